@@ -1,0 +1,90 @@
+//! The command line of CONTRACT.md: `jetid`, `jetid --batch`, `jetid predict`, `jetid simulate`.
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, Parser, Subcommand};
+
+pub mod inspect;
+pub mod simulate;
+
+#[derive(Debug, Parser)]
+#[command(name = "jetid", version, about = "Turbojet test-bench runs to control-oriented gray-box models")]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct Cli {
+    /// Run the headless pipeline instead of opening the desktop app.
+    #[arg(long)]
+    pub batch: bool,
+    #[command(flatten)]
+    pub batch_args: BatchArgs,
+    /// Open the app on the bundled sample runs, save a PNG of one view to this file, and exit.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// The view to capture with --screenshot (data, …).
+    #[arg(long, default_value = "data")]
+    pub view: String,
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Args, Default, Clone)]
+pub struct BatchArgs {
+    /// Project file (default: the bundled sample project).
+    pub project: Option<PathBuf>,
+    /// Identification run.
+    #[arg(long)]
+    pub ident: Option<PathBuf>,
+    /// Validation run (repeatable).
+    #[arg(long = "validate")]
+    pub validate: Vec<PathBuf>,
+    /// Frequency-domain validation (chirp) run.
+    #[arg(long)]
+    pub chirp: Option<PathBuf>,
+    /// Steady-state run for the noise fit.
+    #[arg(long)]
+    pub steady: Option<PathBuf>,
+    /// Output column to model (repeatable; default: all outputs present).
+    #[arg(long = "output")]
+    pub outputs: Vec<String>,
+    /// Apply an effect from the catalog, parameters fitted (repeatable).
+    #[arg(long = "add-effect")]
+    pub add_effects: Vec<String>,
+    /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
+    #[arg(long = "map")]
+    pub maps: Vec<String>,
+    /// Sample time in seconds, for files without a time column.
+    #[arg(long)]
+    pub sample_time: Option<f64>,
+    /// Where results go.
+    #[arg(long, default_value = "jetid-out")]
+    pub out: PathBuf,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run the bundled turbojet simulator and write a run file.
+    Simulate(simulate::SimulateArgs),
+    /// Load a run file and print what jetid reads from it (channels, sample time, ranges).
+    Inspect(inspect::InspectArgs),
+}
+
+/// Dispatch a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Some(Command::Simulate(args)) => simulate::run(&args),
+        Some(Command::Inspect(args)) => inspect::run(&args),
+        None if cli.batch => crate::batch::run(&cli.batch_args),
+        #[cfg(feature = "gui")]
+        None if let Some(out) = &cli.screenshot => crate::ui::screenshot(out, &cli.view),
+        None => run_app(),
+    }
+}
+
+#[cfg(feature = "gui")]
+fn run_app() -> Result<()> {
+    crate::ui::run_app()
+}
+
+#[cfg(not(feature = "gui"))]
+fn run_app() -> Result<()> {
+    anyhow::bail!("this jetid was built without the desktop app (feature `gui`); use `jetid --batch`")
+}

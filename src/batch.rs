@@ -1,8 +1,317 @@
-//! Project → pipeline → report, headless.
-use anyhow::Result;
+//! `jetid --batch`: project → runs → gray-box identification of each output → model.json,
+//! report.json, report.md and figures. No egui.
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
 
 use crate::cli::BatchArgs;
+use crate::core::pipeline::{self, Identified, PipelineError, segments_for};
+use crate::core::run::Run;
+use crate::core::segment::SegmentSettings;
+use crate::io::csv_run::load_run;
+use crate::io::model_file::{ModelFile, SignalInfo, write_model};
+use crate::io::project::{LoadSpec, Project, RunSource, bundled_project_path, load_project};
+use crate::io::report::{
+    ClusterSummary, HistoryStep, IdentSummary, OutputReport, Report, SegmentSummary, write_report_json,
+    write_report_md,
+};
 
-pub fn run(_args: &BatchArgs) -> Result<()> {
-    anyhow::bail!("not yet")
+/// The loaded runs of a project, by role.
+pub struct Runs {
+    pub ident: Run,
+    pub validate: Vec<Run>,
+    pub chirp: Option<Run>,
+    pub steady: Option<Run>,
+}
+
+/// Stopwatch that records named phases in milliseconds.
+#[derive(Default)]
+pub struct Timings(pub BTreeMap<String, f64>);
+
+impl Timings {
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let out = f();
+        *self.0.entry(name.to_owned()).or_default() += start.elapsed().as_secs_f64() * 1e3;
+        out
+    }
+}
+
+/// The project the command line asks for: the given file, else the bundled one, else none (when
+/// runs are given on the command line), with the command line's overrides applied.
+pub fn project_from_args(args: &BatchArgs) -> Result<Project> {
+    let mut project = match (&args.project, &args.ident) {
+        (Some(path), _) => load_project(path)?,
+        (None, Some(_)) => Project {
+            name: "command line".into(),
+            ident: None,
+            validate: vec![],
+            chirp: None,
+            steady: None,
+            outputs: vec![],
+            add_effects: vec![],
+            settings: BTreeMap::new(),
+            segments: BTreeMap::new(),
+            clusters: BTreeMap::new(),
+        },
+        (None, None) => load_project(&bundled_project_path()?)?,
+    };
+    let cli_load = LoadSpec { map: args.maps.clone(), sample_time: args.sample_time, ..LoadSpec::default() };
+    cli_load.to_options().context("command-line load options")?;
+    let cwd = PathBuf::from(".");
+    let src = |p: &PathBuf| RunSource { path: cwd.join(p), load: cli_load.clone() };
+    if let Some(p) = &args.ident {
+        project.ident = Some(src(p));
+    }
+    if !args.validate.is_empty() {
+        project.validate = args.validate.iter().map(src).collect();
+    }
+    if let Some(p) = &args.chirp {
+        project.chirp = Some(src(p));
+    }
+    if let Some(p) = &args.steady {
+        project.steady = Some(src(p));
+    }
+    if !args.outputs.is_empty() {
+        project.outputs = args.outputs.clone();
+    }
+    project.add_effects.extend(args.add_effects.iter().cloned());
+    Ok(project)
+}
+
+pub fn load_source(source: &RunSource) -> Result<Run> {
+    let opts = source.load.to_options()?;
+    Ok(load_run(&source.path, &opts)?)
+}
+
+pub fn load_runs(project: &Project) -> Result<Runs> {
+    let Some(ident) = &project.ident else {
+        bail!("the project names no identification run (give one with --ident FILE)");
+    };
+    let ident = load_source(ident)?;
+    let validate = project.validate.iter().map(load_source).collect::<Result<Vec<_>>>()?;
+    let chirp = project.chirp.as_ref().map(load_source).transpose()?;
+    let steady = project.steady.as_ref().map(load_source).transpose()?;
+    for run in validate.iter().chain(&chirp).chain(&steady) {
+        let ratio = run.dt_secs / ident.dt_secs;
+        if (ratio - 1.0).abs() > 0.02 {
+            bail!(
+                "run '{}' is sampled every {:.5} s but the identification run every {:.5} s; models are discrete-time, so resample it first",
+                run.name,
+                run.dt_secs,
+                ident.dt_secs
+            );
+        }
+    }
+    Ok(Runs { ident, validate, chirp, steady })
+}
+
+/// Outputs to model: the project's list (each must exist), else every output of the ident run.
+pub fn outputs_to_model(project: &Project, ident: &Run) -> Result<Vec<String>> {
+    if project.outputs.is_empty() {
+        return Ok(ident.outputs.iter().map(|c| c.name.clone()).collect());
+    }
+    for name in &project.outputs {
+        if ident.output(name).is_none() {
+            let available: Vec<&str> = ident.outputs.iter().map(|c| c.name.as_str()).collect();
+            bail!(
+                "output '{name}' is not in the identification run '{}' (outputs: {})",
+                ident.name,
+                available.join(", ")
+            );
+        }
+    }
+    Ok(project.outputs.clone())
+}
+
+/// Identify one output as the project says.
+pub fn identify(project: &Project, ident: &Run, output: &str) -> Result<Identified, PipelineError> {
+    let settings = project.settings_for(output);
+    let given = project.segments.get(output).map(Vec::as_slice);
+    let segments = segments_for(ident, given, &SegmentSettings::default())?;
+    pipeline::identify_output(
+        ident,
+        output,
+        &settings,
+        &segments,
+        project.clusters.get(output).map(Vec::as_slice),
+    )
+}
+
+fn summarise(identified: &Identified) -> IdentSummary {
+    let model = &identified.model;
+    let tf = &model.wiener.linear.tf;
+    let fits = &identified.fits;
+    IdentSummary {
+        arx_orders: fits.models.first().map_or([0; 3], |m| [m.orders.na, m.orders.nb, m.orders.nk]),
+        segments: fits
+            .segments
+            .iter()
+            .zip(&fits.models)
+            .map(|(s, m)| SegmentSummary {
+                label: s.label.clone(),
+                start: s.start,
+                step_at: s.step_at,
+                end: s.end,
+                rank: m.rank,
+                cond: m.cond,
+            })
+            .collect(),
+        clusters: identified
+            .evals
+            .iter()
+            .map(|e| ClusterSummary {
+                kind: format!("{:?}", e.cluster.kind),
+                centre: e.cluster.centre,
+                radius: e.cluster.radius,
+                found: e.segments_found,
+                needed: e.segments_needed,
+                valid: e.valid,
+                status: format!("{:?}", e.status),
+                centroid: e.centroid,
+                spread: e.spread,
+                natural_freq_rad_s: e.natural_freq_rad_s,
+                time_constant_secs: e.time_constant_secs,
+            })
+            .collect(),
+        poles: tf.poles().unwrap_or_default(),
+        zeros: tf.zeros().unwrap_or_default(),
+        dc_gain: tf.dc_gain().ok(),
+        offset: model.wiener.linear.offset,
+        static_map_beta: model.wiener.map.beta(),
+        static_order: model.wiener.map.order(),
+        static_order_loo: model.static_suggestion.as_ref().map(|s| s.loo_rmse.clone()).unwrap_or_default(),
+        refined: model.refinement.is_some(),
+        diagnostics: fits.diagnostics.clone(),
+    }
+}
+
+/// Runs the models are scored on: validation runs, then the chirp run.
+pub fn scored_runs(runs: &Runs) -> Vec<&Run> {
+    runs.validate.iter().chain(&runs.chirp).collect()
+}
+
+fn score_output(
+    identified: &Identified,
+    runs: &Runs,
+    output: &str,
+    report: &mut OutputReport,
+    notes: &mut Vec<String>,
+) {
+    let wiener = &identified.model.wiener;
+    for run in scored_runs(runs) {
+        if run.output(output).is_none() {
+            notes.push(format!("run '{}' has no '{output}' column; not scored for it", run.name));
+            continue;
+        }
+        for (name, result) in [
+            ("gray_box", pipeline::predict_wiener(wiener, run, output)),
+            ("linear", pipeline::predict_linear(&wiener.linear, run, output)),
+        ] {
+            match result {
+                Ok(p) => {
+                    report.models.entry(name.to_owned()).or_default().insert(run.name.clone(), p.metrics);
+                }
+                Err(e) => notes.push(format!("{name} on '{}': {e}", run.name)),
+            }
+        }
+    }
+}
+
+/// Mean RMSPE of a model over the validation runs (the error-history figure of merit).
+pub fn mean_validation_rmspe(report: &OutputReport, runs: &Runs, model: &str) -> Option<f64> {
+    let scores = report.models.get(model)?;
+    let vals: Vec<f64> =
+        runs.validate.iter().filter_map(|r| scores.get(&r.name)).map(|m| m.rmspe_pct).collect();
+    (!vals.is_empty()).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
+}
+
+pub fn run(args: &BatchArgs) -> Result<()> {
+    let total = Instant::now();
+    let mut timings = Timings::default();
+    let project = project_from_args(args)?;
+    if let Some(id) = project.add_effects.first() {
+        bail!("--add-effect {id}: effects are not available in this version yet");
+    }
+    let runs = timings.time("load_runs", || load_runs(&project))?;
+    let outputs = outputs_to_model(&project, &runs.ident)?;
+    let out_dir = &args.out;
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+
+    let mut model_file = ModelFile::new(
+        runs.ident.dt_secs,
+        SignalInfo { name: runs.ident.input.name.clone(), unit: runs.ident.input.unit.clone() },
+    );
+    let mut report = Report {
+        format_version: crate::io::report::REPORT_FORMAT_VERSION,
+        project: project.name.clone(),
+        input: runs.ident.input.name.clone(),
+        runs: run_roles(&runs),
+        outputs: BTreeMap::new(),
+        noise_fit: None,
+        monte_carlo: None,
+        timings_ms: BTreeMap::new(),
+        figures: Vec::new(),
+        diagnostics: Vec::new(),
+    };
+    for output in &outputs {
+        let identified = timings
+            .time(&format!("identify_{output}"), || identify(&project, &runs.ident, output))
+            .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
+        let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
+        model_file.push(&identified.model, &unit);
+        let mut out = OutputReport {
+            unit,
+            models: BTreeMap::new(),
+            identified: summarise(&identified),
+            diagnosis: Vec::new(),
+            effects_applied: Vec::new(),
+            error_history: Vec::new(),
+        };
+        timings
+            .time("validate", || score_output(&identified, &runs, output, &mut out, &mut report.diagnostics));
+        if let Some(rmspe) = mean_validation_rmspe(&out, &runs, "gray_box") {
+            out.error_history.push(HistoryStep { step: "base".into(), rmspe_pct: rmspe });
+        }
+        report.outputs.insert(output.clone(), out);
+    }
+    write_model(&out_dir.join("model.json"), &model_file)?;
+    report.timings_ms = timings.0;
+    report.timings_ms.insert("total".into(), total.elapsed().as_secs_f64() * 1e3);
+    write_report_json(&out_dir.join("report.json"), &report)?;
+    write_report_md(&out_dir.join("report.md"), &report)?;
+    print_summary(&report, out_dir);
+    Ok(())
+}
+
+fn run_roles(runs: &Runs) -> BTreeMap<String, String> {
+    let mut roles = BTreeMap::new();
+    roles.insert("identification".to_owned(), runs.ident.name.clone());
+    for (i, r) in runs.validate.iter().enumerate() {
+        roles.insert(format!("validation {}", i + 1), r.name.clone());
+    }
+    if let Some(r) = &runs.chirp {
+        roles.insert("chirp".into(), r.name.clone());
+    }
+    if let Some(r) = &runs.steady {
+        roles.insert("steady".into(), r.name.clone());
+    }
+    roles
+}
+
+fn print_summary(report: &Report, out_dir: &Path) {
+    for (output, o) in &report.outputs {
+        for (model, runs) in &o.models {
+            for (run, m) in runs {
+                println!(
+                    "{output:>18} {model:<10} {run:<14} RMSPE {:>8.4} %  fit {:>7.2} %",
+                    m.rmspe_pct, m.fit_pct
+                );
+            }
+        }
+    }
+    println!("wrote model.json, report.json and report.md to {}", out_dir.display());
 }

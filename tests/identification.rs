@@ -1,11 +1,11 @@
 //! The gray-box pipeline on systems with known truth.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use jetid::core::cluster::RootKind;
+use jetid::core::metrics::metrics;
 use jetid::core::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
 use jetid::core::run::{Channel, Run};
 use jetid::core::segment::SegmentSettings;
 use jetid::core::tf::DiscreteTf;
-use jetid::core::metrics::metrics;
 use num_complex::Complex64;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -43,7 +43,15 @@ fn run(name: &str, u: Vec<f64>, y: Vec<f64>) -> Run {
 #[test]
 fn paper_wiener_system_is_identified_to_under_0_2_pct() {
     let u_ident = staircase(&[
-        (2.6, 60.0), (3.1, 40.0), (2.8, 40.0), (3.6, 40.0), (4.2, 40.0), (3.4, 40.0), (5.43, 40.0), (6.4, 40.0), (4.6, 40.0),
+        (2.6, 60.0),
+        (3.1, 40.0),
+        (2.8, 40.0),
+        (3.6, 40.0),
+        (4.2, 40.0),
+        (3.4, 40.0),
+        (5.43, 40.0),
+        (6.4, 40.0),
+        (4.6, 40.0),
     ]);
     let y_ident = paper_speed(&u_ident);
     let ident = run("ident", noisy(&u_ident, 0.000327, 1), noisy(&y_ident, 5.07, 2));
@@ -52,7 +60,12 @@ fn paper_wiener_system_is_identified_to_under_0_2_pct() {
     assert_eq!(segments.len(), 8);
     let result = identify_output(&ident, "shaft_speed_rpm", &settings, &segments, None).unwrap();
 
-    let poles: Vec<Complex64> = result.evals.iter().filter(|e| e.valid && e.cluster.kind == RootKind::Pole).flat_map(|e| e.reduced_roots()).collect();
+    let poles: Vec<Complex64> = result
+        .evals
+        .iter()
+        .filter(|e| e.valid && e.cluster.kind == RootKind::Pole)
+        .flat_map(|e| e.reduced_roots())
+        .collect();
     assert!(poles.iter().any(|p| (p - Complex64::new(0.936, 0.0)).norm() < 0.02), "poles {poles:?}");
 
     // Validation: fast steps, a ramp and a sinusoid, scored against the noiseless output.

@@ -5,6 +5,7 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
 pub mod inspect;
+pub mod predict;
 pub mod simulate;
 
 #[derive(Debug, Parser)]
@@ -63,6 +64,8 @@ pub struct BatchArgs {
 pub enum Command {
     /// Run the bundled turbojet simulator and write a run file.
     Simulate(simulate::SimulateArgs),
+    /// Simulate a saved model from a run's input.
+    Predict(predict::PredictArgs),
     /// Load a run file and print what jetid reads from it (channels, sample time, ranges).
     Inspect(inspect::InspectArgs),
 }
@@ -72,6 +75,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Simulate(args)) => simulate::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
+        Some(Command::Predict(args)) => predict::run(&args),
         None if cli.batch => crate::batch::run(&cli.batch_args),
         #[cfg(feature = "gui")]
         None if let Some(out) = &cli.screenshot => crate::ui::screenshot(out, &cli.view),

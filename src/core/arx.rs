@@ -185,7 +185,13 @@ mod tests {
             fit_arx(&[1.0; 10], &[1.0; 10], ArxOrders::new(19, 3), 0.1),
             Err(ArxError::TooFewSamples { .. })
         ));
-        assert!(matches!(fit_arx(&[1.0; 10], &[1.0; 9], ArxOrders::new(1, 0), 0.1), Err(ArxError::LengthMismatch { .. })));
-        assert!(matches!(fit_arx(&[1.0; 10], &[1.0; 10], ArxOrders::new(0, 0), 0.1), Err(ArxError::BadOrders { .. })));
+        assert!(matches!(
+            fit_arx(&[1.0; 10], &[1.0; 9], ArxOrders::new(1, 0), 0.1),
+            Err(ArxError::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            fit_arx(&[1.0; 10], &[1.0; 10], ArxOrders::new(0, 0), 0.1),
+            Err(ArxError::BadOrders { .. })
+        ));
     }
 }

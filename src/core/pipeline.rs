@@ -4,7 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::core::arx::{ArxModel, ArxOrders, fit_arx};
-use crate::core::cluster::{self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots};
+use crate::core::cluster::{
+    self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots,
+};
 use crate::core::metrics::{Metrics, MetricsError, metrics};
 use crate::core::refine::{Refinement, refine_roots};
 use crate::core::run::Run;
@@ -101,7 +103,11 @@ pub fn output_values<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], Pipeli
 }
 
 /// Segments of the identification run: the user's if given (checked), else detected.
-pub fn segments_for(run: &Run, given: Option<&[Segment]>, settings: &SegmentSettings) -> Result<Vec<Segment>, PipelineError> {
+pub fn segments_for(
+    run: &Run,
+    given: Option<&[Segment]>,
+    settings: &SegmentSettings,
+) -> Result<Vec<Segment>, PipelineError> {
     let wrap = |source| PipelineError::Segment { run: run.name.clone(), source };
     match given {
         Some(segments) => {
@@ -117,7 +123,12 @@ fn mean(x: &[f64]) -> f64 {
 }
 
 /// Fit one ARX model per segment on deviations from the segment's starting steady state.
-pub fn fit_segments(run: &Run, output: &str, segments: &[Segment], orders: ArxOrders) -> Result<SegmentFits, PipelineError> {
+pub fn fit_segments(
+    run: &Run,
+    output: &str,
+    segments: &[Segment],
+    orders: ArxOrders,
+) -> Result<SegmentFits, PipelineError> {
     let y = output_values(run, output)?;
     let u = &run.input.values;
     let mut models = Vec::new();
@@ -139,7 +150,11 @@ pub fn fit_segments(run: &Run, output: &str, segments: &[Segment], orders: ArxOr
                         model.cond
                     ));
                 }
-                roots.push(SegmentRoots { label: seg.label.clone(), poles: model.poles.clone(), zeros: model.zeros.clone() });
+                roots.push(SegmentRoots {
+                    label: seg.label.clone(),
+                    poles: model.poles.clone(),
+                    zeros: model.zeros.clone(),
+                });
                 models.push(model);
                 fitted_segments.push(seg.clone());
             }
@@ -153,7 +168,14 @@ pub fn fit_segments(run: &Run, output: &str, segments: &[Segment], orders: ArxOr
             diagnostics: diagnostics.join("; "),
         });
     }
-    Ok(SegmentFits { output: output.to_owned(), dt_secs: run.dt_secs, segments: fitted_segments, models, roots, diagnostics })
+    Ok(SegmentFits {
+        output: output.to_owned(),
+        dt_secs: run.dt_secs,
+        segments: fitted_segments,
+        models,
+        roots,
+        diagnostics,
+    })
 }
 
 /// The reduced model of one output: clusters, linear block, static map and how they were chosen.
@@ -236,7 +258,9 @@ pub fn build_gray_box(
     let order = Some(first.wiener.map.order());
     let suggestion = first.suggestion.clone();
     let refined = if settings.refine {
-        refine_roots(&poles, &zeros, |p, z| assemble(fits, u, y, start, p, z, settings, order).ok().map(|a| a.residual))
+        refine_roots(&poles, &zeros, |p, z| {
+            assemble(fits, u, y, start, p, z, settings, order).ok().map(|a| a.residual)
+        })
     } else {
         None
     };
@@ -305,8 +329,10 @@ pub fn live_update(
     omegas_rad_s: &[f64],
 ) -> Result<LiveResult, PipelineError> {
     let (model, evals) = build_gray_box(fits, ident, clusters, settings)?;
-    let predictions =
-        validation.iter().map(|run| predict_wiener(&model.wiener, run, &fits.output)).collect::<Result<Vec<_>, _>>()?;
+    let predictions = validation
+        .iter()
+        .map(|run| predict_wiener(&model.wiener, run, &fits.output))
+        .collect::<Result<Vec<_>, _>>()?;
     let bode = model.wiener.linear.tf.bode_response(omegas_rad_s);
     Ok(LiveResult { model, evals, predictions, bode })
 }

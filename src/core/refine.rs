@@ -44,7 +44,8 @@ impl RootParams {
         let mut i = 0;
         for &pair in &self.pairs {
             if pair {
-                let (re, im) = (theta.get(i).copied().unwrap_or(0.0), theta.get(i + 1).copied().unwrap_or(0.0));
+                let (re, im) =
+                    (theta.get(i).copied().unwrap_or(0.0), theta.get(i + 1).copied().unwrap_or(0.0));
                 out.extend([Complex64::new(re, im), Complex64::new(re, -im)]);
                 i += 2;
             } else {
@@ -68,7 +69,11 @@ pub struct Refinement {
 
 /// Refine poles and zeros. `simulate` returns the residual vector of the whole Wiener model for
 /// candidate roots (or `None` where they are not admissible).
-pub fn refine_roots<F>(poles: &[Complex64], zeros: &[Complex64], mut residual: F) -> Option<(Vec<Complex64>, Vec<Complex64>, Refinement)>
+pub fn refine_roots<F>(
+    poles: &[Complex64],
+    zeros: &[Complex64],
+    mut residual: F,
+) -> Option<(Vec<Complex64>, Vec<Complex64>, Refinement)>
 where
     F: FnMut(&[Complex64], &[Complex64]) -> Option<Vec<f64>>,
 {

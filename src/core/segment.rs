@@ -51,7 +51,9 @@ impl Default for SegmentSettings {
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SegmentError {
-    #[error("no steps found in the input (largest change {largest:.4} is below the threshold {threshold:.4}); give segments by hand")]
+    #[error(
+        "no steps found in the input (largest change {largest:.4} is below the threshold {threshold:.4}); give segments by hand"
+    )]
     NoSteps { largest: f64, threshold: f64 },
     #[error("the run has {samples} samples, too few to segment")]
     TooShort { samples: usize },
@@ -130,7 +132,12 @@ fn step_threshold(u: &[f64], w: usize, settings: &SegmentSettings) -> (f64, f64)
 }
 
 /// Segments for the given step indices: baseline before each step, end a baseline before the next.
-pub fn segments_from_steps(steps: &[usize], n_samples: usize, dt_secs: f64, settings: &SegmentSettings) -> Vec<Segment> {
+pub fn segments_from_steps(
+    steps: &[usize],
+    n_samples: usize,
+    dt_secs: f64,
+    settings: &SegmentSettings,
+) -> Vec<Segment> {
     let baseline = ((settings.baseline_secs / dt_secs).round() as usize).max(2);
     steps
         .iter()
@@ -144,9 +151,15 @@ pub fn segments_from_steps(steps: &[usize], n_samples: usize, dt_secs: f64, sett
 }
 
 /// Detect steps and build their segments.
-pub fn auto_segments(u: &[f64], dt_secs: f64, settings: &SegmentSettings) -> Result<Vec<Segment>, SegmentError> {
+pub fn auto_segments(
+    u: &[f64],
+    dt_secs: f64,
+    settings: &SegmentSettings,
+) -> Result<Vec<Segment>, SegmentError> {
     if !(settings.min_hold_secs >= 0.0 && settings.baseline_secs > 0.0) {
-        return Err(SegmentError::BadSettings { reason: "min_hold_secs ≥ 0 and baseline_secs > 0 are required".into() });
+        return Err(SegmentError::BadSettings {
+            reason: "min_hold_secs ≥ 0 and baseline_secs > 0 are required".into(),
+        });
     }
     let steps = detect_steps(u, dt_secs, settings)?;
     Ok(segments_from_steps(&steps, u.len(), dt_secs, settings))
@@ -191,7 +204,11 @@ mod tests {
     #[test]
     fn finds_every_step_of_a_noisy_staircase() {
         for seed in 0..5 {
-            let (u, truth) = staircase(&[(2.5, 400), (3.2, 300), (2.9, 300), (4.5, 350), (5.4, 300), (3.0, 300)], 0.00327, seed);
+            let (u, truth) = staircase(
+                &[(2.5, 400), (3.2, 300), (2.9, 300), (4.5, 350), (5.4, 300), (3.0, 300)],
+                0.00327,
+                seed,
+            );
             let steps = detect_steps(&u, 1.0 / 8.85, &SegmentSettings::default()).unwrap();
             assert_eq!(steps, truth, "seed {seed}");
             let segs = segments_from_steps(&steps, u.len(), 1.0 / 8.85, &SegmentSettings::default());
@@ -205,8 +222,14 @@ mod tests {
     #[test]
     fn flat_input_has_no_steps() {
         let (u, _) = staircase(&[(5.43, 500)], 0.00327, 1);
-        assert!(matches!(detect_steps(&u, 0.113, &SegmentSettings::default()), Err(SegmentError::NoSteps { .. })));
-        assert!(matches!(detect_steps(&u[..10], 0.113, &SegmentSettings::default()), Err(SegmentError::TooShort { .. })));
+        assert!(matches!(
+            detect_steps(&u, 0.113, &SegmentSettings::default()),
+            Err(SegmentError::NoSteps { .. })
+        ));
+        assert!(matches!(
+            detect_steps(&u[..10], 0.113, &SegmentSettings::default()),
+            Err(SegmentError::TooShort { .. })
+        ));
     }
 
     #[test]

@@ -45,7 +45,13 @@ impl StaticMap {
     /// Derivative df/dv.
     pub fn slope(&self, v: f64) -> f64 {
         let x = (v - self.v_center) / self.v_scale;
-        let d = self.coeffs_scaled.iter().enumerate().skip(1).rev().fold(0.0, |acc, (i, c)| acc * x + i as f64 * c);
+        let d = self
+            .coeffs_scaled
+            .iter()
+            .enumerate()
+            .skip(1)
+            .rev()
+            .fold(0.0, |acc, (i, c)| acc * x + i as f64 * c);
         d / self.v_scale
     }
 
@@ -142,7 +148,10 @@ mod tests {
 
     #[test]
     fn errors() {
-        assert!(matches!(fit_static_map(&[1.0, 2.0], &[1.0, 2.0], 2), Err(StaticMapError::TooFewPoints { .. })));
+        assert!(matches!(
+            fit_static_map(&[1.0, 2.0], &[1.0, 2.0], 2),
+            Err(StaticMapError::TooFewPoints { .. })
+        ));
         assert!(matches!(fit_static_map(&[1.0], &[1.0, 2.0], 1), Err(StaticMapError::LengthMismatch { .. })));
         assert!(matches!(fit_static_map(&[1.0], &[1.0], 0), Err(StaticMapError::BadOrder { .. })));
     }

@@ -47,7 +47,11 @@ pub enum WienerError {
 }
 
 /// Unit-steady-state-gain transfer function with these poles and zeros.
-pub fn unit_gain_tf(poles: &[Complex64], zeros: &[Complex64], dt_secs: f64) -> Result<DiscreteTf, WienerError> {
+pub fn unit_gain_tf(
+    poles: &[Complex64],
+    zeros: &[Complex64],
+    dt_secs: f64,
+) -> Result<DiscreteTf, WienerError> {
     if poles.is_empty() {
         return Err(WienerError::NoPoles);
     }
@@ -124,6 +128,9 @@ mod tests {
         assert_eq!(unit_gain_tf(&[], &[], 0.1), Err(WienerError::NoPoles));
         assert_eq!(unit_gain_tf(&p, &z2, 0.1), Err(WienerError::Improper { zeros: 2, poles: 1 }));
         assert_eq!(unit_gain_tf(&p, &[Complex64::new(1.0, 0.0)], 0.1), Err(WienerError::ZeroDcGain));
-        assert!(matches!(unit_gain_tf(&[Complex64::new(1.01, 0.0)], &[], 0.1), Err(WienerError::Unstable { .. })));
+        assert!(matches!(
+            unit_gain_tf(&[Complex64::new(1.01, 0.0)], &[], 0.1),
+            Err(WienerError::Unstable { .. })
+        ));
     }
 }

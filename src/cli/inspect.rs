@@ -1,0 +1,119 @@
+//! `jetid inspect RUN.csv`: load a run file as the pipeline would and print what was read.
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use crate::core::run::{Channel, Run};
+use crate::io::csv_run::{LoadNotes, LoadOptions, load_run_with_notes};
+
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The run file (CSV).
+    pub file: PathBuf,
+    /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
+    #[arg(long = "map", value_name = "ROLE=COLUMN")]
+    pub maps: Vec<String>,
+    /// Sample time in seconds, for files without a time column.
+    #[arg(long, value_name = "SECONDS")]
+    pub sample_time: Option<f64>,
+    /// Keep only samples START:END (0-based, END excluded), or seconds with `s`: 12.5s:80s.
+    #[arg(long, value_name = "START:END")]
+    pub window: Option<String>,
+    /// A 0/1 column marking good samples; bad ones are interpolated.
+    #[arg(long, value_name = "COLUMN")]
+    pub quality: Option<String>,
+    /// Resample a non-uniform time axis onto a uniform grid.
+    #[arg(long)]
+    pub resample: bool,
+}
+
+pub fn run(args: &InspectArgs) -> Result<()> {
+    let opts = LoadOptions::from_cli(
+        &args.maps,
+        args.sample_time,
+        args.window.as_deref(),
+        args.quality.as_deref(),
+        args.resample,
+    )?;
+    // The loader's errors already name the file, row and column.
+    let (run, notes) = load_run_with_notes(&args.file, &opts).context("cannot load the run file")?;
+    print!("{}", summary(&run, &notes));
+    Ok(())
+}
+
+/// The text `jetid inspect` prints.
+pub fn summary(run: &Run, notes: &LoadNotes) -> String {
+    let mut out = String::new();
+    // Writing into a String cannot fail; the results are ignored below.
+    let (Some(t0), Some(t_end)) = (run.t_secs.first(), run.t_secs.last()) else {
+        let _ = writeln!(out, "run {}: no samples", run.name);
+        return out;
+    };
+    let _ = writeln!(out, "run {}", run.name);
+    let _ = writeln!(
+        out,
+        "samples   {} (rows {}..{} of {} in the file)",
+        run.len(),
+        notes.kept_rows.start,
+        notes.kept_rows.end,
+        notes.rows_in_file
+    );
+    let _ = writeln!(out, "dt        {:.6} s ({:.4} Hz)", run.dt_secs, 1.0 / run.dt_secs);
+    let _ = writeln!(out, "duration  {:.3} s (t = {t0} s to {t_end} s)", t_end - t0);
+    let time_source = notes.time_column.as_ref().map_or("sample time".to_owned(), |c| format!("column {c}"));
+    let _ = writeln!(out, "time      from {time_source}{}", if notes.resampled { ", resampled" } else { "" });
+    if notes.repaired_samples + notes.trimmed_bad_start + notes.trimmed_bad_end > 0 {
+        let _ = writeln!(
+            out,
+            "quality   {} bad samples interpolated, {} trimmed at the start, {} at the end",
+            notes.repaired_samples, notes.trimmed_bad_start, notes.trimmed_bad_end
+        );
+    }
+    for dropped in &notes.dropped_columns {
+        let _ = writeln!(out, "left out  {}: {}", dropped.name, dropped.reason);
+    }
+    let rows: Vec<(&str, &Channel)> = std::iter::once(("input", &run.input))
+        .chain(run.outputs.iter().map(|c| ("output", c)))
+        .chain(run.aux.iter().map(|c| ("aux", c)))
+        .collect();
+    let width = rows.iter().map(|(_, c)| c.name.chars().count()).max().unwrap_or(0).max(7);
+    let _ = writeln!(
+        out,
+        "\n{:<7} {:<width$} {:<6} {:>14} {:>14} {:>14}",
+        "role", "channel", "unit", "min", "mean", "max"
+    );
+    for (role, channel) in rows {
+        let (min, mean, max) = stats(&channel.values);
+        let _ = writeln!(
+            out,
+            "{role:<7} {:<width$} {:<6} {:>14} {:>14} {:>14}",
+            channel.name,
+            channel.unit,
+            number(min),
+            number(mean),
+            number(max)
+        );
+    }
+    out
+}
+
+fn stats(values: &[f64]) -> (f64, f64, f64) {
+    let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
+    (min, mean, max)
+}
+
+/// Six significant digits, in exponent form outside a readable range.
+fn number(v: f64) -> String {
+    let magnitude = v.abs();
+    if magnitude != 0.0 && !(1e-3..1e7).contains(&magnitude) {
+        format!("{v:.5e}")
+    } else {
+        let decimals =
+            if magnitude == 0.0 { 0 } else { (5 - magnitude.log10().floor() as i32).max(0) as usize };
+        format!("{v:.decimals$}")
+    }
+}

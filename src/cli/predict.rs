@@ -1,0 +1,75 @@
+//! `jetid predict --model MODEL.json --input RUN.csv --out PRED.csv`: simulate a saved model from a
+//! run's input alone.
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use crate::core::run::{Channel, Run};
+use crate::io::csv_run::{LoadOptions, load_run, write_run};
+use crate::io::model_file::read_model;
+
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// A model.json written by `jetid --batch` or the app.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The run whose input drives the model.
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Where the prediction goes: time_s and one column per modelled output.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Column mapping ROLE=COLUMN for the input run (repeatable).
+    #[arg(long = "map")]
+    pub maps: Vec<String>,
+    /// Sample time in seconds, for files without a time column.
+    #[arg(long)]
+    pub sample_time: Option<f64>,
+}
+
+pub fn run(args: &PredictArgs) -> Result<()> {
+    let model = read_model(&args.model)?;
+    let opts = LoadOptions::from_cli(&args.maps, args.sample_time, None, None, false).context("--map")?;
+    let run = load_run(&args.input, &opts)?;
+    if ((run.dt_secs / model.dt_secs) - 1.0).abs() > 0.02 {
+        bail!(
+            "{} is sampled every {:.5} s but the model every {:.5} s; the model is discrete-time",
+            args.input.display(),
+            run.dt_secs,
+            model.dt_secs
+        );
+    }
+    if model.outputs.is_empty() {
+        bail!("{} holds no output model", args.model.display());
+    }
+    let u = &run.input.values;
+    let mut outputs = Vec::new();
+    for out in &model.outputs {
+        if let Some(effect) = out.effects.first() {
+            bail!(
+                "output '{}' uses the effect '{}', which this version cannot simulate",
+                out.name,
+                effect.id
+            );
+        }
+        let (_, y) = out.wiener.simulate(u);
+        outputs.push(Channel { name: out.name.clone(), unit: out.unit.clone(), values: y });
+    }
+    let prediction = Run {
+        name: format!("{} predicted", run.name),
+        dt_secs: run.dt_secs,
+        t_secs: run.t_secs.clone(),
+        input: run.input.clone(),
+        outputs,
+        aux: Vec::new(),
+    };
+    write_run(&args.out, &prediction)?;
+    println!(
+        "wrote {} ({} samples, outputs: {})",
+        args.out.display(),
+        run.len(),
+        model.outputs.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+    );
+    Ok(())
+}

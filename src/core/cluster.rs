@@ -1,0 +1,645 @@
+//! Clusters of poles and zeros on the z-plane (identification step 2, paper section 3.1).
+//!
+//! Every identification segment j = 1..J has a high-order ARX model; its poles and zeros are
+//! overlaid on the z-plane. A [`Cluster`] is a circle (centre, radius) for one [`RootKind`]. It is
+//! *valid* when it holds a root from at least m of the J segment models (the aggregation condition,
+//! m = J unless [`ClusterSettings::min_segments`] says otherwise) and it is not excluded: near the
+//! origin, near the Nyquist angle, or (poles only) with its centroid on or outside the unit circle.
+//!
+//! Conventions:
+//! - Roots are *folded* into the closed upper half-plane (a root below the real axis is replaced by
+//!   its conjugate) before anything is measured, so a circle stands for itself and its mirror image
+//!   and a conjugate pair from one segment counts once. Centres are stored in the upper half-plane.
+//! - Membership: per segment at most one member, the segment's folded root nearest the centre, if it
+//!   lies within the radius. J segments give at most J members.
+//! - A cluster is on the real axis when its centre lies within half a radius of it
+//!   ([`Cluster::is_real_axis`]); its centroid is then forced real (the mean of the real parts) and
+//!   it yields one real root in the reduced model. Any other cluster yields a conjugate pair.
+//! - s-plane figures come from s = ln(z) / dt at the centroid.
+//!
+//! [`propose_clusters`] (in `cluster_proposal`) finds clusters automatically.
+
+use nalgebra::Complex;
+use serde::{Deserialize, Serialize};
+
+pub use super::cluster_proposal::propose_clusters;
+
+type Complex64 = Complex<f64>;
+
+/// A cluster counts as on the real axis when |Im c| ≤ this fraction of its radius.
+pub const REAL_AXIS_FRACTION: f64 = 0.5;
+/// Folded roots of one segment closer than this (relative to 1 + |z|) are one root (conjugate twins).
+const TWIN_TOL: f64 = 1e-9;
+/// A pole is unstable when its modulus is at least 1 minus this.
+const UNIT_CIRCLE_TOL: f64 = 1e-9;
+
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum ClusterError {
+    #[error("cluster setting `{name}` = {value} is out of range ({expected})")]
+    InvalidSetting { name: &'static str, value: f64, expected: &'static str },
+    #[error("the aggregation condition needs at least one segment (min_segments = 0)")]
+    ZeroMinSegments,
+    #[error("sample period {dt_secs} s must be finite and positive")]
+    InvalidSamplePeriod { dt_secs: f64 },
+    #[error("cluster {cluster}: centre ({re}, {im}) and radius {radius} must be finite, radius ≥ 0")]
+    InvalidCluster { cluster: usize, re: f64, im: f64, radius: f64 },
+    #[error("cluster proposal needs at least {needed} segment models, got {found}")]
+    TooFewSegments { found: usize, needed: usize },
+    #[error("aggregation condition asks for {needed} segments but only {segments} were identified")]
+    MinSegmentsExceedSegments { needed: usize, segments: usize },
+    #[error("cluster {cluster} holds roots from {found} segments, {needed} needed")]
+    TooFewMembers { cluster: usize, found: usize, needed: usize },
+    #[error("cluster {cluster} is excluded: {status:?}")]
+    Excluded { cluster: usize, status: ClusterStatus },
+}
+
+/// Poles (roots of A) or zeros (roots of B).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RootKind {
+    Pole,
+    Zero,
+}
+
+/// The poles and zeros of one segment's high-order model.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct SegmentRoots {
+    pub label: String,
+    #[serde(with = "complex_vec_serde")]
+    pub poles: Vec<Complex64>,
+    #[serde(with = "complex_vec_serde")]
+    pub zeros: Vec<Complex64>,
+}
+
+impl SegmentRoots {
+    pub fn roots(&self, kind: RootKind) -> &[Complex64] {
+        match kind {
+            RootKind::Pole => &self.poles,
+            RootKind::Zero => &self.zeros,
+        }
+    }
+}
+
+/// A circle on the z-plane; the centre is kept in the closed upper half-plane.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct Cluster {
+    pub kind: RootKind,
+    #[serde(with = "complex_serde")]
+    pub centre: Complex64,
+    pub radius: f64,
+}
+
+impl Cluster {
+    /// The cluster with its centre folded into the upper half-plane.
+    pub fn new(kind: RootKind, centre: Complex64, radius: f64) -> Self {
+        Self { kind, centre: fold(centre), radius }
+    }
+
+    /// True when the centre lies within [`REAL_AXIS_FRACTION`] of a radius of the real axis.
+    pub fn is_real_axis(&self) -> bool {
+        self.centre.im.abs() <= REAL_AXIS_FRACTION * self.radius
+    }
+}
+
+/// Settings of the cluster analysis. Check them with [`ClusterSettings::check`].
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct ClusterSettings {
+    /// Aggregation condition m: segments a valid cluster must hold a root from; `None` = all J.
+    pub min_segments: Option<usize>,
+    /// Clusters whose centroid angle exceeds this are excluded (sampling distortion), in (0, π].
+    pub nyquist_exclusion_rad: f64,
+    /// Clusters whose centroid modulus is below this are excluded (ARX noise roots at the origin).
+    pub min_modulus: f64,
+    /// Proposal only: largest radius a proposed cluster may need to aggregate its segments. Chance
+    /// gatherings of ARX noise roots (a ring near |z| ≈ 0.85–0.9) aggregate J = 7 segments at about
+    /// 0.07–0.15, so much above the default admits them.
+    pub max_radius: f64,
+    /// Proposal only: the nearest non-member root must be at least this many radii from the centroid.
+    pub min_isolation: f64,
+}
+
+impl Default for ClusterSettings {
+    fn default() -> Self {
+        Self {
+            min_segments: None,
+            nyquist_exclusion_rad: 0.75 * std::f64::consts::PI,
+            min_modulus: 0.1,
+            max_radius: 0.08,
+            min_isolation: 1.5,
+        }
+    }
+}
+
+impl ClusterSettings {
+    pub fn check(&self) -> Result<(), ClusterError> {
+        if self.min_segments == Some(0) {
+            return Err(ClusterError::ZeroMinSegments);
+        }
+        let pi = std::f64::consts::PI;
+        let checks: [(&'static str, f64, bool, &'static str); 4] = [
+            (
+                "nyquist_exclusion_rad",
+                self.nyquist_exclusion_rad,
+                self.nyquist_exclusion_rad > 0.0 && self.nyquist_exclusion_rad <= pi,
+                "0 < x ≤ π",
+            ),
+            ("min_modulus", self.min_modulus, (0.0..1.0).contains(&self.min_modulus), "0 ≤ x < 1"),
+            ("max_radius", self.max_radius, self.max_radius > 0.0 && self.max_radius <= 2.0, "0 < x ≤ 2"),
+            ("min_isolation", self.min_isolation, (0.0..=100.0).contains(&self.min_isolation), "0 ≤ x ≤ 100"),
+        ];
+        // NaN fails every range test above.
+        match checks.into_iter().find(|(_, _, ok, _)| !ok) {
+            Some((name, value, _, expected)) => Err(ClusterError::InvalidSetting { name, value, expected }),
+            None => Ok(()),
+        }
+    }
+
+    /// m for J identified segments.
+    pub fn segments_needed(&self, segments: usize) -> usize {
+        self.min_segments.unwrap_or(segments)
+    }
+}
+
+/// One member of a cluster: the root of one segment nearest the centre.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct Member {
+    /// Index into the `roots` slice given to the evaluation.
+    pub segment: usize,
+    /// Index into that segment's `poles` or `zeros`.
+    pub root_index: usize,
+    /// The root folded into the upper half-plane (where it lies in the circle).
+    #[serde(with = "complex_serde")]
+    pub root: Complex64,
+}
+
+/// Why a cluster is (in)valid. Checked in this order; the first failing reason is reported.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub enum ClusterStatus {
+    Valid,
+    TooFewMembers {
+        found: usize,
+        needed: usize,
+    },
+    NearOrigin {
+        modulus: f64,
+        min_modulus: f64,
+    },
+    NearNyquist {
+        angle_rad: f64,
+        limit_rad: f64,
+    },
+    /// A pole cluster whose centroid is on or outside the unit circle.
+    Unstable {
+        modulus: f64,
+    },
+}
+
+/// A cluster with its members and the figures the cluster table and the reduced model need.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct ClusterEval {
+    pub cluster: Cluster,
+    /// Sorted by segment.
+    pub members: Vec<Member>,
+    pub segments_found: usize,
+    pub segments_needed: usize,
+    /// Mean of the members (real for real-axis clusters); the centre when there are none.
+    #[serde(with = "complex_serde")]
+    pub centroid: Complex64,
+    /// Root-mean-square distance of the members from the centroid.
+    pub spread: f64,
+    /// Distance from the centroid to the nearest root of the same kind that is not a member.
+    pub nearest_non_member: Option<f64>,
+    pub valid: bool,
+    pub status: ClusterStatus,
+    /// |s| with s = ln(centroid) / dt.
+    pub natural_freq_rad_s: f64,
+    /// −Re(s)/|s|; 0 when s = 0 (z = 1, an integrator).
+    pub damping: f64,
+    /// −1/Re(s) for a real-axis cluster with its centroid in (0, 1).
+    pub time_constant_secs: Option<f64>,
+}
+
+impl ClusterEval {
+    /// The roots this cluster contributes to the reduced model: the centroid, plus its conjugate
+    /// when the cluster is off the real axis.
+    pub fn reduced_roots(&self) -> Vec<Complex64> {
+        if self.cluster.is_real_axis() {
+            vec![Complex64::new(self.centroid.re, 0.0)]
+        } else {
+            vec![self.centroid, self.centroid.conj()]
+        }
+    }
+
+    /// `Ok` when valid; otherwise the reason as an error naming the cluster's index.
+    pub fn check_valid(&self, cluster: usize) -> Result<(), ClusterError> {
+        match &self.status {
+            ClusterStatus::Valid => Ok(()),
+            ClusterStatus::TooFewMembers { found, needed } => {
+                Err(ClusterError::TooFewMembers { cluster, found: *found, needed: *needed })
+            }
+            status => Err(ClusterError::Excluded { cluster, status: status.clone() }),
+        }
+    }
+}
+
+/// The reduced model's roots of one kind: those of every valid cluster, sorted by angle, then modulus.
+pub fn valid_reduced_roots(evals: &[ClusterEval], kind: RootKind) -> Vec<Complex64> {
+    let mut roots: Vec<Complex64> = evals
+        .iter()
+        .filter(|e| e.valid && e.cluster.kind == kind)
+        .flat_map(ClusterEval::reduced_roots)
+        .collect();
+    roots.sort_by(|a, b| a.arg().total_cmp(&b.arg()).then(a.norm().total_cmp(&b.norm())));
+    roots
+}
+
+/// Evaluates one cluster against the segment models' roots.
+pub fn evaluate_cluster(
+    cluster: &Cluster,
+    roots: &[SegmentRoots],
+    settings: &ClusterSettings,
+    dt_secs: f64,
+) -> Result<ClusterEval, ClusterError> {
+    check_inputs(settings, dt_secs)?;
+    check_cluster(0, cluster)?;
+    let folded = folded_roots(roots, cluster.kind);
+    Ok(evaluate_folded(cluster, &folded, settings.segments_needed(roots.len()), settings, dt_secs))
+}
+
+/// Evaluates clusters; the result is in the order of `clusters`.
+pub fn evaluate_clusters(
+    clusters: &[Cluster],
+    roots: &[SegmentRoots],
+    settings: &ClusterSettings,
+    dt_secs: f64,
+) -> Result<Vec<ClusterEval>, ClusterError> {
+    check_inputs(settings, dt_secs)?;
+    for (i, c) in clusters.iter().enumerate() {
+        check_cluster(i, c)?;
+    }
+    let poles = folded_roots(roots, RootKind::Pole);
+    let zeros = folded_roots(roots, RootKind::Zero);
+    let needed = settings.segments_needed(roots.len());
+    Ok(clusters
+        .iter()
+        .map(|c| {
+            let folded = match c.kind {
+                RootKind::Pole => &poles,
+                RootKind::Zero => &zeros,
+            };
+            evaluate_folded(c, folded, needed, settings, dt_secs)
+        })
+        .collect())
+}
+
+pub(crate) fn check_inputs(settings: &ClusterSettings, dt_secs: f64) -> Result<(), ClusterError> {
+    settings.check()?;
+    if !(dt_secs.is_finite() && dt_secs > 0.0) {
+        return Err(ClusterError::InvalidSamplePeriod { dt_secs });
+    }
+    Ok(())
+}
+
+fn check_cluster(index: usize, c: &Cluster) -> Result<(), ClusterError> {
+    let ok = c.centre.re.is_finite() && c.centre.im.is_finite() && c.radius.is_finite() && c.radius >= 0.0;
+    if ok {
+        Ok(())
+    } else {
+        Err(ClusterError::InvalidCluster {
+            cluster: index,
+            re: c.centre.re,
+            im: c.centre.im,
+            radius: c.radius,
+        })
+    }
+}
+
+/// A root folded into the closed upper half-plane, with where it came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FoldedRoot {
+    pub segment: usize,
+    pub root_index: usize,
+    pub z: Complex64,
+}
+
+pub(crate) fn fold(z: Complex64) -> Complex64 {
+    if z.im < 0.0 { z.conj() } else { z }
+}
+
+/// Per segment, its finite roots of `kind` folded into the upper half-plane, conjugate twins merged
+/// (the upper one kept).
+pub(crate) fn folded_roots(roots: &[SegmentRoots], kind: RootKind) -> Vec<Vec<FoldedRoot>> {
+    roots
+        .iter()
+        .enumerate()
+        .map(|(segment, seg)| {
+            let mut kept: Vec<FoldedRoot> = Vec::new();
+            for (root_index, &z) in seg.roots(kind).iter().enumerate() {
+                if !(z.re.is_finite() && z.im.is_finite()) {
+                    continue;
+                }
+                let folded = FoldedRoot { segment, root_index, z: fold(z) };
+                let twin =
+                    kept.iter_mut().find(|k| (k.z - folded.z).norm() <= TWIN_TOL * (1.0 + folded.z.norm()));
+                match twin {
+                    None => kept.push(folded),
+                    Some(k) => {
+                        let kept_is_lower = seg.roots(kind).get(k.root_index).is_some_and(|r| r.im < 0.0);
+                        if kept_is_lower && z.im >= 0.0 {
+                            k.root_index = root_index;
+                        }
+                    }
+                }
+            }
+            kept
+        })
+        .collect()
+}
+
+/// The root of one segment nearest `centre` (ties: the earlier root) and its distance.
+pub(crate) fn nearest_in_segment(points: &[FoldedRoot], centre: Complex64) -> Option<(f64, FoldedRoot)> {
+    points.iter().map(|p| ((p.z - centre).norm(), *p)).min_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// Distance from `point` to the nearest root that is not one of `members`.
+pub(crate) fn nearest_non_member(
+    folded: &[Vec<FoldedRoot>],
+    members: &[FoldedRoot],
+    point: Complex64,
+) -> Option<f64> {
+    folded
+        .iter()
+        .flatten()
+        .filter(|p| !members.iter().any(|m| m.segment == p.segment && m.root_index == p.root_index))
+        .map(|p| (p.z - point).norm())
+        .min_by(f64::total_cmp)
+}
+
+/// The mean of folded roots; real when it lies within half of its radius of the real axis.
+pub(crate) fn centroid_of(points: &[FoldedRoot], real_axis: bool) -> Option<Complex64> {
+    if points.is_empty() {
+        return None;
+    }
+    let n = points.len() as f64;
+    let mean = points.iter().fold(Complex64::new(0.0, 0.0), |acc, p| acc + p.z) / n;
+    Some(if real_axis { Complex64::new(mean.re, 0.0) } else { mean })
+}
+
+pub(crate) fn evaluate_folded(
+    cluster: &Cluster,
+    folded: &[Vec<FoldedRoot>],
+    needed: usize,
+    settings: &ClusterSettings,
+    dt_secs: f64,
+) -> ClusterEval {
+    let cluster = Cluster::new(cluster.kind, cluster.centre, cluster.radius);
+    let real_axis = cluster.is_real_axis();
+    let chosen: Vec<FoldedRoot> = folded
+        .iter()
+        .filter_map(|seg| nearest_in_segment(seg, cluster.centre))
+        .filter(|(d, _)| *d <= cluster.radius)
+        .map(|(_, p)| p)
+        .collect();
+    let fallback = if real_axis { Complex64::new(cluster.centre.re, 0.0) } else { cluster.centre };
+    let centroid = centroid_of(&chosen, real_axis).unwrap_or(fallback);
+    let spread = if chosen.is_empty() {
+        0.0
+    } else {
+        (chosen.iter().map(|p| (p.z - centroid).norm_sqr()).sum::<f64>() / chosen.len() as f64).sqrt()
+    };
+    let nearest_non_member = nearest_non_member(folded, &chosen, centroid);
+    let status = status_of(&cluster, centroid, chosen.len(), needed, settings);
+    let (natural_freq_rad_s, damping) = natural_freq_and_damping(centroid, dt_secs);
+    let time_constant_secs = (real_axis && centroid.re > 0.0 && centroid.re < 1.0)
+        .then(|| -dt_secs / centroid.re.ln())
+        .filter(|t| t.is_finite());
+    ClusterEval {
+        segments_found: chosen.len(),
+        members: chosen
+            .iter()
+            .map(|p| Member { segment: p.segment, root_index: p.root_index, root: p.z })
+            .collect(),
+        cluster,
+        segments_needed: needed,
+        centroid,
+        spread,
+        nearest_non_member,
+        valid: status == ClusterStatus::Valid,
+        status,
+        natural_freq_rad_s,
+        damping,
+        time_constant_secs,
+    }
+}
+
+fn status_of(
+    cluster: &Cluster,
+    centroid: Complex64,
+    found: usize,
+    needed: usize,
+    settings: &ClusterSettings,
+) -> ClusterStatus {
+    let modulus = centroid.norm();
+    let angle_rad = centroid.im.abs().atan2(centroid.re);
+    if found < needed {
+        ClusterStatus::TooFewMembers { found, needed }
+    } else if modulus < settings.min_modulus {
+        ClusterStatus::NearOrigin { modulus, min_modulus: settings.min_modulus }
+    } else if angle_rad > settings.nyquist_exclusion_rad {
+        ClusterStatus::NearNyquist { angle_rad, limit_rad: settings.nyquist_exclusion_rad }
+    } else if cluster.kind == RootKind::Pole && modulus >= 1.0 - UNIT_CIRCLE_TOL {
+        ClusterStatus::Unstable { modulus }
+    } else {
+        ClusterStatus::Valid
+    }
+}
+
+/// (|s|, −Re(s)/|s|) for s = ln(z)/dt; z = 0 is treated as the smallest positive modulus.
+pub fn natural_freq_and_damping(z: Complex64, dt_secs: f64) -> (f64, f64) {
+    let ln_modulus = z.norm().max(f64::MIN_POSITIVE).ln();
+    let s = Complex64::new(ln_modulus, z.im.atan2(z.re)) / dt_secs;
+    let omega = s.norm();
+    let damping = if omega > 0.0 { -s.re / omega } else { 0.0 };
+    (omega, damping)
+}
+
+/// Serialises a complex number as `[re, im]`.
+mod complex_serde {
+    use super::Complex64;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(z: &Complex64, s: S) -> Result<S::Ok, S::Error> {
+        [z.re, z.im].serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Complex64, D::Error> {
+        let [re, im] = <[f64; 2]>::deserialize(d)?;
+        Ok(Complex64::new(re, im))
+    }
+}
+
+/// Serialises complex numbers as a list of `[re, im]`.
+mod complex_vec_serde {
+    use super::Complex64;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(zs: &[Complex64], s: S) -> Result<S::Ok, S::Error> {
+        zs.iter().map(|z| [z.re, z.im]).collect::<Vec<_>>().serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Complex64>, D::Error> {
+        let pairs = Vec::<[f64; 2]>::deserialize(d)?;
+        Ok(pairs.into_iter().map(|[re, im]| Complex64::new(re, im)).collect())
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    const DT: f64 = 1.0 / 8.85;
+
+    fn c(re: f64, im: f64) -> Complex64 {
+        Complex64::new(re, im)
+    }
+
+    fn segments(poles: &[Vec<Complex64>]) -> Vec<SegmentRoots> {
+        let seg = |(j, p): (usize, &Vec<Complex64>)| SegmentRoots {
+            label: format!("S{j}"),
+            poles: p.clone(),
+            zeros: p.clone(),
+        };
+        poles.iter().enumerate().map(seg).collect()
+    }
+
+    fn eval(cluster: &Cluster, roots: &[SegmentRoots], settings: &ClusterSettings) -> ClusterEval {
+        evaluate_cluster(cluster, roots, settings, DT).unwrap()
+    }
+
+    fn four_segments() -> Vec<SegmentRoots> {
+        let noise = [c(0.5, 0.0), c(0.2, 0.3), c(0.2, -0.3)];
+        let reals = [0.925, 0.93, 0.935, 0.94];
+        segments(&reals.map(|r| [vec![c(r, 0.0)], noise.to_vec()].concat()))
+    }
+
+    #[test]
+    fn aggregation_moving_and_growing() {
+        let roots = four_segments();
+        let s = ClusterSettings::default();
+        let e = eval(&Cluster::new(RootKind::Pole, c(0.93, 0.0), 0.02), &roots, &s);
+        assert_eq!(e.status, ClusterStatus::Valid);
+        assert_eq!((e.segments_found, e.segments_needed), (4, 4));
+        assert!((e.centroid - c(0.9325, 0.0)).norm() < 1e-12);
+        assert!((e.time_constant_secs.unwrap() + DT / 0.9325_f64.ln()).abs() < 1e-9);
+        let far = eval(&Cluster::new(RootKind::Pole, c(0.98, 0.0), 0.02), &roots, &s);
+        assert_eq!(far.status, ClusterStatus::TooFewMembers { found: 0, needed: 4 });
+        assert!(!far.valid && far.members.is_empty());
+        let mut cluster = Cluster::new(RootKind::Pole, c(0.945, 0.0), 0.012);
+        assert_eq!(eval(&cluster, &roots, &s).status, ClusterStatus::TooFewMembers { found: 2, needed: 4 });
+        let err = eval(&cluster, &roots, &s).check_valid(3);
+        assert_eq!(err, Err(ClusterError::TooFewMembers { cluster: 3, found: 2, needed: 4 }));
+        cluster.radius = 0.0175;
+        assert_eq!(eval(&cluster, &roots, &s).segments_found, 3);
+        cluster.radius = 0.021;
+        assert!(eval(&cluster, &roots, &s).valid);
+    }
+
+    #[test]
+    fn one_member_per_segment_and_m_below_j() {
+        let mut roots = four_segments();
+        roots[0].poles.push(c(0.926, 0.0));
+        roots.push(SegmentRoots { label: "none".into(), poles: vec![c(0.1, 0.1)], zeros: vec![] });
+        let cluster = Cluster::new(RootKind::Pole, c(0.93, 0.0), 0.02);
+        let e = eval(&cluster, &roots, &ClusterSettings::default());
+        assert_eq!(e.status, ClusterStatus::TooFewMembers { found: 4, needed: 5 });
+        assert_eq!(e.members.iter().map(|m| m.segment).collect::<Vec<_>>(), vec![0, 1, 2, 3]);
+        assert_eq!(e.members[0].root_index, 4, "0.926 is nearer 0.93 than 0.925");
+        let m4 = ClusterSettings { min_segments: Some(4), ..ClusterSettings::default() };
+        assert!(eval(&cluster, &roots, &m4).valid);
+    }
+
+    #[test]
+    fn conjugates_fold_and_count_once() {
+        // Off-axis: the pair of segment 0, only the lower root of segment 1, only the upper of 2.
+        let roots = segments(&[
+            vec![c(0.80, 0.21), c(0.80, -0.21)],
+            vec![c(0.81, -0.20)],
+            vec![c(0.79, 0.22), c(0.3, 0.0)],
+        ]);
+        let s = ClusterSettings::default();
+        let e = eval(&Cluster::new(RootKind::Pole, c(0.80, -0.21), 0.03), &roots, &s);
+        assert!(e.valid && e.cluster.centre.im > 0.0 && !e.cluster.is_real_axis());
+        assert_eq!(e.members.len(), 3);
+        assert_eq!((e.members[0].root_index, e.members[1].root_index), (0, 0));
+        assert!(e.members.iter().all(|m| m.root.im > 0.0));
+        assert!((e.centroid - c(0.80, 0.21)).norm() < 1e-12);
+        assert_eq!(e.reduced_roots(), vec![e.centroid, e.centroid.conj()]);
+        // Real axis: a near-real pair counts once and the centroid is real.
+        let roots = segments(&[vec![c(0.9, 0.001), c(0.9, -0.001)], vec![c(0.91, 0.0)], vec![c(0.92, 0.0)]]);
+        let e = eval(&Cluster::new(RootKind::Pole, c(0.91, 0.0), 0.02), &roots, &s);
+        assert!(e.valid && e.cluster.is_real_axis());
+        assert_eq!(e.members.len(), 3);
+        assert!(e.centroid.im.abs() < 1e-15 && (e.centroid.re - 0.91).abs() < 1e-12);
+        assert_eq!(valid_reduced_roots(&[e], RootKind::Pole).len(), 1);
+    }
+
+    #[test]
+    fn exclusions_nyquist_origin_unstable() {
+        let s = ClusterSettings::default();
+        let at = |z: Complex64| segments(&[vec![z], vec![z]]);
+        let angle = |a: f64| c(0.7 * a.cos(), 0.7 * a.sin());
+        let status = |z: Complex64, kind| eval(&Cluster::new(kind, z, 0.01), &at(z), &s).status;
+        assert_eq!(status(angle(0.7 * PI), RootKind::Pole), ClusterStatus::Valid);
+        assert!(matches!(status(angle(0.8 * PI), RootKind::Pole), ClusterStatus::NearNyquist { .. }));
+        assert!(matches!(status(c(-0.8, 0.0), RootKind::Zero), ClusterStatus::NearNyquist { .. }));
+        assert!(matches!(status(c(0.05, 0.0), RootKind::Pole), ClusterStatus::NearOrigin { .. }));
+        assert!(matches!(status(c(1.02, 0.0), RootKind::Pole), ClusterStatus::Unstable { .. }));
+        assert!(matches!(status(c(1.0, 0.0), RootKind::Pole), ClusterStatus::Unstable { .. }));
+        assert_eq!(status(c(1.02, 0.0), RootKind::Zero), ClusterStatus::Valid);
+        let looser = ClusterSettings { nyquist_exclusion_rad: PI, ..s.clone() };
+        let z = c(-0.8, 0.0);
+        assert!(eval(&Cluster::new(RootKind::Pole, z, 0.01), &at(z), &looser).valid);
+    }
+
+    #[test]
+    fn s_plane_figures_are_recovered() {
+        let (omega, zeta) = (3.0, 0.4);
+        let s = c(-zeta * omega, omega * (1.0 - zeta * zeta).sqrt());
+        let z = (s * DT).exp();
+        let e =
+            eval(&Cluster::new(RootKind::Pole, z, 0.01), &segments(&[vec![z], vec![z]]), &Default::default());
+        assert!((e.natural_freq_rad_s - omega).abs() < 1e-9 && (e.damping - zeta).abs() < 1e-9);
+        assert_eq!(e.time_constant_secs, None);
+        assert_eq!(natural_freq_and_damping(c(1.0, 0.0), DT), (0.0, 0.0));
+        assert!(natural_freq_and_damping(c(0.0, 0.0), DT).0.is_finite());
+    }
+
+    #[test]
+    fn bad_inputs_are_errors() {
+        let roots = four_segments();
+        let cl = Cluster::new(RootKind::Pole, c(0.93, 0.0), 0.02);
+        let s = ClusterSettings::default();
+        assert!(matches!(
+            evaluate_cluster(&cl, &roots, &s, 0.0),
+            Err(ClusterError::InvalidSamplePeriod { .. })
+        ));
+        let zero = ClusterSettings { min_segments: Some(0), ..s.clone() };
+        assert_eq!(zero.check(), Err(ClusterError::ZeroMinSegments));
+        let nan = ClusterSettings { max_radius: f64::NAN, ..s.clone() };
+        assert!(matches!(nan.check(), Err(ClusterError::InvalidSetting { name: "max_radius", .. })));
+        let bad = Cluster { radius: -1.0, ..cl.clone() };
+        let err = evaluate_clusters(&[cl, bad], &roots, &s, DT);
+        assert!(matches!(err, Err(ClusterError::InvalidCluster { cluster: 1, .. })));
+    }
+
+    #[test]
+    fn serde_round_trip() {
+        let roots = four_segments();
+        let cl = Cluster::new(RootKind::Pole, c(0.93, 0.0), 0.02);
+        let evals = evaluate_clusters(&[cl], &roots, &ClusterSettings::default(), DT).unwrap();
+        let json = serde_json::to_string(&(&evals, &roots)).unwrap();
+        let back: (Vec<ClusterEval>, Vec<SegmentRoots>) = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, (evals, roots));
+    }
+}

@@ -1,0 +1,423 @@
+//! Automatic cluster proposal: a density search under the aggregation condition.
+//!
+//! Poles and zeros are searched separately, on roots folded into the upper half-plane (conjugate
+//! twins merged). With J segments and m = [`ClusterSettings::segments_needed`]:
+//!
+//! 1. **Grow a candidate from every root still in play.** Start the centre at the root. For each
+//!    segment take its root nearest the centre and sort these distances d₍₁₎ ≤ … ≤ d₍J₎. The segments
+//!    with the m smallest distances are the members; a further segment whose nearest root is within
+//!    `min_isolation` × the current radius (and within `max_radius`) is absorbed too, since it would
+//!    otherwise spoil the isolation test below. Re-centre on the members' mean (forced real when it
+//!    lies within half a radius of the real axis) and repeat until the member set, hence the centre,
+//!    stops changing (at most a fixed number of rounds). The candidate's radius is the largest
+//!    member distance: the smallest circle about that centre that satisfies the aggregation condition.
+//! 2. **Accept candidates only when they are clusters:** radius ≤ `max_radius`; the nearest root that
+//!    is not a member at least `min_isolation` radii away (a consistent mode stands apart; a chance
+//!    gathering inside a ring of noise roots does not); the circle does not overlap a cluster accepted
+//!    earlier; and [`super::cluster::evaluate_cluster`] calls it valid (not near the origin, not beyond
+//!    the Nyquist exclusion angle, a pole inside the unit circle).
+//! 3. **Greedy:** accept the acceptable candidate with the smallest radius (most consistent; ties go to
+//!    the lower angle, i.e. lower frequency, then the smaller modulus), take its members out of play
+//!    and search again, until no candidate is acceptable.
+//!
+//! The proposed circle keeps the centre and widens the radius by a margin for display, never past
+//! half-way to the nearest non-member nor so far that an off-axis centre would count as on the axis.
+//! Results are sorted by kind, then angle, then modulus. The search is O(R² · rounds) in the number
+//! of roots R, which is small (J · model order).
+
+use nalgebra::Complex;
+
+use super::cluster::{
+    Cluster, ClusterError, ClusterSettings, FoldedRoot, REAL_AXIS_FRACTION, RootKind, SegmentRoots,
+    check_inputs, evaluate_folded, folded_roots, nearest_in_segment, nearest_non_member,
+};
+
+type Complex64 = Complex<f64>;
+
+/// Re-centring rounds per candidate; the member set usually settles in two or three.
+const MAX_ROUNDS: usize = 32;
+/// Display margin on a proposed radius.
+const RADIUS_MARGIN: f64 = 1.25;
+/// Smallest proposed radius, so that a circle around identical roots stays visible and draggable.
+const MIN_CIRCLE_RADIUS: f64 = 2e-3;
+/// Radii closer than this count as tied in the ranking.
+const RADIUS_TIE_TOL: f64 = 1e-9;
+
+/// Proposes clusters of poles and zeros from the segment models' roots.
+///
+/// Errors when the settings or `dt_secs` are invalid, when there are fewer than two segments, or
+/// when the aggregation condition needs fewer than two or more segments than there are.
+pub fn propose_clusters(
+    roots: &[SegmentRoots],
+    settings: &ClusterSettings,
+    dt_secs: f64,
+) -> Result<Vec<Cluster>, ClusterError> {
+    check_inputs(settings, dt_secs)?;
+    let segments = roots.len();
+    if segments < 2 {
+        return Err(ClusterError::TooFewSegments { found: segments, needed: 2 });
+    }
+    let needed = settings.segments_needed(segments);
+    if needed > segments {
+        return Err(ClusterError::MinSegmentsExceedSegments { needed, segments });
+    }
+    if needed < 2 {
+        // One root alone is a "cluster" of radius zero: the aggregation condition means nothing.
+        return Err(ClusterError::TooFewSegments { found: needed, needed: 2 });
+    }
+    let mut clusters = Vec::new();
+    for kind in [RootKind::Pole, RootKind::Zero] {
+        clusters.extend(propose_kind(kind, roots, settings, needed, dt_secs));
+    }
+    clusters.sort_by(|a, b| {
+        a.kind
+            .cmp(&b.kind)
+            .then(angle_of(a.centre).total_cmp(&angle_of(b.centre)))
+            .then(a.centre.norm().total_cmp(&b.centre.norm()))
+            .then(a.radius.total_cmp(&b.radius))
+    });
+    Ok(clusters)
+}
+
+/// A grown candidate: centre, members (one per segment) and the radius that holds them.
+#[derive(Clone, Debug)]
+struct Candidate {
+    centre: Complex64,
+    radius: f64,
+    members: Vec<FoldedRoot>,
+}
+
+fn angle_of(z: Complex64) -> f64 {
+    z.im.abs().atan2(z.re)
+}
+
+fn propose_kind(
+    kind: RootKind,
+    roots: &[SegmentRoots],
+    settings: &ClusterSettings,
+    needed: usize,
+    dt_secs: f64,
+) -> Vec<Cluster> {
+    let folded = folded_roots(roots, kind);
+    let mut in_play = folded.clone();
+    let mut accepted: Vec<Cluster> = Vec::new();
+    loop {
+        let mut best: Option<(Candidate, Cluster)> = None;
+        for seed in in_play.iter().flatten() {
+            let Some(candidate) = grow(seed.z, &in_play, needed, settings) else {
+                continue;
+            };
+            if best.as_ref().is_some_and(|(b, _)| !ranks_before(&candidate, b)) {
+                continue;
+            }
+            if let Some(cluster) = accept(kind, &candidate, &folded, &accepted, needed, settings, dt_secs) {
+                best = Some((candidate, cluster));
+            }
+        }
+        let Some((candidate, cluster)) = best else {
+            break;
+        };
+        for seg in &mut in_play {
+            seg.retain(|p| {
+                !candidate.members.iter().any(|m| m.segment == p.segment && m.root_index == p.root_index)
+            });
+        }
+        accepted.push(cluster);
+    }
+    accepted
+}
+
+/// Strictly better: smaller radius, then lower angle, then smaller modulus.
+fn ranks_before(a: &Candidate, b: &Candidate) -> bool {
+    if (a.radius - b.radius).abs() > RADIUS_TIE_TOL {
+        return a.radius < b.radius;
+    }
+    let key = |c: &Candidate| (angle_of(c.centre), c.centre.norm());
+    let (ka, kb) = (key(a), key(b));
+    ka.0.total_cmp(&kb.0).then(ka.1.total_cmp(&kb.1)).is_lt()
+}
+
+/// Step 1 of the module doc: grow a candidate from `seed` over the roots still in play.
+fn grow(
+    seed: Complex64,
+    in_play: &[Vec<FoldedRoot>],
+    needed: usize,
+    settings: &ClusterSettings,
+) -> Option<Candidate> {
+    let mut centre = seed;
+    let mut last = None;
+    for _ in 0..MAX_ROUNDS {
+        let members = select_members(centre, in_play, needed, settings)?;
+        let radius = members.iter().map(|p| (p.z - centre).norm()).fold(0.0, f64::max);
+        let next = recentre(&members)?;
+        let settled = (next - centre).norm() <= f64::EPSILON * (1.0 + centre.norm());
+        last = Some(Candidate { centre, radius, members });
+        if settled {
+            break;
+        }
+        centre = next;
+    }
+    last
+}
+
+/// The nearest root of the m closest segments, plus any further segment close enough to spoil
+/// the isolation test. Sorted by segment.
+fn select_members(
+    centre: Complex64,
+    in_play: &[Vec<FoldedRoot>],
+    needed: usize,
+    settings: &ClusterSettings,
+) -> Option<Vec<FoldedRoot>> {
+    let mut nearest: Vec<(f64, FoldedRoot)> =
+        in_play.iter().filter_map(|seg| nearest_in_segment(seg, centre)).collect();
+    if nearest.len() < needed {
+        return None;
+    }
+    nearest.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.segment.cmp(&b.1.segment)));
+    let mut count = needed;
+    while let (Some(&(radius, _)), Some(&(next, _))) = (nearest.get(count - 1), nearest.get(count)) {
+        if next <= settings.max_radius && next < settings.min_isolation * radius {
+            count += 1;
+        } else {
+            break;
+        }
+    }
+    nearest.truncate(count);
+    let mut members: Vec<FoldedRoot> = nearest.into_iter().map(|(_, p)| p).collect();
+    members.sort_by_key(|p| p.segment);
+    Some(members)
+}
+
+/// The members' mean, put on the real axis when within half its radius of it.
+fn recentre(members: &[FoldedRoot]) -> Option<Complex64> {
+    let n = members.len() as f64;
+    if members.is_empty() {
+        return None;
+    }
+    let mean = members.iter().fold(Complex64::new(0.0, 0.0), |acc, p| acc + p.z) / n;
+    let radius = members.iter().map(|p| (p.z - mean).norm()).fold(0.0, f64::max);
+    Some(if mean.im.abs() <= REAL_AXIS_FRACTION * radius { Complex64::new(mean.re, 0.0) } else { mean })
+}
+
+/// Step 2 of the module doc: the proposed circle when `candidate` is an acceptable cluster.
+fn accept(
+    kind: RootKind,
+    candidate: &Candidate,
+    folded: &[Vec<FoldedRoot>],
+    accepted: &[Cluster],
+    needed: usize,
+    settings: &ClusterSettings,
+    dt_secs: f64,
+) -> Option<Cluster> {
+    if candidate.radius > settings.max_radius {
+        return None;
+    }
+    let gap = nearest_non_member(folded, &candidate.members, candidate.centre);
+    if gap.is_some_and(|g| g < settings.min_isolation * candidate.radius) {
+        return None;
+    }
+    let cluster = Cluster::new(kind, candidate.centre, display_radius(candidate, gap));
+    let overlaps = accepted.iter().any(|a| (a.centre - cluster.centre).norm() < a.radius + cluster.radius);
+    if overlaps {
+        return None;
+    }
+    let eval = evaluate_folded(&cluster, folded, needed, settings, dt_secs);
+    eval.valid.then_some(cluster)
+}
+
+/// The member radius widened by [`RADIUS_MARGIN`] (at least [`MIN_CIRCLE_RADIUS`]), but no further than
+/// half-way to the nearest non-member, and keeping an off-axis centre off the axis.
+fn display_radius(candidate: &Candidate, gap: Option<f64>) -> f64 {
+    let r = candidate.radius;
+    let mut radius = (r * RADIUS_MARGIN).max(MIN_CIRCLE_RADIUS);
+    if let Some(g) = gap {
+        radius = radius.min(0.5 * (r + g));
+    }
+    let im = candidate.centre.im.abs();
+    if im > 0.0 && im <= REAL_AXIS_FRACTION * radius {
+        // Off-axis at radius r (the re-centring decided so): stay below the real-axis threshold.
+        radius = radius.min(0.5 * (r + im / REAL_AXIS_FRACTION));
+    }
+    // Members lie within r; keep them inside despite rounding.
+    radius.max(r * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::super::cluster::{ClusterStatus, evaluate_cluster};
+    use super::*;
+    use proptest::prelude::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::f64::consts::PI;
+
+    const DT: f64 = 1.0 / 8.85;
+    const REAL_POLE: f64 = 0.936;
+
+    fn c(re: f64, im: f64) -> Complex64 {
+        Complex64::new(re, im)
+    }
+
+    fn pair() -> Complex64 {
+        c(0.80, 0.21)
+    }
+
+    fn jitter(rng: &mut ChaCha8Rng, size: f64) -> Complex64 {
+        let (r, a) = (size * rng.random::<f64>().sqrt(), rng.random_range(0.0..2.0 * PI));
+        c(r * a.cos(), r * a.sin())
+    }
+
+    /// `pairs` conjugate pairs with modulus in `modulus` and any angle, kept 0.05 from the true roots.
+    fn scattered(rng: &mut ChaCha8Rng, pairs: usize, modulus: std::ops::Range<f64>) -> Vec<Complex64> {
+        let mut out = Vec::new();
+        while out.len() < 2 * pairs {
+            let z = Complex64::from_polar(rng.random_range(modulus.clone()), rng.random_range(0.0..PI));
+            if (z - c(REAL_POLE, 0.0)).norm() > 0.05 && (z - pair()).norm() > 0.05 {
+                out.extend([z, z.conj()]);
+            }
+        }
+        out
+    }
+
+    /// J segments with the speed model's true poles jittered by `size`, 16 scattered poles and 3
+    /// scattered zeros each (19 poles / 3 zeros per segment).
+    fn speed_like(seed: u64, segments: usize, size: f64) -> Vec<SegmentRoots> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..segments)
+            .map(|j| {
+                let p = pair() + jitter(&mut rng, size);
+                let mut poles = vec![c(REAL_POLE + size * rng.random_range(-1.0..1.0), 0.0), p, p.conj()];
+                poles.extend(scattered(&mut rng, 8, 0.05..0.98));
+                let mut zeros = scattered(&mut rng, 1, 0.05..1.5);
+                zeros.push(c(rng.random_range(-1.5..1.5), 0.0));
+                SegmentRoots { label: format!("S{j}"), poles, zeros }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn finds_the_true_roots_and_nothing_else() {
+        let settings = ClusterSettings::default();
+        for seed in 0..12 {
+            let roots = speed_like(seed, 7, 0.005);
+            let clusters = propose_clusters(&roots, &settings, DT).unwrap();
+            let centres: Vec<Complex64> = clusters.iter().map(|c| c.centre).collect();
+            assert_eq!(clusters.len(), 2, "seed {seed}: {centres:?}");
+            assert!(clusters.iter().all(|c| c.kind == RootKind::Pole));
+            assert!((centres[0] - c(REAL_POLE, 0.0)).norm() < 0.01, "seed {seed}: {centres:?}");
+            assert!((centres[1] - pair()).norm() < 0.01, "seed {seed}: {centres:?}");
+            assert!(clusters[0].is_real_axis() && !clusters[1].is_real_axis());
+            for cl in &clusters {
+                let e = evaluate_cluster(cl, &roots, &settings, DT).unwrap();
+                assert_eq!(e.segments_found, 7);
+            }
+        }
+    }
+
+    #[test]
+    fn noise_ring_and_origin_roots_give_no_clusters() {
+        let settings = ClusterSettings::default();
+        let mut spurious = 0;
+        for seed in 0..20 {
+            let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
+            let roots: Vec<SegmentRoots> = (0..7)
+                .map(|j| {
+                    let mut poles = scattered(&mut rng, 8, 0.6..0.9);
+                    poles.extend(scattered(&mut rng, 1, 0.0..0.12));
+                    poles.push(c(rng.random_range(-0.1..0.1), 0.0));
+                    SegmentRoots { label: format!("S{j}"), poles, zeros: vec![] }
+                })
+                .collect();
+            spurious += propose_clusters(&roots, &settings, DT).unwrap().len();
+        }
+        assert_eq!(spurious, 0);
+    }
+
+    #[test]
+    fn aggregation_below_all_segments() {
+        let mut roots = speed_like(7, 7, 0.005);
+        // Segment 3 loses its real pole.
+        roots[3].poles.remove(0);
+        let all = propose_clusters(&roots, &ClusterSettings::default(), DT).unwrap();
+        assert_eq!(all.len(), 1);
+        assert!((all[0].centre - pair()).norm() < 0.01);
+        let six = ClusterSettings { min_segments: Some(6), ..ClusterSettings::default() };
+        let some = propose_clusters(&roots, &six, DT).unwrap();
+        assert_eq!(some.len(), 2, "{some:?}");
+        assert!((some[0].centre - c(REAL_POLE, 0.0)).norm() < 0.01);
+    }
+
+    #[test]
+    fn degenerate_inputs() {
+        let s = ClusterSettings::default();
+        let empty = propose_clusters(&[], &s, DT);
+        assert_eq!(empty, Err(ClusterError::TooFewSegments { found: 0, needed: 2 }));
+        let one = speed_like(1, 1, 0.005);
+        assert_eq!(propose_clusters(&one, &s, DT), Err(ClusterError::TooFewSegments { found: 1, needed: 2 }));
+        let bare: Vec<SegmentRoots> =
+            (0..3).map(|j| SegmentRoots { label: format!("{j}"), poles: vec![], zeros: vec![] }).collect();
+        assert_eq!(propose_clusters(&bare, &s, DT), Ok(vec![]));
+        let eight = ClusterSettings { min_segments: Some(8), ..s.clone() };
+        let too_many = propose_clusters(&speed_like(1, 7, 0.005), &eight, DT);
+        assert_eq!(too_many, Err(ClusterError::MinSegmentsExceedSegments { needed: 8, segments: 7 }));
+        // Identical roots in every segment: radius zero, still a visible circle.
+        let same: Vec<SegmentRoots> = (0..4)
+            .map(|j| SegmentRoots { label: format!("{j}"), poles: vec![c(0.9, 0.0)], zeros: vec![] })
+            .collect();
+        let cl = propose_clusters(&same, &s, DT).unwrap();
+        assert_eq!(cl.len(), 1);
+        assert!(cl[0].radius >= MIN_CIRCLE_RADIUS && (cl[0].centre - c(0.9, 0.0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn deterministic() {
+        let roots = speed_like(3, 7, 0.01);
+        let s = ClusterSettings::default();
+        assert_eq!(propose_clusters(&roots, &s, DT), propose_clusters(&roots, &s, DT));
+    }
+
+    fn segments_strategy() -> impl Strategy<Value = (Vec<SegmentRoots>, Option<usize>)> {
+        let root = (-1.5..1.5f64, -1.5..1.5f64).prop_map(|(re, im)| c(re, im));
+        let shared = prop::collection::vec(root.clone(), 0..3);
+        let segment = (prop::collection::vec(root.clone(), 0..8), prop::collection::vec(root, 0..4));
+        (shared, prop::collection::vec(segment, 2..7), 0..8usize, 0.0..0.05f64).prop_map(
+            |(shared, segs, m, spread)| {
+                let j = segs.len();
+                let roots = segs
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, (mut poles, zeros))| {
+                        let wobble = c(spread * (k as f64).sin(), spread * (k as f64).cos());
+                        poles.extend(shared.iter().map(|z| z + wobble));
+                        SegmentRoots { label: format!("{k}"), poles, zeros }
+                    })
+                    .collect();
+                (roots, (m >= 2 && m <= j).then_some(m))
+            },
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+        #[test]
+        fn proposals_are_valid_sorted_and_disjoint((roots, m) in segments_strategy()) {
+            let settings = ClusterSettings { min_segments: m, ..ClusterSettings::default() };
+            let clusters = propose_clusters(&roots, &settings, DT).unwrap();
+            for cl in &clusters {
+                let e = evaluate_cluster(cl, &roots, &settings, DT).unwrap();
+                prop_assert_eq!(&e.status, &ClusterStatus::Valid);
+                prop_assert!(cl.centre.im >= 0.0 && cl.radius > 0.0);
+            }
+            for (a, b) in clusters.iter().zip(clusters.iter().skip(1)) {
+                let key = |c: &Cluster| (c.kind, angle_of(c.centre));
+                prop_assert!(key(a).0 < key(b).0 || (key(a).0 == key(b).0 && key(a).1 <= key(b).1));
+            }
+            for (i, a) in clusters.iter().enumerate() {
+                for b in clusters.iter().skip(i + 1).filter(|b| b.kind == a.kind) {
+                    prop_assert!((a.centre - b.centre).norm() >= a.radius + b.radius);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,409 @@
+//! Reading a run file: CSV table → roles → window → quality repair → time checks → `Run`.
+use std::ops::Range;
+use std::path::Path;
+
+use super::column_map::{Layout, TimeBase, resolve_layout};
+use super::repair::{TimeProblem, check_time, fill_gaps, median_step, resample};
+use super::{
+    DroppedColumn, LoadNotes, LoadOptions, MAX_BAD_FRACTION, MIN_SAMPLES, RunFileError, TIME_TOLERANCE,
+};
+use crate::core::run::{Channel, Run};
+
+/// The raw table: trimmed header names, and the data records with their line numbers.
+struct Table {
+    header: Vec<String>,
+    rows: Vec<csv::ByteRecord>,
+    lines: Vec<u64>,
+}
+
+/// A cell read as a number.
+enum Cell {
+    Number(f64),
+    /// Empty, NaN or infinite.
+    Missing,
+    NotNumber,
+}
+
+fn parse_cell(bytes: &[u8]) -> Cell {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        return Cell::NotNumber;
+    };
+    if text.is_empty() {
+        return Cell::Missing;
+    }
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => Cell::Number(v),
+        Ok(_) => Cell::Missing,
+        Err(_) => Cell::NotNumber,
+    }
+}
+
+/// A cell as text for a message, cut to a readable length.
+fn shown(bytes: &[u8]) -> String {
+    const MAX_CHARS: usize = 40;
+    let text = String::from_utf8_lossy(bytes);
+    if text.chars().count() > MAX_CHARS {
+        format!("{}…", text.chars().take(MAX_CHARS).collect::<String>())
+    } else {
+        text.into_owned()
+    }
+}
+
+/// Line numbers from byte offsets. The csv crate's own line count lags behind CRLF line endings
+/// and blank lines, and a record's byte offset may point at the end of the previous line.
+struct LineCounter<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    line: u64,
+}
+
+impl LineCounter<'_> {
+    /// The 1-based line of the record starting at `byte`; records must come in file order.
+    fn line_at(&mut self, byte: u64) -> u64 {
+        let mut start = usize::try_from(byte).unwrap_or(usize::MAX).min(self.bytes.len());
+        while matches!(self.bytes.get(start), Some(b'\r' | b'\n')) {
+            start += 1;
+        }
+        if let Some(skipped) = self.bytes.get(self.offset..start) {
+            self.line += skipped.iter().filter(|&&b| b == b'\n').count() as u64;
+            self.offset = start;
+        }
+        self.line
+    }
+}
+
+fn read_table(file: &Path, bytes: &[u8]) -> Result<Table, RunFileError> {
+    let mut reader =
+        csv::ReaderBuilder::new().has_headers(false).flexible(true).trim(csv::Trim::All).from_reader(bytes);
+    let malformed = |err: csv::Error| RunFileError::Malformed {
+        file: file.to_owned(),
+        line: err.position().map_or(0, csv::Position::line),
+        message: err.to_string(),
+    };
+    let mut records = reader.byte_records();
+    let header_record = match records.next() {
+        None => return Err(RunFileError::Empty { file: file.to_owned() }),
+        Some(record) => record.map_err(malformed)?,
+    };
+    let header: Vec<String> = header_record
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let name = String::from_utf8_lossy(name);
+            let name = if i == 0 { name.trim_start_matches('\u{feff}') } else { &name };
+            name.trim().to_owned()
+        })
+        .collect();
+    if header.iter().all(String::is_empty) {
+        return Err(RunFileError::Empty { file: file.to_owned() });
+    }
+    for (i, name) in header.iter().enumerate().filter(|(_, name)| !name.is_empty()) {
+        if let Some(j) = header.iter().skip(i + 1).position(|other| other == name) {
+            return Err(RunFileError::DuplicateColumn {
+                file: file.to_owned(),
+                column: name.clone(),
+                first: i + 1,
+                second: i + j + 2,
+            });
+        }
+    }
+    let mut rows = Vec::new();
+    let mut lines = Vec::new();
+    let mut counter = LineCounter { bytes, offset: 0, line: 1 };
+    for record in records {
+        let record = record.map_err(malformed)?;
+        let line = record.position().map_or(0, |p| counter.line_at(p.byte()));
+        if record.len() != header.len() {
+            return Err(RunFileError::WrongFieldCount {
+                file: file.to_owned(),
+                line,
+                row: rows.len() + 1,
+                expected: header.len(),
+                found: record.len(),
+            });
+        }
+        rows.push(record);
+        lines.push(line);
+    }
+    Ok(Table { header, rows, lines })
+}
+
+/// The table plus what is needed to name a cell in an error.
+struct Ctx<'a> {
+    file: &'a Path,
+    table: &'a Table,
+}
+
+impl Ctx<'_> {
+    fn name(&self, col: usize) -> String {
+        self.table.header.get(col).cloned().unwrap_or_default()
+    }
+
+    fn line(&self, row: usize) -> u64 {
+        self.table.lines.get(row).copied().unwrap_or(0)
+    }
+
+    fn cell(&self, row: usize, col: usize) -> &[u8] {
+        self.table.rows.get(row).and_then(|r| r.get(col)).unwrap_or_default()
+    }
+
+    /// The error for a cell that is not a finite number (`row` 0-based).
+    fn cell_error(&self, row: usize, col: usize, missing: bool) -> RunFileError {
+        let (file, line, column, cell) =
+            (self.file.to_owned(), self.line(row), self.name(col), shown(self.cell(row, col)));
+        if missing {
+            RunFileError::MissingValue { file, line, row: row + 1, column, cell }
+        } else {
+            RunFileError::NonNumeric { file, line, row: row + 1, column, cell }
+        }
+    }
+
+    /// Which rows the quality column marks good (all of them without one).
+    fn quality(&self, layout: &Layout) -> Result<Vec<bool>, RunFileError> {
+        let n = self.table.rows.len();
+        let Some(col) = layout.quality else {
+            return Ok(vec![true; n]);
+        };
+        (0..n)
+            .map(|row| match parse_cell(self.cell(row, col)) {
+                Cell::Number(v) if (v - 1.0).abs() < 1e-9 => Ok(true),
+                Cell::Number(v) if v.abs() < 1e-9 => Ok(false),
+                _ => Err(RunFileError::BadQualityValue {
+                    file: self.file.to_owned(),
+                    line: self.line(row),
+                    row: row + 1,
+                    column: self.name(col),
+                    cell: shown(self.cell(row, col)),
+                }),
+            })
+            .collect()
+    }
+
+    /// Column `col` over `rows`, NaN in bad rows. A bad cell in a good row is an error when
+    /// `strict`, otherwise the reason the column is dropped (`Ok(Err(reason))`).
+    fn column(
+        &self,
+        col: usize,
+        rows: Range<usize>,
+        good: &[bool],
+        strict: bool,
+    ) -> Result<Result<Vec<f64>, String>, RunFileError> {
+        let mut values = Vec::with_capacity(rows.len());
+        for row in rows {
+            if !good.get(row).copied().unwrap_or(true) {
+                values.push(f64::NAN);
+                continue;
+            }
+            match parse_cell(self.cell(row, col)) {
+                Cell::Number(v) => values.push(v),
+                bad => {
+                    let missing = matches!(bad, Cell::Missing);
+                    if strict {
+                        return Err(self.cell_error(row, col, missing));
+                    }
+                    let what = if missing { "a missing value" } else { "a non-numeric value" };
+                    let cell = shown(self.cell(row, col));
+                    return Ok(Err(format!("line {}: {what} (\"{cell}\")", self.line(row))));
+                }
+            }
+        }
+        Ok(Ok(values))
+    }
+
+    /// A strict column over `rows` with its bad samples interpolated.
+    fn repaired_column(
+        &self,
+        col: usize,
+        rows: Range<usize>,
+        good: &[bool],
+    ) -> Result<Vec<f64>, RunFileError> {
+        let mut values = self.column(col, rows, good, true)?.unwrap_or_default();
+        fill_gaps(&mut values);
+        Ok(values)
+    }
+
+    /// The time of a row for selecting a window in seconds; NaN when unreadable.
+    fn time_of_row(&self, time: TimeBase, row: usize) -> f64 {
+        match time {
+            TimeBase::Column(col) => match parse_cell(self.cell(row, col)) {
+                Cell::Number(v) => v,
+                _ => f64::NAN,
+            },
+            TimeBase::Fixed { dt_secs } => row as f64 * dt_secs,
+        }
+    }
+}
+
+/// Read a run from the bytes of a CSV file; `file` only names it in errors and gives the run name.
+pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Run, LoadNotes), RunFileError> {
+    if let Some(value) = opts.sample_time_secs
+        && !(value.is_finite() && value > 0.0)
+    {
+        return Err(RunFileError::BadSampleTime { file: file.to_owned(), value });
+    }
+    let table = read_table(file, bytes)?;
+    let layout = resolve_layout(file, &table.header, opts)?;
+    let ctx = Ctx { file, table: &table };
+    let good = ctx.quality(&layout)?;
+    let (window, kept) = select_rows(&ctx, &layout, opts, &good)?;
+
+    let mut t_secs = match layout.time {
+        TimeBase::Column(col) => ctx.repaired_column(col, kept.clone(), &good)?,
+        TimeBase::Fixed { dt_secs } => kept.clone().map(|row| row as f64 * dt_secs).collect(),
+    };
+    let Channels { names, mut values, dropped: dropped_columns } =
+        read_channels(&ctx, &layout, kept.clone(), &good)?;
+    let mut resampled = false;
+    let dt_secs = match layout.time {
+        TimeBase::Fixed { dt_secs } => dt_secs,
+        TimeBase::Column(col) => match check_time(&t_secs, TIME_TOLERANCE) {
+            Ok(dt_secs) => dt_secs,
+            Err(TimeProblem::NonUniform { .. }) if opts.resample => {
+                let dt_secs = median_step(&t_secs);
+                t_secs = resample(&t_secs, &mut values, dt_secs);
+                resampled = true;
+                dt_secs
+            }
+            Err(problem) => return Err(time_error(&ctx, col, kept.start, problem)),
+        },
+    };
+    if t_secs.len() < MIN_SAMPLES {
+        return Err(too_few_samples(file, t_secs.len()));
+    }
+
+    let mut channels = names.iter().zip(values).map(|(name, v)| Channel::new(name, v));
+    // The input is always the first channel; this branch only keeps indexing out of the code.
+    let Some(input) = channels.next() else {
+        return Err(RunFileError::NoOutput { file: file.to_owned(), present: table.header.clone() });
+    };
+    let outputs: Vec<Channel> = channels.by_ref().take(layout.outputs.len()).collect();
+    let aux: Vec<Channel> = channels.collect();
+    let name = file.file_stem().map_or_else(|| file.to_string_lossy(), |s| s.to_string_lossy()).into_owned();
+    let notes = LoadNotes {
+        time_column: match layout.time {
+            TimeBase::Column(col) => Some(ctx.name(col)),
+            TimeBase::Fixed { .. } => None,
+        },
+        rows_in_file: table.rows.len(),
+        kept_rows: kept.clone(),
+        repaired_samples: kept.clone().filter(|&row| !good.get(row).copied().unwrap_or(true)).count(),
+        trimmed_bad_start: kept.start - window.start,
+        trimmed_bad_end: window.end - kept.end,
+        resampled,
+        dropped_columns,
+    };
+    Ok((Run { name, dt_secs, t_secs, input, outputs, aux }, notes))
+}
+
+fn too_few_samples(file: &Path, found: usize) -> RunFileError {
+    RunFileError::TooFewSamples { file: file.to_owned(), found, needed: MIN_SAMPLES }
+}
+
+/// The rows of the window, and the rows kept of it once bad samples at either end are trimmed.
+fn select_rows(
+    ctx: &Ctx<'_>,
+    layout: &Layout,
+    opts: &LoadOptions,
+    good: &[bool],
+) -> Result<(Range<usize>, Range<usize>), RunFileError> {
+    let n_rows = ctx.table.rows.len();
+    if n_rows < MIN_SAMPLES {
+        return Err(too_few_samples(ctx.file, n_rows));
+    }
+    let window = match &opts.window {
+        None => 0..n_rows,
+        Some(window) => {
+            window.select(n_rows, &|row| ctx.time_of_row(layout.time, row)).map_err(|reason| {
+                RunFileError::BadWindow { file: ctx.file.to_owned(), window: window.to_string(), reason }
+            })?
+        }
+    };
+    let is_good = |row: &usize| good.get(*row).copied().unwrap_or(false);
+    let bad = window.len() - window.clone().filter(is_good).count();
+    if let Some(col) = layout.quality
+        && bad as f64 > MAX_BAD_FRACTION * window.len() as f64
+    {
+        return Err(RunFileError::TooManyBadSamples {
+            file: ctx.file.to_owned(),
+            column: ctx.name(col),
+            bad,
+            total: window.len(),
+            max_pct: 100.0 * MAX_BAD_FRACTION,
+        });
+    }
+    // Bad samples at either end have no good neighbour to interpolate from: trim them.
+    let first = window.clone().find(is_good).unwrap_or(window.start);
+    let end = window.clone().rev().find(is_good).map_or(first, |last| last + 1);
+    if end - first < MIN_SAMPLES {
+        return Err(too_few_samples(ctx.file, end - first));
+    }
+    Ok((window, first..end))
+}
+
+/// The input, outputs and auxiliary channels, in that order: `names[i]` holds `values[i]`.
+struct Channels {
+    names: Vec<String>,
+    values: Vec<Vec<f64>>,
+    /// Unmapped columns left out because they are not numeric throughout.
+    dropped: Vec<DroppedColumn>,
+}
+
+/// Read and repair every channel over the kept rows.
+fn read_channels(
+    ctx: &Ctx<'_>,
+    layout: &Layout,
+    kept: Range<usize>,
+    good: &[bool],
+) -> Result<Channels, RunFileError> {
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    for &col in std::iter::once(&layout.input).chain(&layout.outputs).chain(&layout.aux) {
+        names.push(ctx.name(col));
+        values.push(ctx.repaired_column(col, kept.clone(), good)?);
+    }
+    let mut dropped = Vec::new();
+    for &col in &layout.extras {
+        match ctx.column(col, kept.clone(), good, false)? {
+            Ok(mut column) => {
+                fill_gaps(&mut column);
+                names.push(ctx.name(col));
+                values.push(column);
+            }
+            Err(reason) => dropped.push(DroppedColumn { name: ctx.name(col), reason }),
+        }
+    }
+    for &col in &layout.ignored {
+        let reason = "the sample time is given, so the time column is not read".to_owned();
+        dropped.push(DroppedColumn { name: ctx.name(col), reason });
+    }
+    Ok(Channels { names, values, dropped })
+}
+
+fn time_error(ctx: &Ctx<'_>, col: usize, first_row: usize, problem: TimeProblem) -> RunFileError {
+    let (file, column) = (ctx.file.to_owned(), ctx.name(col));
+    match problem {
+        TimeProblem::NonIncreasing { k, previous, value } => {
+            let row = first_row + k;
+            RunFileError::NonIncreasingTime {
+                file,
+                line: ctx.line(row),
+                row: row + 1,
+                column,
+                previous,
+                value,
+            }
+        }
+        TimeProblem::NonUniform { k, step, expected } => {
+            let row = first_row + k;
+            RunFileError::NonUniformTime {
+                file,
+                line: ctx.line(row),
+                row: row + 1,
+                column,
+                step,
+                expected,
+                tolerance_pct: 100.0 * TIME_TOLERANCE,
+            }
+        }
+    }
+}

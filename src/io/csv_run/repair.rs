@@ -1,0 +1,169 @@
+//! Sample-level numerics of loading: gap filling, time-axis checks and resampling.
+
+/// Replace NaN entries by linear interpolation (by sample index) between the nearest finite
+/// neighbours; NaN at either end takes the nearest finite value. An all-NaN slice is left alone.
+pub(super) fn fill_gaps(values: &mut [f64]) {
+    let n = values.len();
+    let mut prev: Option<usize> = None;
+    let mut i = 0;
+    while i < n {
+        if values.get(i).is_some_and(|v| v.is_finite()) {
+            prev = Some(i);
+            i += 1;
+            continue;
+        }
+        let next = (i..n).find(|&j| values.get(j).is_some_and(|v| v.is_finite()));
+        let left = prev.and_then(|p| values.get(p).map(|&v| (p, v)));
+        let right = next.and_then(|q| values.get(q).map(|&v| (q, v)));
+        let end = next.unwrap_or(n);
+        for k in i..end {
+            let value = match (left, right) {
+                (Some((p, vp)), Some((q, vq))) => vp + (vq - vp) * (k - p) as f64 / (q - p) as f64,
+                (Some((_, v)), None) | (None, Some((_, v))) => v,
+                (None, None) => return,
+            };
+            if let Some(slot) = values.get_mut(k) {
+                *slot = value;
+            }
+        }
+        i = end;
+    }
+}
+
+/// Consecutive pairs `(t[k-1], t[k])`.
+fn pairs(t: &[f64]) -> impl Iterator<Item = (f64, f64)> + '_ {
+    t.windows(2).filter_map(|w| match w {
+        [a, b] => Some((*a, *b)),
+        _ => None,
+    })
+}
+
+/// The median of the steps of `t` (at least two samples), rounded to 12 significant digits to drop
+/// the noise of floating-point differences (0.020000000000000018 → 0.02); 0 for fewer samples.
+pub(super) fn median_step(t: &[f64]) -> f64 {
+    let median = median_of_steps(t);
+    format!("{median:.11e}").parse().unwrap_or(median)
+}
+
+fn median_of_steps(t: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = pairs(t).map(|(a, b)| b - a).collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    steps.sort_by(f64::total_cmp);
+    let mid = steps.len() / 2;
+    match (steps.get(mid.wrapping_sub(1)), steps.get(mid)) {
+        (Some(a), Some(b)) if steps.len().is_multiple_of(2) => 0.5 * (a + b),
+        (_, Some(b)) => *b,
+        _ => 0.0,
+    }
+}
+
+/// What is wrong with a time axis; `k` is the index of the offending sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum TimeProblem {
+    NonIncreasing { k: usize, previous: f64, value: f64 },
+    NonUniform { k: usize, step: f64, expected: f64 },
+}
+
+/// Check that `t` strictly increases and that every step is within `tolerance` (relative) of the
+/// median step, which is returned. A non-increasing time is reported before any non-uniform step.
+pub(super) fn check_time(t: &[f64], tolerance: f64) -> Result<f64, TimeProblem> {
+    for (k, (previous, value)) in pairs(t).enumerate() {
+        if value <= previous || !value.is_finite() {
+            return Err(TimeProblem::NonIncreasing { k: k + 1, previous, value });
+        }
+    }
+    let dt = median_step(t);
+    // A little headroom so that steps printed with rounded digits (0.106, 0.107) are not refused
+    // for the last bits of floating-point noise.
+    let limit = tolerance * dt * (1.0 + 1e-9);
+    for (k, (previous, value)) in pairs(t).enumerate() {
+        let step = value - previous;
+        if (step - dt).abs() > limit {
+            return Err(TimeProblem::NonUniform { k: k + 1, step, expected: dt });
+        }
+    }
+    Ok(dt)
+}
+
+/// Resample every channel onto the uniform grid `t[0] + k·dt` (up to the last time) by linear
+/// interpolation; `t` must strictly increase. Returns the new time axis.
+pub(super) fn resample(t: &[f64], channels: &mut [Vec<f64>], dt_secs: f64) -> Vec<f64> {
+    let (Some(&t0), Some(&t_end)) = (t.first(), t.last()) else {
+        return Vec::new();
+    };
+    if !(dt_secs > 0.0 && dt_secs.is_finite()) {
+        return t.to_vec();
+    }
+    let count = ((t_end - t0) / dt_secs + 1e-9).floor() as usize + 1;
+    let grid: Vec<f64> = (0..count).map(|k| t0 + k as f64 * dt_secs).collect();
+    // For each grid point: the segment [j, j+1] of `t` holding it and the weight of sample j+1.
+    let mut weights = Vec::with_capacity(count);
+    let mut j = 0;
+    for &tk in &grid {
+        while j + 2 < t.len() && t.get(j + 1).is_some_and(|&tn| tn <= tk) {
+            j += 1;
+        }
+        let weight = match (t.get(j), t.get(j + 1)) {
+            (Some(&ta), Some(&tb)) if tb > ta => ((tk - ta) / (tb - ta)).clamp(0.0, 1.0),
+            _ => 0.0,
+        };
+        weights.push((j, weight));
+    }
+    for values in channels.iter_mut() {
+        let resampled = weights
+            .iter()
+            .map(|&(j, w)| {
+                let a = values.get(j).copied().unwrap_or(f64::NAN);
+                let b = values.get(j + 1).copied().unwrap_or(a);
+                a + (b - a) * w
+            })
+            .collect();
+        *values = resampled;
+    }
+    grid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaps_are_filled_linearly() {
+        let mut v = [f64::NAN, 1.0, f64::NAN, f64::NAN, 4.0, f64::NAN];
+        fill_gaps(&mut v);
+        let expected = [1.0, 1.0, 2.0, 3.0, 4.0, 4.0];
+        assert!(v.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-12), "{v:?}");
+    }
+
+    #[test]
+    fn median_of_steps() {
+        assert!((median_step(&[0.0, 0.1, 0.2, 0.35, 0.45]) - 0.1).abs() < 1e-12);
+        assert!((median_step(&[0.0, 1.0, 3.0]) - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn time_checks_name_the_first_offending_sample() {
+        assert_eq!(
+            check_time(&[0.0, 1.0, 2.0, 2.0, 3.0], 0.01),
+            Err(TimeProblem::NonIncreasing { k: 3, previous: 2.0, value: 2.0 })
+        );
+        let Err(TimeProblem::NonUniform { k, .. }) = check_time(&[0.0, 1.0, 2.0, 3.5, 4.5], 0.01) else {
+            panic!("expected a non-uniform step");
+        };
+        assert_eq!(k, 3);
+        assert!(check_time(&[0.0, 0.106, 0.213, 0.319, 0.425], 0.01).is_ok());
+    }
+
+    #[test]
+    fn resampling_a_line_keeps_the_line() {
+        let t = [0.0, 0.9, 2.1, 3.0, 4.05];
+        let mut ch = vec![t.iter().map(|x| 2.0 * x + 1.0).collect::<Vec<f64>>()];
+        let grid = resample(&t, &mut ch, 1.0);
+        assert_eq!(grid.len(), 5);
+        for (tk, y) in grid.iter().zip(&ch[0]) {
+            assert!((y - (2.0 * tk + 1.0)).abs() < 1e-12);
+        }
+    }
+}

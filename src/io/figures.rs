@@ -1,0 +1,212 @@
+//! PNG figures for the batch report: z-plane clusters, Bode comparison, static-map fit, validation
+//! traces, histograms and box plots.
+//!
+//! Every function takes plain data and writes one PNG file. The file is written atomically: the
+//! image is encoded in memory, written to a temporary file in the target directory and renamed
+//! over the target, so a failed run never leaves a half-written picture behind.
+//!
+//! Drawing uses `plotters` with its pure-Rust bitmap backend and the embedded DejaVu Sans font
+//! (`assets/fonts/`), so no system font library is needed. Empty data gives a chart with a
+//! "no data" note rather than an error; inconsistent data (series of different lengths, zero
+//! bins) gives a [`FigureError`]. Non-finite values are skipped.
+
+mod bode;
+mod legend;
+pub mod palette;
+mod stats;
+mod xy;
+mod zplane;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use plotters::coord::Shift;
+use plotters::drawing::DrawingAreaErrorKind;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+pub use bode::{BodeCurve, EmpiricalBode, bode_png};
+pub use stats::{boxplot_png, histogram_png};
+pub use xy::{static_map_png, traces_png};
+pub use zplane::zplane_png;
+
+/// DejaVu Sans (Bitstream Vera licence, see `assets/fonts/DejaVuSans-LICENSE.txt`).
+static FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+/// The family name the font is registered under; plotters' default text styles use it.
+const FONT_FAMILY: &str = "sans-serif";
+
+/// Standard figure size in pixels.
+pub const FIGURE_SIZE: (u32, u32) = (1200, 800);
+/// Width of the legend panel at the right of every figure, in pixels.
+const LEGEND_WIDTH: u32 = 250;
+const TITLE_FONT_PX: f64 = 28.0;
+const DESC_FONT_PX: f64 = 20.0;
+const LABEL_FONT_PX: f64 = 16.0;
+/// Space around each chart and the sizes of its axis label areas, in pixels.
+const CHART_MARGIN: u32 = 15;
+const X_LABEL_AREA: u32 = 50;
+const Y_LABEL_AREA: u32 = 80;
+
+#[derive(Debug, thiserror::Error)]
+pub enum FigureError {
+    #[error("figure {}: cannot write the file: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("figure {}: cannot encode the PNG: {source}", path.display())]
+    Encode { path: PathBuf, source: image::ImageError },
+    #[error("figure {}: drawing failed: {message}", path.display())]
+    Draw { path: PathBuf, message: String },
+    #[error("figure {}: the path has no file name", path.display())]
+    NoFileName { path: PathBuf },
+    #[error("figure {}: {what} has {found} values, expected {expected}", path.display())]
+    LengthMismatch { path: PathBuf, what: String, found: usize, expected: usize },
+    #[error("figure {}: parameter `{name}` = {value} is out of range ({expected})", path.display())]
+    InvalidParameter { path: PathBuf, name: &'static str, value: f64, expected: &'static str },
+    #[error("the embedded figure font could not be loaded")]
+    Font,
+}
+
+/// A drawing failure inside plotters, before the path is attached.
+#[derive(Debug)]
+pub(crate) struct DrawError(String);
+
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for DrawError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        Self(e.to_string())
+    }
+}
+
+pub(crate) type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+pub(crate) type DrawResult = Result<(), DrawError>;
+
+fn ensure_font() -> Result<(), FigureError> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, FONT_TTF).is_ok()
+    });
+    if ok { Ok(()) } else { Err(FigureError::Font) }
+}
+
+/// Draws a `size` picture with `draw` and writes it to `path` as PNG, atomically.
+pub(crate) fn render(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&Area<'_>) -> DrawResult,
+) -> Result<(), FigureError> {
+    ensure_font()?;
+    let (w, h) = size;
+    let mut pixels = vec![255u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area();
+        let drawn = root
+            .fill(&palette::BACKGROUND)
+            .map_err(DrawError::from)
+            .and_then(|()| draw(&root))
+            .and_then(|()| root.present().map_err(DrawError::from));
+        drawn.map_err(|DrawError(message)| FigureError::Draw { path: path.to_path_buf(), message })?;
+    }
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &pixels,
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|source| FigureError::Encode { path: path.to_path_buf(), source })?;
+    write_atomically(path, &png)
+}
+
+/// Writes `bytes` to a temporary file beside `path`, then renames it over `path`.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), FigureError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let Some(file_name) = path.file_name() else {
+        return Err(FigureError::NoFileName { path: path.to_path_buf() });
+    };
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let tmp = dir.join(format!(".{}.{}-{n}.tmp", file_name.to_string_lossy(), std::process::id()));
+    let io_err = |source| FigureError::Io { path: path.to_path_buf(), source };
+    std::fs::write(&tmp, bytes).map_err(io_err)?;
+    std::fs::rename(&tmp, path).map_err(|source| {
+        // Best effort: the rename error is the one worth reporting.
+        let _ = std::fs::remove_file(&tmp);
+        io_err(source)
+    })
+}
+
+pub(crate) fn font(size_px: f64) -> TextStyle<'static> {
+    TextStyle::from((FONT_FAMILY, size_px).into_font()).color(&palette::TEXT)
+}
+
+pub(crate) fn title_font() -> TextStyle<'static> {
+    font(TITLE_FONT_PX)
+}
+
+pub(crate) fn desc_font() -> TextStyle<'static> {
+    font(DESC_FONT_PX)
+}
+
+pub(crate) fn label_font() -> TextStyle<'static> {
+    font(LABEL_FONT_PX)
+}
+
+/// Draws the title and splits the rest into the chart area (left) and the legend panel (right).
+pub(crate) fn titled_with_legend<'a>(root: &Area<'a>, title: &str) -> Result<(Area<'a>, Area<'a>), DrawError> {
+    let body = root.titled(title, title_font())?;
+    let (w, _) = body.dim_in_pixel();
+    Ok(body.split_horizontally(w.saturating_sub(LEGEND_WIDTH)))
+}
+
+/// A chart builder with the standard margin and label-area sizes.
+pub(crate) fn chart_builder<'a, 'b>(area: &'a Area<'b>) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(CHART_MARGIN).x_label_area_size(X_LABEL_AREA).y_label_area_size(Y_LABEL_AREA);
+    builder
+}
+
+/// Writes `text` in the middle of `area` (used for "no data").
+pub(crate) fn draw_note(area: &Area<'_>, text: &str) -> DrawResult {
+    let (w, h) = area.dim_in_pixel();
+    let style = desc_font().color(&palette::NOTE).pos(Pos::new(HPos::Center, VPos::Center));
+    area.draw(&Text::new(text.to_owned(), (w as i32 / 2, h as i32 / 2), style))?;
+    Ok(())
+}
+
+/// The range of the finite values, padded by `pad` of its width; a single value or a zero-width
+/// range is widened so the axis is still drawable. `None` when no value is finite.
+pub(crate) fn padded_range(values: impl IntoIterator<Item = f64>, pad: f64) -> Option<(f64, f64)> {
+    let (lo, hi) = values
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold(None, |acc: Option<(f64, f64)>, v| match acc {
+            None => Some((v, v)),
+            Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
+        })?;
+    let width = hi - lo;
+    if width <= f64::EPSILON * (lo.abs() + hi.abs()) {
+        let half = if lo.abs() > 0.0 { 0.1 * lo.abs() } else { 1.0 };
+        return Some((lo - half, hi + half));
+    }
+    Some((lo - pad * width, hi + pad * width))
+}
+
+/// A number for an axis tick: few digits, no trailing zeros.
+pub(crate) fn tick_label(v: f64) -> String {
+    let a = v.abs();
+    if a > 0.0 && !(1e-3..1e5).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".to_owned() } else { s.to_owned() }
+}
+
+/// Fails unless `found == expected`.
+pub(crate) fn check_len(path: &Path, what: &str, found: usize, expected: usize) -> Result<(), FigureError> {
+    if found == expected {
+        Ok(())
+    } else {
+        Err(FigureError::LengthMismatch { path: path.to_path_buf(), what: what.to_owned(), found, expected })
+    }
+}

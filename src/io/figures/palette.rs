@@ -1,0 +1,41 @@
+//! Every colour the figures use.
+use plotters::style::RGBColor;
+
+pub const BACKGROUND: RGBColor = RGBColor(255, 255, 255);
+pub const TEXT: RGBColor = RGBColor(30, 30, 30);
+pub const NOTE: RGBColor = RGBColor(120, 120, 120);
+/// Major and minor grid lines.
+pub const GRID_BOLD: RGBColor = RGBColor(210, 210, 210);
+pub const GRID_LIGHT: RGBColor = RGBColor(238, 238, 238);
+/// Axes, the unit circle and other reference lines drawn over the grid.
+pub const REFERENCE: RGBColor = RGBColor(90, 90, 90);
+/// The z-plane angle rays.
+pub const RAY: RGBColor = RGBColor(190, 190, 190);
+/// Measured data: traces, steady-state points, empirical Bode points.
+pub const MEASURED: RGBColor = RGBColor(20, 20, 20);
+/// Data the figure plays down: invalid clusters, low-coherence points.
+pub const MUTED: RGBColor = RGBColor(160, 160, 160);
+/// Valid clusters.
+pub const VALID_CLUSTER: RGBColor = RGBColor(0, 0, 0);
+/// A fitted curve drawn over measured points (static map, normal fit).
+pub const FIT: RGBColor = RGBColor(214, 39, 40);
+/// Bars and boxes.
+pub const FILL: RGBColor = RGBColor(31, 119, 180);
+/// Series colours (segments, models), used in turn (Tableau 10).
+pub const SERIES: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// The `i`-th series colour, cycling.
+pub fn series(i: usize) -> RGBColor {
+    SERIES[i % SERIES.len()]
+}

@@ -1,0 +1,120 @@
+//! `model.json`: everything needed to simulate each output's model again (CONTRACT.md).
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::core::cluster::Cluster;
+use crate::core::pipeline::GrayBoxModel;
+use crate::core::refine::Refinement;
+use crate::core::wiener::WienerModel;
+use crate::io::atomic::write_atomic;
+
+pub const MODEL_FORMAT_VERSION: u32 = 1;
+
+pub const CONVENTION: &str = "Wiener model u -> G(z) -> v -> f(v) -> y. linear.tf.num_zinv[k] and \
+den_zinv[k] multiply z^-k, den_zinv[0] = 1; v = G(z) u + linear.offset, simulated from the steady \
+state of the first input sample. f(v) = sum_i static_map.coeffs_scaled[i] * ((v - v_center)/v_scale)^i \
+= sum_i static_map_beta[i] * v^i.";
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SignalInfo {
+    pub name: String,
+    pub unit: String,
+}
+
+/// An effect applied to a model, with its fitted parameters (see METHOD.md's catalog).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EffectRecord {
+    pub id: String,
+    pub params: std::collections::BTreeMap<String, f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutputModel {
+    pub name: String,
+    pub unit: String,
+    /// The model the file simulates.
+    pub wiener: WienerModel,
+    /// Plain coefficients β0, β1, … of f(v), for reading (the scaled form above is what is simulated).
+    pub static_map_beta: Vec<f64>,
+    pub poles: Vec<Complex64>,
+    pub zeros: Vec<Complex64>,
+    pub clusters: Vec<Cluster>,
+    #[serde(default)]
+    pub refinement: Option<Refinement>,
+    #[serde(default)]
+    pub effects: Vec<EffectRecord>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    pub format_version: u32,
+    pub convention: String,
+    pub dt_secs: f64,
+    pub input: SignalInfo,
+    pub outputs: Vec<OutputModel>,
+}
+
+impl ModelFile {
+    pub fn new(dt_secs: f64, input: SignalInfo) -> Self {
+        Self {
+            format_version: MODEL_FORMAT_VERSION,
+            convention: CONVENTION.to_owned(),
+            dt_secs,
+            input,
+            outputs: Vec::new(),
+        }
+    }
+
+    pub fn push(&mut self, model: &GrayBoxModel, unit: &str) {
+        let tf = &model.wiener.linear.tf;
+        self.outputs.push(OutputModel {
+            name: model.output.clone(),
+            unit: unit.to_owned(),
+            wiener: model.wiener.clone(),
+            static_map_beta: model.wiener.map.beta(),
+            poles: tf.poles().unwrap_or_default(),
+            zeros: tf.zeros().unwrap_or_default(),
+            clusters: model.clusters.clone(),
+            refinement: model.refinement.clone(),
+            effects: Vec::new(),
+        });
+    }
+}
+
+pub fn write_model(path: &Path, model: &ModelFile) -> Result<()> {
+    let text = serde_json::to_string_pretty(model).context("serialising the model")?;
+    write_atomic(path, text.as_bytes())
+}
+
+pub fn read_model(path: &Path) -> Result<ModelFile> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read model file {}", path.display()))?;
+    let model: ModelFile = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a jetid model file", path.display()))?;
+    if model.format_version != MODEL_FORMAT_VERSION {
+        bail!(
+            "{} has format_version {}, this jetid reads version {MODEL_FORMAT_VERSION}",
+            path.display(),
+            model.format_version
+        );
+    }
+    if !(model.dt_secs.is_finite() && model.dt_secs > 0.0) {
+        bail!("{}: dt_secs must be positive, got {}", path.display(), model.dt_secs);
+    }
+    for out in &model.outputs {
+        // Re-check what the constructor checks, so a hand-edited file cannot panic the simulation.
+        crate::core::tf::DiscreteTf::new(
+            out.wiener.linear.tf.num_zinv.clone(),
+            out.wiener.linear.tf.den_zinv.clone(),
+            out.wiener.linear.tf.dt_secs,
+        )
+        .with_context(|| format!("{}: output '{}'", path.display(), out.name))?;
+        if out.wiener.map.coeffs_scaled.is_empty() || !out.wiener.map.v_scale.is_normal() {
+            bail!("{}: output '{}' has an empty static map or a zero v_scale", path.display(), out.name);
+        }
+    }
+    Ok(model)
+}

@@ -1,0 +1,298 @@
+//! Project files (TOML): which runs play which role, how to read them, and per-output settings.
+//!
+//! ```toml
+//! name = "SR-30 sample runs"
+//! ident = "ident.csv"                      # paths are relative to the project file;
+//! validate = ["validation.csv"]            # "$VAR/..." takes the folder from an environment variable
+//! chirp = "chirp.csv"
+//! steady = "steady.csv"
+//! outputs = ["shaft_speed_rpm", "thrust_n"]  # default: every output of the identification run
+//! add_effects = []
+//! [load]                                   # how to read every run (each run may override)
+//! map = ["input=pump_V", "output=rpm"]
+//! [[validate]]                             # a run may also be a table with its own options
+//! path = "runA.csv"
+//! window = "935:2603"
+//! [output.shaft_speed_rpm]                 # per-output settings
+//! na = 19
+//! nb = 3
+//! static_order = 2
+//! segments = [[600, 626, 950], ...]        # optional manual segments: start, step, end (samples)
+//! clusters = [{ kind = "Pole", centre = [0.936, 0.0], radius = 0.01 }]
+//! ```
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde::{Deserialize, Serialize};
+
+use crate::core::arx::ArxOrders;
+use crate::core::cluster::Cluster;
+use crate::core::pipeline::OutputSettings;
+use crate::core::segment::{Segment, segment_label};
+use crate::io::csv_run::LoadOptions;
+
+/// How to read runs: the command line's `--map`, `--sample-time`, `--window`, `--quality`, `--resample`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LoadSpec {
+    pub map: Vec<String>,
+    pub sample_time: Option<f64>,
+    pub window: Option<String>,
+    pub quality: Option<String>,
+    pub resample: bool,
+}
+
+impl LoadSpec {
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    pub fn to_options(&self) -> Result<LoadOptions> {
+        Ok(LoadOptions::from_cli(
+            &self.map,
+            self.sample_time,
+            self.window.as_deref(),
+            self.quality.as_deref(),
+            self.resample,
+        )?)
+    }
+
+    /// `self` with the fields `over` sets taken from `over`.
+    fn overridden_by(&self, over: &LoadSpec) -> LoadSpec {
+        LoadSpec {
+            map: if over.map.is_empty() { self.map.clone() } else { over.map.clone() },
+            sample_time: over.sample_time.or(self.sample_time),
+            window: over.window.clone().or_else(|| self.window.clone()),
+            quality: over.quality.clone().or_else(|| self.quality.clone()),
+            resample: self.resample || over.resample,
+        }
+    }
+}
+
+/// A run in a project: a path, or a table with a path and its own load options.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum RunEntry {
+    Path(String),
+    Table {
+        path: String,
+        #[serde(flatten)]
+        load: LoadSpec,
+    },
+}
+
+/// Per-output settings as written in a project file.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSpec {
+    pub na: Option<usize>,
+    pub nb: Option<usize>,
+    pub nk: Option<usize>,
+    pub static_order: Option<usize>,
+    pub min_segments: Option<usize>,
+    pub refine: Option<bool>,
+    pub segments: Option<Vec<[usize; 3]>>,
+    pub clusters: Option<Vec<Cluster>>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ProjectFile {
+    pub name: Option<String>,
+    pub ident: Option<RunEntry>,
+    pub validate: Vec<RunEntry>,
+    pub chirp: Option<RunEntry>,
+    pub steady: Option<RunEntry>,
+    pub outputs: Vec<String>,
+    pub add_effects: Vec<String>,
+    pub load: LoadSpec,
+    pub output: BTreeMap<String, OutputSpec>,
+}
+
+/// A run to load: its resolved path and options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunSource {
+    pub path: PathBuf,
+    pub load: LoadSpec,
+}
+
+/// A project with paths resolved and settings checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Project {
+    pub name: String,
+    pub ident: Option<RunSource>,
+    pub validate: Vec<RunSource>,
+    pub chirp: Option<RunSource>,
+    pub steady: Option<RunSource>,
+    pub outputs: Vec<String>,
+    pub add_effects: Vec<String>,
+    pub settings: BTreeMap<String, OutputSettings>,
+    pub segments: BTreeMap<String, Vec<Segment>>,
+    pub clusters: BTreeMap<String, Vec<Cluster>>,
+}
+
+impl Project {
+    /// Settings for an output: the project's, else the defaults for its name.
+    pub fn settings_for(&self, output: &str) -> OutputSettings {
+        self.settings.get(output).cloned().unwrap_or_else(|| OutputSettings::for_output(output))
+    }
+}
+
+/// Expand a leading `$VAR` (or `${VAR}`) and resolve relative to `base`.
+pub fn resolve_path(raw: &str, base: &Path) -> Result<PathBuf> {
+    let expanded = if let Some(rest) = raw.strip_prefix('$') {
+        let (var, tail) = if let Some(braced) = rest.strip_prefix('{') {
+            let end = braced.find('}').ok_or_else(|| anyhow!("unclosed '${{' in path '{raw}'"))?;
+            (&braced[..end], &braced[end + 1..])
+        } else {
+            let end = rest.find(['/', '\\']).unwrap_or(rest.len());
+            (&rest[..end], &rest[end..])
+        };
+        let value = std::env::var(var)
+            .map_err(|_| anyhow!("path '{raw}' needs the environment variable {var}, which is not set"))?;
+        format!("{value}{tail}")
+    } else {
+        raw.to_owned()
+    };
+    let path = PathBuf::from(expanded);
+    Ok(if path.is_absolute() { path } else { base.join(path) })
+}
+
+fn source(entry: &RunEntry, base: &Path, defaults: &LoadSpec) -> Result<RunSource> {
+    let (raw, own) = match entry {
+        RunEntry::Path(p) => (p.as_str(), LoadSpec::default()),
+        RunEntry::Table { path, load } => (path.as_str(), load.clone()),
+    };
+    let load = defaults.overridden_by(&own);
+    load.to_options().with_context(|| format!("load options of run '{raw}'"))?;
+    Ok(RunSource { path: resolve_path(raw, base)?, load })
+}
+
+fn output_settings(name: &str, spec: &OutputSpec) -> Result<OutputSettings> {
+    let mut s = OutputSettings::for_output(name);
+    s.orders = ArxOrders {
+        na: spec.na.unwrap_or(s.orders.na),
+        nb: spec.nb.unwrap_or(s.orders.nb),
+        nk: spec.nk.unwrap_or(s.orders.nk),
+    };
+    s.orders.check().with_context(|| format!("[output.{name}]"))?;
+    if spec.static_order.is_some() {
+        s.static_order = spec.static_order;
+    }
+    if let Some(m) = spec.min_segments {
+        s.cluster.min_segments = Some(m);
+    }
+    if let Some(r) = spec.refine {
+        s.refine = r;
+    }
+    Ok(s)
+}
+
+/// Parse a project from TOML text; `base` is the folder relative paths start from.
+pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
+    let file: ProjectFile = toml::from_str(text).with_context(|| format!("project file {origin}"))?;
+    let defaults = &file.load;
+    defaults.to_options().with_context(|| format!("[load] of project file {origin}"))?;
+    let mut settings = BTreeMap::new();
+    let mut segments = BTreeMap::new();
+    let mut clusters = BTreeMap::new();
+    for (name, spec) in &file.output {
+        settings.insert(
+            name.clone(),
+            output_settings(name, spec).with_context(|| format!("project file {origin}"))?,
+        );
+        if let Some(bounds) = &spec.segments {
+            let segs = bounds
+                .iter()
+                .enumerate()
+                .map(|(i, [start, step_at, end])| Segment {
+                    label: segment_label(i),
+                    start: *start,
+                    step_at: *step_at,
+                    end: *end,
+                })
+                .collect();
+            segments.insert(name.clone(), segs);
+        }
+        if let Some(c) = &spec.clusters {
+            clusters.insert(name.clone(), c.clone());
+        }
+    }
+    let opt = |e: &Option<RunEntry>| e.as_ref().map(|e| source(e, base, defaults)).transpose();
+    Ok(Project {
+        name: file.name.clone().unwrap_or_else(|| origin.to_owned()),
+        ident: opt(&file.ident)?,
+        validate: file.validate.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?,
+        chirp: opt(&file.chirp)?,
+        steady: opt(&file.steady)?,
+        outputs: file.outputs.clone(),
+        add_effects: file.add_effects.clone(),
+        settings,
+        segments,
+        clusters,
+    })
+}
+
+pub fn load_project(path: &Path) -> Result<Project> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read project file {}", path.display()))?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_project(&text, &base, &path.display().to_string())
+}
+
+/// The bundled sample runs: `sample_runs/` under the current folder, else beside the sources.
+pub fn bundled_samples_dir() -> Option<PathBuf> {
+    let candidates =
+        [PathBuf::from("sample_runs"), Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs")];
+    candidates.into_iter().find(|p| p.join("sr30").is_dir())
+}
+
+/// The default project of `jetid --batch`.
+pub fn bundled_project_path() -> Result<PathBuf> {
+    let Some(dir) = bundled_samples_dir() else {
+        bail!(
+            "no project given and the bundled sample runs (sample_runs/sr30) were not found; pass a project file or --ident"
+        );
+    };
+    Ok(dir.join("sr30").join("project.toml"))
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn parses_paths_tables_and_settings() {
+        let text = r#"
+            ident = "ident.csv"
+            validate = ["val.csv", { path = "/abs/runA.csv", window = "935:2603" }]
+            [load]
+            map = ["input=pump_V"]
+            [output.rpm]
+            na = 4
+            nb = 1
+            segments = [[10, 20, 60], [60, 70, 120]]
+            clusters = [{ kind = "Pole", centre = [0.9, 0.0], radius = 0.02 }]
+        "#;
+        let p = parse_project(text, Path::new("/data"), "t.toml").unwrap();
+        assert_eq!(p.ident.as_ref().unwrap().path, PathBuf::from("/data/ident.csv"));
+        assert_eq!(p.validate[1].path, PathBuf::from("/abs/runA.csv"));
+        assert_eq!(p.validate[1].load.window.as_deref(), Some("935:2603"));
+        assert_eq!(p.validate[1].load.map, vec!["input=pump_V".to_owned()]);
+        assert_eq!(p.settings["rpm"].orders.na, 4);
+        assert_eq!(p.segments["rpm"][1].label, "B");
+        assert_eq!(p.clusters["rpm"].len(), 1);
+    }
+
+    #[test]
+    fn bad_projects_are_errors() {
+        assert!(parse_project("idnet = \"x.csv\"", Path::new("."), "t").is_err());
+        assert!(parse_project("[output.y]\nna = 0", Path::new("."), "t").is_err());
+        assert!(parse_project("[load]\nmap = [\"nonsense\"]", Path::new("."), "t").is_err());
+        let err =
+            parse_project("ident = \"$JETID_SURELY_UNSET_VAR/x.csv\"", Path::new("."), "t").unwrap_err();
+        assert!(format!("{err:#}").contains("JETID_SURELY_UNSET_VAR"));
+    }
+}

@@ -1,0 +1,263 @@
+//! `report.json` and `report.md` of `jetid --batch` (CONTRACT.md).
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::core::metrics::Metrics;
+use crate::io::atomic::write_atomic;
+
+pub const REPORT_FORMAT_VERSION: u32 = 1;
+
+/// The paper's Table 1 (RMSPE %, SE; time-domain validation / chirp), for comparison.
+pub const PAPER_TABLE1: [(&str, &str, f64, f64, f64, f64); 6] = [
+    ("shaft speed", "gray-box", 1.3429, 26.613, 2.0327, 11.641),
+    ("shaft speed", "Hammerstein–Wiener", 5.5167, 121.06, 8.5607, 47.835),
+    ("shaft speed", "NNARX", 3.1928, 52.280, 3.8578, 27.555),
+    ("thrust", "gray-box", 4.3739, 0.0580, 6.4324, 0.0309),
+    ("thrust", "Hammerstein–Wiener", 8.0221, 0.1431, 14.838, 0.0552),
+    ("thrust", "NNARX", 7.4271, 0.1466, 17.136, 0.0489),
+];
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SegmentSummary {
+    pub label: String,
+    pub start: usize,
+    pub step_at: usize,
+    pub end: usize,
+    pub rank: usize,
+    pub cond: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClusterSummary {
+    pub kind: String,
+    pub centre: Complex64,
+    pub radius: f64,
+    pub found: usize,
+    pub needed: usize,
+    pub valid: bool,
+    pub status: String,
+    pub centroid: Complex64,
+    pub spread: f64,
+    pub natural_freq_rad_s: f64,
+    pub time_constant_secs: Option<f64>,
+}
+
+/// What was identified for one output.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IdentSummary {
+    pub arx_orders: [usize; 3],
+    pub segments: Vec<SegmentSummary>,
+    pub clusters: Vec<ClusterSummary>,
+    pub poles: Vec<Complex64>,
+    pub zeros: Vec<Complex64>,
+    pub dc_gain: Option<f64>,
+    pub offset: f64,
+    pub static_map_beta: Vec<f64>,
+    pub static_order: usize,
+    /// (order, leave-one-out RMSE) when the order was chosen from the data.
+    pub static_order_loo: Vec<(usize, f64)>,
+    pub refined: bool,
+    pub diagnostics: Vec<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosisEntry {
+    pub effect: String,
+    pub significant: bool,
+    pub rmspe_before_pct: f64,
+    pub rmspe_after_pct: f64,
+    pub evidence: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HistoryStep {
+    pub step: String,
+    pub rmspe_pct: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutputReport {
+    pub unit: String,
+    /// model name → run name → metrics.
+    pub models: BTreeMap<String, BTreeMap<String, Metrics>>,
+    pub identified: IdentSummary,
+    pub diagnosis: Vec<DiagnosisEntry>,
+    pub effects_applied: Vec<String>,
+    pub error_history: Vec<HistoryStep>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    pub format_version: u32,
+    pub project: String,
+    pub input: String,
+    pub runs: BTreeMap<String, String>,
+    pub outputs: BTreeMap<String, OutputReport>,
+    pub noise_fit: Option<serde_json::Value>,
+    pub monte_carlo: Option<serde_json::Value>,
+    pub timings_ms: BTreeMap<String, f64>,
+    pub figures: Vec<String>,
+    pub diagnostics: Vec<String>,
+}
+
+pub fn write_report_json(path: &Path, report: &Report) -> Result<()> {
+    let text = serde_json::to_string_pretty(report).context("serialising the report")?;
+    write_atomic(path, text.as_bytes())
+}
+
+fn fmt_complex(z: &Complex64) -> String {
+    if z.im.abs() < 1e-12 {
+        format!("{:.4}", z.re)
+    } else {
+        format!("{:.4} {} {:.4}j", z.re, if z.im < 0.0 { "−" } else { "+" }, z.im.abs())
+    }
+}
+
+fn model_title(name: &str) -> &str {
+    match name {
+        "gray_box" => "gray-box (Wiener)",
+        "linear" => "linear (reduced TF alone)",
+        "hammerstein_wiener" => "Hammerstein–Wiener",
+        "nnarx" => "NNARX",
+        other => other,
+    }
+}
+
+fn metrics_table(out: &mut String, report: &OutputReport) {
+    let _ = writeln!(out, "| model | run | RMSPE % | MAPE % | SE | fit % | RMSE | max error |");
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
+    for (model, runs) in &report.models {
+        for (run, m) in runs {
+            let _ = writeln!(
+                out,
+                "| {} | {run} | {:.4} | {:.4} | {:.4} | {:.2} | {:.4} | {:.4} |",
+                model_title(model),
+                m.rmspe_pct,
+                m.mape_pct,
+                m.se,
+                m.fit_pct,
+                m.rmse,
+                m.max_abs_error
+            );
+        }
+    }
+}
+
+fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
+    let [na, nb, nk] = id.arx_orders;
+    let _ = writeln!(
+        out,
+        "Segment ARX models: {na} poles, {nb} zeros, delay {nk}; {} segments.\n",
+        id.segments.len()
+    );
+    let _ = writeln!(out, "| cluster | centre | radius | members | valid | centroid | ω (rad/s) | τ (s) |");
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
+    for (i, c) in id.clusters.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "| {} {} | {} | {:.4} | {}/{} | {} | {} | {:.3} | {} |",
+            c.kind,
+            i + 1,
+            fmt_complex(&c.centre),
+            c.radius,
+            c.found,
+            c.needed,
+            if c.valid { "yes".to_owned() } else { c.status.clone() },
+            fmt_complex(&c.centroid),
+            c.natural_freq_rad_s,
+            c.time_constant_secs.map_or("–".to_owned(), |t| format!("{t:.3}"))
+        );
+    }
+    let poles: Vec<String> = id.poles.iter().map(fmt_complex).collect();
+    let zeros: Vec<String> = id.zeros.iter().map(fmt_complex).collect();
+    let _ = writeln!(
+        out,
+        "\nReduced model{}: poles {}; zeros {}; steady-state gain {} {unit} per input unit, offset {:.4}.",
+        if id.refined { " (centroids polished by simulation error)" } else { "" },
+        poles.join(", "),
+        if zeros.is_empty() { "none".to_owned() } else { zeros.join(", ") },
+        id.dc_gain.map_or("–".to_owned(), |g| format!("{g:.5}")),
+        id.offset
+    );
+    let beta: Vec<String> =
+        id.static_map_beta.iter().enumerate().map(|(i, b)| format!("{b:.6e}·v^{i}")).collect();
+    let _ = writeln!(out, "Static map (order {}): f(v) = {}.", id.static_order, beta.join(" + "));
+    if !id.static_order_loo.is_empty() {
+        let loo: Vec<String> =
+            id.static_order_loo.iter().map(|(o, e)| format!("order {o}: {e:.4}")).collect();
+        let _ = writeln!(out, "Leave-one-out RMSE on the steady points: {}.", loo.join(", "));
+    }
+    for d in &id.diagnostics {
+        let _ = writeln!(out, "- note: {d}");
+    }
+}
+
+/// The Markdown report: the same numbers as report.json, as tables a person reads.
+pub fn render_markdown(report: &Report) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "# jetid report — {}\n", report.project);
+    let _ = writeln!(out, "Input: `{}`. Runs:\n", report.input);
+    for (role, run) in &report.runs {
+        let _ = writeln!(out, "- {role}: `{run}`");
+    }
+    for (name, o) in &report.outputs {
+        let _ = writeln!(out, "\n## Output `{name}` [{}]\n", o.unit);
+        ident_section(&mut out, &o.identified, &o.unit);
+        let _ = writeln!(out, "\n### Validation (each model simulated from the input alone)\n");
+        metrics_table(&mut out, o);
+        if !o.error_history.is_empty() {
+            let _ = writeln!(
+                out,
+                "\nError history: {}",
+                o.error_history
+                    .iter()
+                    .map(|h| format!("{} {:.4} %", h.step, h.rmspe_pct))
+                    .collect::<Vec<_>>()
+                    .join(" → ")
+            );
+        }
+        if !o.diagnosis.is_empty() {
+            let _ = writeln!(
+                out,
+                "\n### Diagnosis\n\n| effect | significant | RMSPE before % | after % | evidence |\n|---|---|---|---|---|"
+            );
+            for d in &o.diagnosis {
+                let _ = writeln!(
+                    out,
+                    "| {} | {} | {:.4} | {:.4} | {} |",
+                    d.effect, d.significant, d.rmspe_before_pct, d.rmspe_after_pct, d.evidence
+                );
+            }
+        }
+    }
+    let _ = writeln!(out, "\n## The paper's Table 1, for comparison (RMSPE %, SE; validation / chirp)\n");
+    let _ =
+        writeln!(out, "| output | model | RMSPE | SE | RMSPE chirp | SE chirp |\n|---|---|---|---|---|---|");
+    for (o, m, a, b, c, d) in PAPER_TABLE1 {
+        let _ = writeln!(out, "| {o} | {m} | {a} | {b} | {c} | {d} |");
+    }
+    if !report.figures.is_empty() {
+        let _ = writeln!(out, "\n## Figures\n");
+        for f in &report.figures {
+            let _ = writeln!(out, "![{f}]({f})\n");
+        }
+    }
+    if !report.diagnostics.is_empty() {
+        let _ = writeln!(out, "\n## Notes\n");
+        for d in &report.diagnostics {
+            let _ = writeln!(out, "- {d}");
+        }
+    }
+    let timings: Vec<String> = report.timings_ms.iter().map(|(k, v)| format!("{k} {v:.1} ms")).collect();
+    let _ = writeln!(out, "\nTimings: {}.", timings.join(", "));
+    out
+}
+
+pub fn write_report_md(path: &Path, report: &Report) -> Result<()> {
+    write_atomic(path, render_markdown(report).as_bytes())
+}

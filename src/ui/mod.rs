@@ -1,0 +1,125 @@
+//! The desktop app (eframe/egui).
+//!
+//! State comes in three tiers (STYLE.md): [`Session`] is what the user loaded and decided (saved on
+//! close, runs read again on start), [`ViewState`] is transient (selection, dialogs, each view's
+//! zoom and toggles), [`Derived`] is recomputed from the session when its revision changes. Views
+//! return [`Command`]s and [`App::apply`] carries them out. See [`views`] for adding a view.
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+
+use anyhow::{Result, anyhow, bail};
+
+pub mod app;
+pub mod command;
+pub mod data_ui;
+pub mod derived;
+pub mod file_dialog;
+pub mod mapping_ui;
+pub mod panels_ui;
+pub mod plot_util;
+pub mod screenshot;
+pub mod session;
+pub mod theme;
+pub mod views;
+
+pub use app::{App, ViewState};
+pub use command::Command;
+pub use derived::Derived;
+pub use session::{Role, SavedSession, Session};
+pub use views::Tab;
+
+/// The key of the saved session in eframe's storage.
+const STORAGE_KEY: &str = "jetid_session";
+const APP_ID: &str = "jetid";
+const WINDOW_SIZE: [f32; 2] = [1400.0, 900.0];
+const NO_DISPLAY_HINT: &str = "the desktop app needs a graphical display; \
+     run the headless pipeline with `jetid --batch` instead (see `jetid --help`)";
+
+/// The bundled sample runs: `sample_runs/sr30` under the current directory, else under the source
+/// tree jetid was built from.
+pub fn bundled_sample_dir() -> Option<PathBuf> {
+    let relative = Path::new("sample_runs").join("sr30");
+    let candidates = [
+        std::env::current_dir().ok().map(|d| d.join(&relative)),
+        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join(&relative)),
+    ];
+    candidates.into_iter().flatten().find(|dir| dir.is_dir())
+}
+
+/// `jetid` with no arguments: the desktop app, on the saved session or the bundled sample runs.
+pub fn run_app() -> Result<()> {
+    check_display()?;
+    let options = native_options(None);
+    eframe::run_native("jetid", options, Box::new(|cc| Ok(Box::new(DesktopApp::new(cc)))))
+        .map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))
+}
+
+/// `jetid --screenshot OUT [--view NAME]`: a picture of one view on the bundled sample runs.
+pub fn screenshot(out: &Path, view: &str) -> Result<()> {
+    let Some(tab) = Tab::from_cli_name(view) else {
+        bail!("unknown view `{view}`; the views are: {}", Tab::cli_names());
+    };
+    check_display()?;
+    // A private storage file, so a screenshot neither reads nor changes the user's saved session.
+    let storage = std::env::temp_dir().join(format!("jetid-screenshot-{}.ron", std::process::id()));
+    let mut options = native_options(Some(storage.clone()));
+    options.persist_window = false;
+    options.viewport = options.viewport.with_resizable(false);
+    let (tx, rx) = mpsc::channel();
+    let out = out.to_owned();
+    let result = eframe::run_native(
+        "jetid",
+        options,
+        Box::new(move |_cc| Ok(Box::new(screenshot::ScreenshotApp::new(App::startup(None), tab, out, tx)))),
+    );
+    let _ = std::fs::remove_file(&storage);
+    result.map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))?;
+    rx.try_recv().unwrap_or_else(|_| Err(anyhow!("the window closed before the screenshot was taken")))
+}
+
+fn native_options(persistence_path: Option<PathBuf>) -> eframe::NativeOptions {
+    eframe::NativeOptions {
+        renderer: eframe::Renderer::Glow,
+        viewport: egui::ViewportBuilder::default()
+            .with_title("jetid")
+            .with_app_id(APP_ID)
+            .with_inner_size(WINDOW_SIZE)
+            .with_min_inner_size([800.0, 500.0]),
+        persistence_path,
+        ..Default::default()
+    }
+}
+
+/// On Linux and the BSDs a window needs X11 or Wayland; say so plainly instead of letting winit fail.
+fn check_display() -> Result<()> {
+    if cfg!(all(unix, not(target_os = "macos"), not(target_os = "android"))) {
+        let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+        if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
+            bail!("no display found (neither DISPLAY nor WAYLAND_DISPLAY is set): {NO_DISPLAY_HINT}");
+        }
+    }
+    Ok(())
+}
+
+/// The app inside eframe: restores the session from eframe's storage and saves it back.
+struct DesktopApp {
+    app: App,
+}
+
+impl DesktopApp {
+    fn new(cc: &eframe::CreationContext<'_>) -> Self {
+        let saved: Option<SavedSession> = cc.storage.and_then(|s| eframe::get_value(s, STORAGE_KEY));
+        Self { app: App::startup(saved.as_ref()) }
+    }
+}
+
+impl eframe::App for DesktopApp {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        self.app.view.cpu_frame_ms = frame.info().cpu_usage.map(|secs| secs * 1000.0);
+        self.app.ui(ui);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        eframe::set_value(storage, STORAGE_KEY, &self.app.saved_session());
+    }
+}

@@ -1,0 +1,158 @@
+//! The frame around the views: menu bar, run list, status bar, load-error window, empty-session
+//! hint. Each returns the commands the user asked for.
+use egui::RichText;
+
+use super::app::{ViewState, hint};
+use super::command::Command;
+use super::session::{LoadFailure, Role, Session, file_label};
+use super::theme;
+
+pub fn menu_bar_ui(ui: &mut egui::Ui) -> Vec<Command> {
+    let mut commands = Vec::new();
+    egui::MenuBar::new().ui(ui, |ui| {
+        ui.menu_button("File", |ui| {
+            if ui.button("Open run…").clicked() {
+                commands.push(Command::OpenRunDialog);
+                ui.close();
+            }
+            ui.separator();
+            if ui.button("Quit").clicked() {
+                commands.push(Command::Quit);
+                ui.close();
+            }
+        });
+    });
+    commands
+}
+
+pub fn status_bar_ui(ui: &mut egui::Ui, view: &ViewState) {
+    ui.horizontal(|ui| {
+        if let Some(message) = &view.status {
+            ui.label(message);
+        }
+        ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+            if let Some(ms) = view.cpu_frame_ms.or(view.frame_ms) {
+                ui.label(RichText::new(format!("frame {ms:.1} ms")).monospace().color(theme::HINT))
+                    .on_hover_text("CPU time of the previous frame");
+            }
+        });
+    });
+}
+
+pub fn runs_panel_ui(ui: &mut egui::Ui, session: &Session, selected: Option<usize>) -> Vec<Command> {
+    let mut commands = Vec::new();
+    ui.add_space(4.0);
+    ui.heading("Runs");
+    ui.add_space(4.0);
+    if session.runs.is_empty() {
+        hint(ui, "No runs loaded.");
+    }
+    egui::ScrollArea::vertical().auto_shrink([false, true]).show(ui, |ui| {
+        for (i, run) in session.runs.iter().enumerate() {
+            let name = run.display_name();
+            let response = ui
+                .selectable_label(selected == Some(i), RichText::new(&name).strong())
+                .on_hover_text(run.path.display().to_string());
+            if response.clicked() {
+                commands.push(Command::SelectRun(i));
+            }
+            response.context_menu(|ui| {
+                if ui.button("Map columns…").clicked() {
+                    commands.push(Command::MapColumnsOfRun(i));
+                    ui.close();
+                }
+                if ui.button("Remove").clicked() {
+                    commands.push(Command::RemoveRun(i));
+                    ui.close();
+                }
+            });
+            ui.horizontal(|ui| {
+                let label = ui.label("role");
+                egui::ComboBox::from_id_salt(("run_role", i))
+                    .selected_text(run.role.label())
+                    .width(130.0)
+                    .show_ui(ui, |ui| {
+                        for role in Role::ALL {
+                            if ui.selectable_label(run.role == role, role.label()).clicked() {
+                                commands.push(Command::SetRole(i, role));
+                            }
+                        }
+                    })
+                    .response
+                    .labelled_by(label.id);
+            });
+            ui.add_space(6.0);
+        }
+        ui.separator();
+        if ui.button("Open run…").clicked() {
+            commands.push(Command::OpenRunDialog);
+        }
+    });
+    commands
+}
+
+pub fn failures_ui(ctx: &egui::Context, failures: &[LoadFailure]) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let mut open = true;
+    egui::Window::new("Could not load run")
+        .id(egui::Id::unique("load_failures_window"))
+        .open(&mut open)
+        .collapsible(false)
+        .default_width(560.0)
+        .pivot(egui::Align2::CENTER_TOP)
+        .default_pos(ctx.content_rect().center_top() + egui::vec2(0.0, 80.0))
+        .show(ctx, |ui| {
+            ui.label("The session was not changed.");
+            egui::ScrollArea::vertical().max_height(400.0).show(ui, |ui| {
+                for (i, failure) in failures.iter().enumerate() {
+                    ui.group(|ui| failure_ui(ui, i, failure, &mut commands));
+                }
+            });
+            if failures.len() > 1 && ui.button("Dismiss all").clicked() {
+                commands.push(Command::DismissAllFailures);
+            }
+        });
+    if !open {
+        commands.push(Command::DismissAllFailures);
+    }
+    commands
+}
+
+fn failure_ui(ui: &mut egui::Ui, i: usize, failure: &LoadFailure, commands: &mut Vec<Command>) {
+    ui.set_width(ui.available_width());
+    ui.strong(file_label(&failure.path)).on_hover_text(failure.path.display().to_string());
+    ui.add(
+        egui::Label::new(RichText::new(&failure.message).monospace().color(theme::ERROR))
+            .wrap()
+            .selectable(true),
+    );
+    ui.horizontal(|ui| {
+        let mut map = ui.button("Map columns…");
+        if failure.column_problem {
+            map = map.highlight();
+        }
+        if map.on_hover_text("Choose which columns are time, input, outputs and auxiliary channels").clicked()
+        {
+            commands.push(Command::MapColumnsOfFailure(i));
+        }
+        if ui.button("Dismiss").clicked() {
+            commands.push(Command::DismissFailure(i));
+        }
+    });
+}
+
+pub fn empty_session_ui(ui: &mut egui::Ui) {
+    ui.add_space(24.0);
+    ui.vertical_centered(|ui| {
+        ui.heading("No runs loaded");
+        ui.add_space(8.0);
+        hint(ui, "Open a run file (CSV) with File > Open run… (Ctrl+O).");
+        if super::bundled_sample_dir().is_none() {
+            hint(
+                ui,
+                "The bundled sample runs (sample_runs/sr30/*.csv) were not found; \
+                 `jetid simulate --test ident --out ident.csv` makes one.",
+            );
+        }
+    });
+}

@@ -1,0 +1,67 @@
+//! Helpers shared by the plots of several views.
+use egui_plot::{GridInput, GridMark, uniform_grid_spacer};
+
+/// Grid lines on a 1–2–5 sequence (egui_plot's default uses powers of ten only, which leaves a
+/// short axis with a single labelled tick). Labelled lines at least `label_factor` `base_step_size`s
+/// apart (egui_plot labels ticks that are far enough apart), thin lines between them, heavy lines
+/// at the next 1–2–5 step above; each step divides the next.
+pub fn steps_125(input: GridInput, label_factor: f64) -> [f64; 3] {
+    let labelled = nice_125(label_factor * input.base_step_size);
+    let exponent = labelled.log10().floor();
+    let mantissa = (labelled / 10f64.powf(exponent)).round();
+    match mantissa as i64 {
+        2 => [labelled / 2.0, labelled, labelled * 5.0],
+        5 => [labelled / 5.0, labelled, labelled * 2.0],
+        _ => [labelled / 5.0, labelled, labelled * 5.0],
+    }
+}
+
+/// A 1–2–5 grid spacer for [`egui_plot::Plot::y_grid_spacer`] (labels need ~20 points).
+pub fn grid_125_y(input: GridInput) -> Vec<GridMark> {
+    (uniform_grid_spacer(|i| steps_125(i, 3.0)))(input)
+}
+
+/// A 1–2–5 grid spacer for [`egui_plot::Plot::x_grid_spacer`] (labels need ~60 points).
+pub fn grid_125_x(input: GridInput) -> Vec<GridMark> {
+    (uniform_grid_spacer(|i| steps_125(i, 9.0)))(input)
+}
+
+/// The smallest of 1, 2, 5 × 10ⁿ that is at least `value` (positive, finite).
+pub fn nice_125(value: f64) -> f64 {
+    if !(value.is_finite() && value > 0.0) {
+        return 1.0;
+    }
+    let decade = 10f64.powf(value.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * decade)
+        .find(|step| *step >= value * (1.0 - 1e-9))
+        .unwrap_or(10.0 * decade)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nice_steps_are_125_and_not_smaller() {
+        for (value, expected) in
+            [(0.7, 1.0), (1.0, 1.0), (1.3, 2.0), (3.0, 5.0), (7.0, 10.0), (42.0, 50.0), (0.013, 0.02)]
+        {
+            let got = nice_125(value);
+            assert!((got - expected).abs() < 1e-9 * expected, "{value} -> {got}, expected {expected}");
+        }
+    }
+
+    #[test]
+    fn each_step_divides_the_next() {
+        for base in [0.003, 0.9, 1.7, 4.2, 33.0, 710.0] {
+            let [a, b, c] = steps_125(GridInput { bounds: (0.0, 1.0), base_step_size: base }, 3.0);
+            assert!(b >= 3.0 * base * (1.0 - 1e-9) && a < b && b < c);
+            for (small, big) in [(a, b), (b, c)] {
+                let ratio = big / small;
+                assert!((ratio - ratio.round()).abs() < 1e-9, "{small} does not divide {big}");
+            }
+        }
+    }
+}

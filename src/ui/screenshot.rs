@@ -1,0 +1,128 @@
+//! `jetid --screenshot OUT.png [--view NAME]`: open the app on the bundled sample runs at a fixed
+//! size, let it settle, grab the rendered frame, write it as PNG and close.
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context as _, Result, anyhow};
+
+use super::app::App;
+use super::views::Tab;
+
+/// Frames drawn (and time waited) before the picture is taken, so layout and plot bounds settle.
+const WARMUP_FRAMES: u32 = 10;
+const WARMUP: Duration = Duration::from_millis(600);
+/// Give up when no picture arrived by then.
+const TIMEOUT: Duration = Duration::from_secs(30);
+
+pub struct ScreenshotApp {
+    app: App,
+    out: PathBuf,
+    started: Instant,
+    frames: u32,
+    requested: bool,
+    image_tx: Sender<Arc<egui::ColorImage>>,
+    image_rx: Receiver<Arc<egui::ColorImage>>,
+    /// Where the outcome goes (read by the caller after the window closes).
+    outcome: Sender<Result<()>>,
+    done: bool,
+}
+
+impl ScreenshotApp {
+    pub fn new(mut app: App, tab: Tab, out: PathBuf, outcome: Sender<Result<()>>) -> Self {
+        app.view.tab = tab;
+        let (image_tx, image_rx) = mpsc::channel();
+        Self {
+            app,
+            out,
+            started: Instant::now(),
+            frames: 0,
+            requested: false,
+            image_tx,
+            image_rx,
+            outcome,
+            done: false,
+        }
+    }
+
+    fn finish(&mut self, ctx: &egui::Context, outcome: Result<()>) {
+        // The receiver lives in `screenshot()` until the window closes.
+        let _ = self.outcome.send(outcome);
+        self.done = true;
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+    }
+}
+
+impl eframe::App for ScreenshotApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.app.ui(ui);
+        let ctx = ui.ctx().clone();
+        if self.done {
+            return;
+        }
+        self.frames += 1;
+        if let Ok(image) = self.image_rx.try_recv() {
+            let outcome = write_png(&self.out, &image);
+            self.finish(&ctx, outcome);
+            return;
+        }
+        if self.started.elapsed() > TIMEOUT {
+            self.finish(&ctx, Err(anyhow!("no screenshot arrived within {} s", TIMEOUT.as_secs())));
+            return;
+        }
+        if !self.requested && self.frames >= WARMUP_FRAMES && self.started.elapsed() >= WARMUP {
+            let tx = self.image_tx.clone();
+            let repaint = ctx.clone();
+            ctx.request_screenshot(move |image| {
+                let _ = tx.send(image);
+                repaint.request_repaint();
+            });
+            self.requested = true;
+        }
+        ctx.request_repaint_after(Duration::from_millis(30));
+    }
+
+    /// Keep the picture free of hover effects: the pointer of the (virtual) screen is ignored.
+    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        raw_input.events.retain(|event| {
+            !matches!(
+                event,
+                egui::Event::PointerMoved(_)
+                    | egui::Event::PointerButton { .. }
+                    | egui::Event::PointerGone
+                    | egui::Event::MouseWheel { .. }
+            )
+        });
+    }
+
+    fn persist_egui_memory(&self) -> bool {
+        false
+    }
+}
+
+/// Write an RGB PNG next to `out` under a temporary name, then rename it into place.
+pub fn write_png(out: &Path, image: &egui::ColorImage) -> Result<()> {
+    let [width, height] = image.size;
+    let rgb: Vec<u8> = image
+        .pixels
+        .iter()
+        .flat_map(|p| {
+            let [r, g, b, _] = p.to_srgba_unmultiplied();
+            [r, g, b]
+        })
+        .collect();
+    let (w, h) = (u32::try_from(width)?, u32::try_from(height)?);
+    let file_name = out.file_name().ok_or_else(|| anyhow!("{} is not a file path", out.display()))?;
+    let tmp = out.with_file_name(format!(".{}.tmp-{}", file_name.to_string_lossy(), std::process::id()));
+    let written =
+        image::save_buffer_with_format(&tmp, &rgb, w, h, image::ColorType::Rgb8, image::ImageFormat::Png)
+            .with_context(|| format!("writing {}", tmp.display()))
+            .and_then(|()| {
+                std::fs::rename(&tmp, out).with_context(|| format!("renaming to {}", out.display()))
+            });
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}

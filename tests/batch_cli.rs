@@ -1,0 +1,181 @@
+//! `jetid --batch` and `jetid predict` end to end on the bundled sample runs, and the errors a user
+//! can cause through them.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use jetid::core::pipeline::{OutputSettings, identify_output, segments_for};
+use jetid::core::segment::SegmentSettings;
+use jetid::io::csv_run::{LoadOptions, load_run};
+
+fn jetid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().expect("jetid runs")
+}
+
+fn samples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/sr30")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn batch_on_the_bundled_runs_writes_model_and_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("nested/out");
+    let o =
+        jetid(&["--batch", samples().join("project.toml").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["format_version"], 1);
+    for output in ["shaft_speed_rpm", "thrust_n"] {
+        for model in ["gray_box", "linear"] {
+            for run in ["validation", "chirp"] {
+                let m = &report["outputs"][output]["models"][model][run];
+                for key in ["rmspe_pct", "mape_pct", "se", "fit_pct", "rmse", "max_abs_error"] {
+                    assert!(m[key].as_f64().is_some_and(f64::is_finite), "{output}/{model}/{run}/{key}: {m}");
+                }
+            }
+        }
+        let gray =
+            report["outputs"][output]["models"]["gray_box"]["validation"]["rmspe_pct"].as_f64().unwrap();
+        let linear =
+            report["outputs"][output]["models"]["linear"]["validation"]["rmspe_pct"].as_f64().unwrap();
+        assert!(gray < linear, "{output}: the static map should help ({gray} vs {linear})");
+        assert!(report["outputs"][output]["error_history"][0]["rmspe_pct"].as_f64().is_some());
+    }
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("Table 1") && md.contains("gray-box (Wiener)"));
+
+    // predict reproduces the batch's gray-box prediction from model.json alone.
+    let pred = dir.path().join("pred.csv");
+    let val = samples().join("validation.csv");
+    let o = jetid(&[
+        "predict",
+        "--model",
+        out.join("model.json").to_str().unwrap(),
+        "--input",
+        val.to_str().unwrap(),
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let predicted = load_run(&pred, &LoadOptions::default()).unwrap();
+    let measured = load_run(&val, &LoadOptions::default()).unwrap();
+    let y = &measured.output("shaft_speed_rpm").unwrap().values;
+    let y_hat = &predicted.output("shaft_speed_rpm").unwrap().values;
+    let m = jetid::core::metrics::metrics(y, y_hat).unwrap();
+    let batch = report["outputs"]["shaft_speed_rpm"]["models"]["gray_box"]["validation"]["rmspe_pct"]
+        .as_f64()
+        .unwrap();
+    assert!((m.rmspe_pct - batch).abs() < 1e-6 * batch.max(1.0), "predict {} vs batch {batch}", m.rmspe_pct);
+}
+
+#[test]
+fn sr30_models_have_the_papers_structure() {
+    let ident = load_run(&samples().join("ident.csv"), &LoadOptions::default()).unwrap();
+    let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap();
+    assert_eq!(segments.len(), 7, "steps A–H of the identification design");
+
+    let speed = identify_output(
+        &ident,
+        "shaft_speed_rpm",
+        &OutputSettings::for_output("shaft_speed_rpm"),
+        &segments,
+        None,
+    )
+    .unwrap();
+    let poles = speed.model.wiener.linear.tf.poles().unwrap();
+    let real: Vec<f64> = poles.iter().filter(|p| p.im.abs() < 1e-9).map(|p| p.re).collect();
+    assert!(real.iter().any(|r| (0.93..=0.95).contains(r)), "speed poles {poles:?}");
+    assert!(poles.iter().any(|p| p.im.abs() > 0.05), "speed needs a complex pair: {poles:?}");
+
+    let thrust =
+        identify_output(&ident, "thrust_n", &OutputSettings::for_output("thrust_n"), &segments, None)
+            .unwrap();
+    let poles = thrust.model.wiener.linear.tf.poles().unwrap();
+    let slowest = poles.iter().max_by(|a, b| a.norm().total_cmp(&b.norm())).unwrap();
+    assert!(slowest.im.abs() < 1e-9 && (0.92..=0.96).contains(&slowest.re), "thrust poles {poles:?}");
+    // Dominated by that pole: every other pole is at least three times faster.
+    let tau = |z: f64| -1.0 / z.ln();
+    for p in poles.iter().filter(|p| *p != slowest) {
+        assert!(tau(p.norm()) < tau(slowest.re) / 3.0, "thrust pole {p} is not much faster than {slowest}");
+    }
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn expect_error(args: &[&str], needles: &[&str]) {
+    let o = jetid(args);
+    assert_eq!(o.status.code(), Some(1), "args {args:?}: {}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "expected {n:?} in: {err}");
+    }
+}
+
+#[test]
+fn batch_errors_name_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    expect_error(&["--batch", "--ident", "/no/such/run.csv", "--out", out], &["/no/such/run.csv"]);
+    let bad = write(dir.path(), "bad.csv", "time_s,fuel_flow_gph,shaft_speed_rpm\n0,1,2\n0.1,x,3\n");
+    expect_error(&["--batch", "--ident", bad.to_str().unwrap(), "--out", out], &["bad.csv", "fuel_flow_gph"]);
+    let toml = write(dir.path(), "p.toml", "idnet = \"ident.csv\"\n");
+    expect_error(&["--batch", toml.to_str().unwrap(), "--out", out], &["p.toml", "idnet"]);
+    let proj = samples().join("project.toml");
+    expect_error(
+        &["--batch", proj.to_str().unwrap(), "--output", "egt_c", "--out", out],
+        &["egt_c", "shaft_speed_rpm"],
+    );
+    expect_error(&["--batch", proj.to_str().unwrap(), "--map", "banana", "--out", out], &["banana"]);
+    expect_error(&["--batch", "--bogus-flag"], &["--bogus-flag"]);
+    // A flat input has no steps to identify from.
+    let flat: String = std::iter::once("time_s,fuel_flow_gph,shaft_speed_rpm\n".to_owned())
+        .chain((0..400).map(|k| format!("{},{},{}\n", k as f64 * 0.113, 5.43, 73850.0 + (k % 7) as f64)))
+        .collect();
+    let flat = write(dir.path(), "flat.csv", &flat);
+    expect_error(&["--batch", "--ident", flat.to_str().unwrap(), "--out", out], &["no steps"]);
+    assert!(!Path::new(out).join("report.json").exists(), "no report may be left behind by a failed run");
+}
+
+#[test]
+fn predict_errors_name_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let pred = dir.path().join("p.csv");
+    let val = samples().join("validation.csv");
+    expect_error(
+        &[
+            "predict",
+            "--model",
+            "/no/model.json",
+            "--input",
+            val.to_str().unwrap(),
+            "--out",
+            pred.to_str().unwrap(),
+        ],
+        &["/no/model.json"],
+    );
+    let junk = write(dir.path(), "m.json", "{\"format_version\": 1}");
+    expect_error(
+        &[
+            "predict",
+            "--model",
+            junk.to_str().unwrap(),
+            "--input",
+            val.to_str().unwrap(),
+            "--out",
+            pred.to_str().unwrap(),
+        ],
+        &["m.json", "not a jetid model"],
+    );
+    assert!(!pred.exists());
+}

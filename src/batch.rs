@@ -273,6 +273,11 @@ pub fn run(args: &BatchArgs) -> Result<()> {
         };
         timings
             .time("validate", || score_output(&identified, &runs, output, &mut out, &mut report.diagnostics));
+        let (figs, notes) = timings.time("figures", || {
+            crate::batch_figures::output_figures(out_dir, output, &identified, runs.validate.first())
+        });
+        report.figures.extend(figs);
+        report.diagnostics.extend(notes);
         if let Some(rmspe) = mean_validation_rmspe(&out, &runs, "gray_box") {
             out.error_history.push(HistoryStep { step: "base".into(), rmspe_pct: rmspe });
         }

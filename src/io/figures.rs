@@ -29,7 +29,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 pub use bode::{BodeCurve, EmpiricalBode, bode_png};
 pub use stats::{boxplot_png, histogram_png};
 pub use xy::{static_map_png, traces_png};
-pub use zplane::zplane_png;
+pub use zplane::{ZPLANE_SIZE, zplane_png};
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/fonts/DejaVuSans-LICENSE.txt`).
 static FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
@@ -47,6 +47,12 @@ const LABEL_FONT_PX: f64 = 16.0;
 const CHART_MARGIN: u32 = 15;
 const X_LABEL_AREA: u32 = 50;
 const Y_LABEL_AREA: u32 = 80;
+/// Space above the title, in pixels.
+const TITLE_TOP: u32 = 10;
+/// Minor grid lines between two major ones.
+const LIGHT_LINES: usize = 4;
+/// Tick values closer to zero than this are rounding noise (a tick at 0 computed as −2e−16).
+const ZERO_TICK: f64 = 1e-12;
 
 #[derive(Debug, thiserror::Error)]
 pub enum FigureError {
@@ -81,9 +87,8 @@ pub(crate) type DrawResult = Result<(), DrawError>;
 
 fn ensure_font() -> Result<(), FigureError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, FONT_TTF).is_ok()
-    });
+    let ok = *REGISTERED
+        .get_or_init(|| plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, FONT_TTF).is_ok());
     if ok { Ok(()) } else { Err(FigureError::Font) }
 }
 
@@ -127,9 +132,8 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), FigureError> {
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     let tmp = dir.join(format!(".{}.{}-{n}.tmp", file_name.to_string_lossy(), std::process::id()));
     let io_err = |source| FigureError::Io { path: path.to_path_buf(), source };
-    std::fs::write(&tmp, bytes).map_err(io_err)?;
-    std::fs::rename(&tmp, path).map_err(|source| {
-        // Best effort: the rename error is the one worth reporting.
+    std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path)).map_err(|source| {
+        // Best effort: the write or rename error is the one worth reporting.
         let _ = std::fs::remove_file(&tmp);
         io_err(source)
     })
@@ -152,8 +156,11 @@ pub(crate) fn label_font() -> TextStyle<'static> {
 }
 
 /// Draws the title and splits the rest into the chart area (left) and the legend panel (right).
-pub(crate) fn titled_with_legend<'a>(root: &Area<'a>, title: &str) -> Result<(Area<'a>, Area<'a>), DrawError> {
-    let body = root.titled(title, title_font())?;
+pub(crate) fn titled_with_legend<'a>(
+    root: &Area<'a>,
+    title: &str,
+) -> Result<(Area<'a>, Area<'a>), DrawError> {
+    let body = root.margin(TITLE_TOP, 0, 0, 0).titled(title, title_font())?;
     let (w, _) = body.dim_in_pixel();
     Ok(body.split_horizontally(w.saturating_sub(LEGEND_WIDTH)))
 }
@@ -174,12 +181,11 @@ pub(crate) fn draw_note(area: &Area<'_>, text: &str) -> DrawResult {
 }
 
 /// The range of the finite values, padded by `pad` of its width; a single value or a zero-width
-/// range is widened so the axis is still drawable. `None` when no value is finite.
+/// range is widened so the axis is still drawable. `None` when no value is finite or the padded
+/// range overflows.
 pub(crate) fn padded_range(values: impl IntoIterator<Item = f64>, pad: f64) -> Option<(f64, f64)> {
-    let (lo, hi) = values
-        .into_iter()
-        .filter(|v| v.is_finite())
-        .fold(None, |acc: Option<(f64, f64)>, v| match acc {
+    let (lo, hi) =
+        values.into_iter().filter(|v| v.is_finite()).fold(None, |acc: Option<(f64, f64)>, v| match acc {
             None => Some((v, v)),
             Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
         })?;
@@ -188,18 +194,38 @@ pub(crate) fn padded_range(values: impl IntoIterator<Item = f64>, pad: f64) -> O
         let half = if lo.abs() > 0.0 { 0.1 * lo.abs() } else { 1.0 };
         return Some((lo - half, hi + half));
     }
-    Some((lo - pad * width, hi + pad * width))
+    let (lo, hi) = (lo - pad * width, hi + pad * width);
+    // Values near ±f64::MAX overflow the padding; such an axis cannot be drawn.
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
 
-/// A number for an axis tick: few digits, no trailing zeros.
+/// A number for an axis tick: few digits, no trailing zeros; rounding noise around zero is zero.
 pub(crate) fn tick_label(v: f64) -> String {
     let a = v.abs();
-    if a > 0.0 && !(1e-3..1e5).contains(&a) {
+    if a < ZERO_TICK {
+        return "0".to_owned();
+    }
+    if !(1e-3..1e6).contains(&a) {
         return format!("{v:.1e}");
     }
     let s = format!("{v:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".to_owned() } else { s.to_owned() }
+}
+
+/// `v` with `digits` significant digits, for numbers quoted in legends.
+pub(crate) fn sig(v: f64, digits: usize) -> String {
+    let a = v.abs();
+    if a < ZERO_TICK || !v.is_finite() {
+        return tick_label(v);
+    }
+    if !(1e-3..1e6).contains(&a) {
+        return format!("{v:.*e}", digits.saturating_sub(1));
+    }
+    let magnitude = a.log10().floor() as i64;
+    let decimals = (digits as i64 - 1 - magnitude).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_owned() } else { s }
 }
 
 /// Fails unless `found == expected`.

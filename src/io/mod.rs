@@ -1,6 +1,7 @@
 //! Files: run CSVs, project files, model.json, reports, figures.
-pub mod csv_run;
 pub mod atomic;
+pub mod csv_run;
+pub mod figures;
 pub mod model_file;
 pub mod project;
 pub mod report;

@@ -14,7 +14,11 @@ const MAX_LABEL_CHARS: usize = 24;
 /// How an entry's sample is drawn.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Swatch {
-    Line { color: RGBColor, width: u32, dashed: bool },
+    Line {
+        color: RGBColor,
+        width: u32,
+        dashed: bool,
+    },
     Cross(RGBColor),
     Ring(RGBColor),
     Dot(RGBColor),

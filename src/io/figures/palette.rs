@@ -35,6 +35,20 @@ pub const SERIES: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
+/// Colours of emphasised curves (the reduced models over the thin segment curves), used in turn.
+pub const EMPHASIS: [RGBColor; 5] = [
+    RGBColor(200, 0, 0),
+    RGBColor(0, 60, 190),
+    RGBColor(0, 130, 60),
+    RGBColor(140, 0, 160),
+    RGBColor(210, 110, 0),
+];
+
+/// The `i`-th emphasis colour, cycling.
+pub fn emphasis(i: usize) -> RGBColor {
+    EMPHASIS[i % EMPHASIS.len()]
+}
+
 /// The `i`-th series colour, cycling.
 pub fn series(i: usize) -> RGBColor {
     SERIES[i % SERIES.len()]

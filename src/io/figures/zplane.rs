@@ -3,13 +3,14 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use nalgebra::Complex;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, CHART_MARGIN, DrawResult, FigureError, X_LABEL_AREA, Y_LABEL_AREA, chart_builder, desc_font,
-    draw_note, font, label_font, palette, render, tick_label, titled_with_legend,
+    Area, CHART_MARGIN, DrawResult, FigureError, LIGHT_LINES, X_LABEL_AREA, Y_LABEL_AREA, chart_builder,
+    desc_font, font, label_font, palette, render, sig, tick_label, titled_with_legend,
 };
 use crate::core::cluster::{ClusterEval, RootKind, SegmentRoots};
 
@@ -49,7 +50,8 @@ pub fn zplane_png(
     }
     render(path, ZPLANE_SIZE, |root| {
         let (chart_region, legend_area) = titled_with_legend(root, title)?;
-        let mut chart = chart_builder(&square(&chart_region)).build_cartesian_2d(-LIMIT..LIMIT, -LIMIT..LIMIT)?;
+        let mut chart =
+            chart_builder(&square(&chart_region)).build_cartesian_2d(-LIMIT..LIMIT, -LIMIT..LIMIT)?;
         chart
             .configure_mesh()
             .x_desc("Re z")
@@ -62,6 +64,7 @@ pub fn zplane_png(
             .axis_desc_style(desc_font())
             .bold_line_style(palette::GRID_BOLD)
             .light_line_style(palette::GRID_LIGHT)
+            .max_light_lines(LIGHT_LINES)
             .draw()?;
         draw_reference(&mut chart, dt_secs)?;
         for eval in evals {
@@ -72,7 +75,8 @@ pub fn zplane_png(
             outside += draw_roots(&mut chart, segment, palette::series(j))?;
         }
         if roots.iter().all(|s| s.poles.is_empty() && s.zeros.is_empty()) && evals.is_empty() {
-            draw_note(chart.plotting_area(), "no roots or clusters")?;
+            let style = desc_font().color(&palette::NOTE).pos(Pos::new(HPos::Center, VPos::Center));
+            chart.plotting_area().draw(&Text::new("no roots or clusters", (0.0, 0.5), style))?;
         }
         draw_legend(&legend_area, &legend_entries(roots, evals, dt_secs, outside))
     })
@@ -125,7 +129,10 @@ fn draw_reference(chart: &mut ZChart<'_, '_>, dt_secs: f64) -> DrawResult {
         let at = (1.03 * c, 1.03 * s);
         chart.plotting_area().draw(&Text::new(format!("{} rad/s", tick_label(omega)), at, style))?;
     }
-    chart.draw_series(LineSeries::new(circle_points(Complex64::new(0.0, 0.0), 1.0), palette::REFERENCE.stroke_width(2)))?;
+    chart.draw_series(LineSeries::new(
+        circle_points(Complex64::new(0.0, 0.0), 1.0),
+        palette::REFERENCE.stroke_width(2),
+    ))?;
     Ok(())
 }
 
@@ -184,7 +191,11 @@ fn draw_cluster(chart: &mut ZChart<'_, '_>, eval: &ClusterEval, evals: &[Cluster
 }
 
 /// Draws a segment's poles and zeros inside the view; returns how many fell outside it.
-fn draw_roots(chart: &mut ZChart<'_, '_>, segment: &SegmentRoots, color: RGBColor) -> Result<usize, super::DrawError> {
+fn draw_roots(
+    chart: &mut ZChart<'_, '_>,
+    segment: &SegmentRoots,
+    color: RGBColor,
+) -> Result<usize, super::DrawError> {
     let inside = |z: &&Complex64| z.re.abs() <= LIMIT && z.im.abs() <= LIMIT;
     let poles: Vec<(f64, f64)> = segment.poles.iter().filter(inside).map(|z| (z.re, z.im)).collect();
     let zeros: Vec<(f64, f64)> = segment.zeros.iter().filter(inside).map(|z| (z.re, z.im)).collect();
@@ -194,7 +205,12 @@ fn draw_roots(chart: &mut ZChart<'_, '_>, segment: &SegmentRoots, color: RGBColo
     Ok(outside)
 }
 
-fn legend_entries(roots: &[SegmentRoots], evals: &[ClusterEval], dt_secs: f64, outside: usize) -> Vec<LegendEntry> {
+fn legend_entries(
+    roots: &[SegmentRoots],
+    evals: &[ClusterEval],
+    dt_secs: f64,
+    outside: usize,
+) -> Vec<LegendEntry> {
     let mut entries = vec![
         LegendEntry::new("pole", Swatch::Cross(palette::MEASURED)),
         LegendEntry::new("zero", Swatch::Ring(palette::MEASURED)),
@@ -205,8 +221,8 @@ fn legend_entries(roots: &[SegmentRoots], evals: &[ClusterEval], dt_secs: f64, o
         entries.push(LegendEntry::new("valid cluster", valid));
         entries.push(LegendEntry::new("invalid cluster", invalid));
     }
-    entries.push(LegendEntry::text(format!("rays: ω = angle / {} s", tick_label(dt_secs))));
-    entries.push(LegendEntry::text(format!("Nyquist: {} rad/s", tick_label(PI / dt_secs))));
+    entries.push(LegendEntry::text(format!("rays: ω = angle / {} s", sig(dt_secs, 4))));
+    entries.push(LegendEntry::text(format!("Nyquist: {} rad/s", sig(PI / dt_secs, 4))));
     if outside > 0 {
         entries.push(LegendEntry::text(format!("{outside} roots outside the view")));
     }

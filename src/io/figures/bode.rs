@@ -1,0 +1,219 @@
+//! Bode comparison: model frequency responses against the empirical (chirp) estimate.
+use std::path::Path;
+
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+
+use super::legend::{LegendEntry, Swatch, draw_legend};
+use super::{
+    Area, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, check_len, desc_font, draw_note,
+    label_font, padded_range, palette, render, tick_label, titled_with_legend,
+};
+use crate::core::tf::BodePoint;
+
+/// Empirical points with at least this coherence are drawn filled, the others hollow and grey.
+pub const GOOD_COHERENCE: f64 = 0.8;
+const THIN_PX: u32 = 1;
+const THICK_PX: u32 = 3;
+
+/// One model's frequency response.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodeCurve {
+    pub name: String,
+    pub points: Vec<BodePoint>,
+    /// Drawn thick (the reduced models); the others thin (the segment models).
+    pub emphasis: bool,
+}
+
+/// The empirical frequency response with its coherence, one value per frequency.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmpiricalBode {
+    pub omega_rad_s: Vec<f64>,
+    pub mag_db: Vec<f64>,
+    pub phase_deg: Vec<f64>,
+    pub coherence: Vec<f64>,
+}
+
+#[derive(Clone, Copy)]
+enum Panel {
+    Magnitude,
+    Phase,
+}
+
+impl Panel {
+    fn of_point(self, p: &BodePoint) -> f64 {
+        match self {
+            Panel::Magnitude => p.mag_db,
+            Panel::Phase => p.phase_deg,
+        }
+    }
+
+    fn of_empirical(self, e: &EmpiricalBode) -> &[f64] {
+        match self {
+            Panel::Magnitude => &e.mag_db,
+            Panel::Phase => &e.phase_deg,
+        }
+    }
+
+    fn desc(self) -> &'static str {
+        match self {
+            Panel::Magnitude => "magnitude (dB)",
+            Panel::Phase => "phase (deg)",
+        }
+    }
+}
+
+type BodeChart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<LogCoord<f64>, RangedCoordf64>>;
+
+/// Draws magnitude (dB) over phase (deg) against a logarithmic ω axis (rad/s).
+///
+/// Curves with `emphasis` are drawn thick, the others thin; the empirical estimate as points,
+/// filled where its coherence reaches [`GOOD_COHERENCE`].
+pub fn bode_png(
+    path: &Path,
+    title: &str,
+    curves: &[BodeCurve],
+    empirical: Option<&EmpiricalBode>,
+) -> Result<(), FigureError> {
+    if let Some(e) = empirical {
+        let n = e.omega_rad_s.len();
+        check_len(path, "empirical magnitude", e.mag_db.len(), n)?;
+        check_len(path, "empirical phase", e.phase_deg.len(), n)?;
+        check_len(path, "empirical coherence", e.coherence.len(), n)?;
+    }
+    let omegas = curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p.omega_rad_s))
+        .chain(empirical.iter().flat_map(|e| e.omega_rad_s.iter().copied()))
+        .filter(|w| *w > 0.0);
+    let omega_range = log_range(omegas);
+    render(path, FIGURE_SIZE, |root| {
+        let (chart_area, legend_area) = titled_with_legend(root, title)?;
+        let Some((w_lo, w_hi)) = omega_range else {
+            draw_note(&chart_area, "no frequency response data")?;
+            return Ok(());
+        };
+        let (_, h) = chart_area.dim_in_pixel();
+        let (top, bottom) = chart_area.split_vertically(h / 2);
+        draw_panel(&top, Panel::Magnitude, (w_lo, w_hi), curves, empirical)?;
+        draw_panel(&bottom, Panel::Phase, (w_lo, w_hi), curves, empirical)?;
+        draw_legend(&legend_area, &legend_entries(curves, empirical))
+    })
+}
+
+/// The positive finite range of `omegas`, widened to whole decades when it is a single value.
+fn log_range(omegas: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = padded_range(omegas.filter(|w| *w > 0.0).map(f64::log10), 0.0)?;
+    Some((10f64.powf(lo), 10f64.powf(hi)))
+}
+
+fn in_view(omega: f64, value: f64) -> bool {
+    omega > 0.0 && omega.is_finite() && value.is_finite()
+}
+
+fn draw_panel(
+    area: &Area<'_>,
+    panel: Panel,
+    (w_lo, w_hi): (f64, f64),
+    curves: &[BodeCurve],
+    empirical: Option<&EmpiricalBode>,
+) -> DrawResult {
+    let values = curves
+        .iter()
+        .flat_map(|c| c.points.iter().filter(|p| p.omega_rad_s > 0.0).map(move |p| panel.of_point(p)))
+        .chain(empirical.iter().flat_map(|e| {
+            e.omega_rad_s.iter().zip(panel.of_empirical(e)).filter(|(w, _)| **w > 0.0).map(|(_, v)| *v)
+        }));
+    let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
+    let mut chart = chart_builder(area).build_cartesian_2d((w_lo..w_hi).log_scale(), y_lo..y_hi)?;
+    chart
+        .configure_mesh()
+        .x_desc("ω (rad/s)")
+        .y_desc(panel.desc())
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
+        .label_style(label_font())
+        .axis_desc_style(desc_font())
+        .bold_line_style(palette::GRID_BOLD)
+        .light_line_style(palette::GRID_LIGHT)
+        .max_light_lines(LIGHT_LINES)
+        .draw()?;
+    // Thin curves first so the emphasised ones stay on top.
+    for pass_emphasis in [false, true] {
+        for (curve, color) in coloured(curves).filter(|(c, _)| c.emphasis == pass_emphasis) {
+            draw_curve(&mut chart, panel, curve, color)?;
+        }
+    }
+    if let Some(e) = empirical {
+        draw_empirical(&mut chart, panel, e)?;
+    }
+    Ok(())
+}
+
+/// Each curve with its colour: thin curves take the series colours in their order (matching the
+/// segment colours of the z-plane), emphasised ones the emphasis colours in theirs.
+fn coloured(curves: &[BodeCurve]) -> impl Iterator<Item = (&BodeCurve, RGBColor)> {
+    let (mut thin, mut thick) = (0, 0);
+    curves.iter().map(move |c| {
+        let color = if c.emphasis {
+            thick += 1;
+            palette::emphasis(thick - 1)
+        } else {
+            thin += 1;
+            palette::series(thin - 1)
+        };
+        (c, color)
+    })
+}
+
+fn draw_curve(chart: &mut BodeChart<'_, '_>, panel: Panel, curve: &BodeCurve, color: RGBColor) -> DrawResult {
+    let style =
+        if curve.emphasis { color.stroke_width(THICK_PX) } else { color.mix(0.7).stroke_width(THIN_PX) };
+    let points: Vec<(f64, f64)> = curve
+        .points
+        .iter()
+        .map(|p| (p.omega_rad_s, panel.of_point(p)))
+        .filter(|(w, v)| in_view(*w, *v))
+        .collect();
+    chart.draw_series(LineSeries::new(points, style))?;
+    Ok(())
+}
+
+fn draw_empirical(chart: &mut BodeChart<'_, '_>, panel: Panel, e: &EmpiricalBode) -> DrawResult {
+    let points = e
+        .omega_rad_s
+        .iter()
+        .zip(panel.of_empirical(e))
+        .zip(&e.coherence)
+        .filter(|((w, v), _)| in_view(**w, **v))
+        .map(|((w, v), c)| ((*w, *v), *c >= GOOD_COHERENCE));
+    chart.draw_series(points.map(|(p, good)| {
+        if good {
+            Circle::new(p, 4, palette::MEASURED.filled())
+        } else {
+            Circle::new(p, 4, palette::MUTED.stroke_width(1))
+        }
+    }))?;
+    Ok(())
+}
+
+fn legend_entries(curves: &[BodeCurve], empirical: Option<&EmpiricalBode>) -> Vec<LegendEntry> {
+    let mut entries = Vec::new();
+    if empirical.is_some() {
+        entries.push(LegendEntry::new(
+            format!("empirical, coh. ≥ {GOOD_COHERENCE}"),
+            Swatch::Dot(palette::MEASURED),
+        ));
+        entries.push(LegendEntry::new(
+            format!("empirical, coh. < {GOOD_COHERENCE}"),
+            Swatch::Ring(palette::MUTED),
+        ));
+    }
+    for pass_emphasis in [true, false] {
+        for (curve, color) in coloured(curves).filter(|(c, _)| c.emphasis == pass_emphasis) {
+            let width = if curve.emphasis { THICK_PX } else { THIN_PX + 1 };
+            entries.push(LegendEntry::line(curve.name.clone(), color, width));
+        }
+    }
+    entries
+}

@@ -1,0 +1,201 @@
+//! Distribution figures: histograms (Monte Carlo) and box plots (percentage errors).
+use std::f64::consts::PI;
+use std::ops::Range;
+use std::path::Path;
+
+use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::legend::{LegendEntry, Swatch, draw_legend};
+use super::{
+    FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, desc_font, draw_note, font, label_font,
+    padded_range, palette, render, sig, tick_label, titled_with_legend,
+};
+use crate::core::metrics::BoxStats;
+
+const NORMAL_CURVE_POINTS: usize = 200;
+/// Half the width of a box, in category units (one category is 1 wide).
+const BOX_HALF_WIDTH: f64 = 0.3;
+const CAP_HALF_WIDTH: f64 = 0.15;
+
+/// Draws a histogram of the finite `samples` in `bins` equal bins, with the normal density
+/// `fitted_normal = (mean, std)` scaled to counts over it.
+pub fn histogram_png(
+    path: &Path,
+    title: &str,
+    samples: &[f64],
+    bins: usize,
+    fitted_normal: Option<(f64, f64)>,
+    x_label: &str,
+) -> Result<(), FigureError> {
+    if bins == 0 {
+        let path = path.to_path_buf();
+        return Err(FigureError::InvalidParameter { path, name: "bins", value: 0.0, expected: "at least 1" });
+    }
+    let samples: Vec<f64> = samples.iter().copied().filter(|v| v.is_finite()).collect();
+    let normal = fitted_normal.filter(|(m, s)| m.is_finite() && s.is_finite() && *s > 0.0);
+    let sample_range = padded_range(samples.iter().copied(), 0.0);
+    render(path, FIGURE_SIZE, |root| {
+        let (chart_area, legend_area) = titled_with_legend(root, title)?;
+        let Some((lo, hi)) = sample_range else {
+            draw_note(&chart_area, "no samples")?;
+            return Ok(());
+        };
+        let width = (hi - lo) / bins as f64;
+        let mut counts = vec![0usize; bins];
+        for v in &samples {
+            let i = (((v - lo) / width).floor().max(0.0) as usize).min(bins - 1);
+            if let Some(c) = counts.get_mut(i) {
+                *c += 1;
+            }
+        }
+        let scale = samples.len() as f64 * width;
+        let curve: Vec<(f64, f64)> = normal.map(|(m, s)| normal_curve(m, s, scale)).unwrap_or_default();
+        let x_values =
+            [lo, hi].into_iter().chain(normal.into_iter().flat_map(|(m, s)| [m - 3.0 * s, m + 3.0 * s]));
+        let (x_lo, x_hi) = padded_range(x_values, 0.03).unwrap_or((lo, hi));
+        let peak = counts.iter().map(|c| *c as f64).chain(curve.iter().map(|p| p.1)).fold(1.0, f64::max);
+        let mut chart = chart_builder(&chart_area).build_cartesian_2d(x_lo..x_hi, 0.0..1.08 * peak)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc("count")
+            .x_label_formatter(&|v| tick_label(*v))
+            .y_label_formatter(&|v| tick_label(*v))
+            .label_style(label_font())
+            .axis_desc_style(desc_font())
+            .bold_line_style(palette::GRID_BOLD)
+            .light_line_style(palette::GRID_LIGHT)
+            .max_light_lines(LIGHT_LINES)
+            .draw()?;
+        let bars = counts.iter().enumerate().map(|(i, c)| {
+            let x0 = lo + i as f64 * width;
+            [(x0, 0.0), (x0 + width, *c as f64)]
+        });
+        chart.draw_series(bars.clone().map(|r| Rectangle::new(r, palette::FILL.mix(0.5).filled())))?;
+        chart.draw_series(bars.map(|r| Rectangle::new(r, palette::FILL.stroke_width(1))))?;
+        chart.draw_series(LineSeries::new(curve, palette::FIT.stroke_width(3)))?;
+        let mut entries =
+            vec![LegendEntry::new(format!("samples (n = {})", samples.len()), Swatch::Bar(palette::FILL))];
+        if let Some((m, s)) = normal {
+            entries.push(LegendEntry::line("fitted normal", palette::FIT, 3));
+            entries.push(LegendEntry::text(format!("  mean = {}", sig(m, 4))));
+            entries.push(LegendEntry::text(format!("  std = {}", sig(s, 3))));
+        }
+        draw_legend(&legend_area, &entries)
+    })
+}
+
+/// `scale` × the normal density over mean ± 4 std.
+fn normal_curve(mean: f64, std: f64, scale: f64) -> Vec<(f64, f64)> {
+    (0..=NORMAL_CURVE_POINTS)
+        .map(|k| {
+            let x = mean + std * (-4.0 + 8.0 * k as f64 / NORMAL_CURVE_POINTS as f64);
+            let z = (x - mean) / std;
+            (x, scale * (-0.5 * z * z).exp() / (std * (2.0 * PI).sqrt()))
+        })
+        .collect()
+}
+
+/// A category axis: category i spans [i, i + 1] and is labelled with its name at i + 0.5.
+struct CategoryAxis {
+    names: Vec<String>,
+}
+
+impl Ranged for CategoryAxis {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let n = self.names.len().max(1) as f64;
+        (limit.0 as f64 + value / n * (limit.1 - limit.0) as f64).round() as i32
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, _hint: Hint) -> Vec<f64> {
+        (0..self.names.len()).map(|i| i as f64 + 0.5).collect()
+    }
+
+    fn range(&self) -> Range<f64> {
+        0.0..self.names.len().max(1) as f64
+    }
+}
+
+impl ValueFormatter<f64> for CategoryAxis {
+    fn format_ext(&self, value: &f64) -> String {
+        let i = value.floor();
+        if i < 0.0 {
+            return String::new();
+        }
+        self.names.get(i as usize).cloned().unwrap_or_default()
+    }
+}
+
+/// Draws one box per entry: q1–q3 box, median line, whiskers, the minimum and maximum when they
+/// lie beyond the whiskers, and the number of points outside the whiskers.
+pub fn boxplot_png(
+    path: &Path,
+    title: &str,
+    boxes: &[(String, BoxStats)],
+    y_label: &str,
+) -> Result<(), FigureError> {
+    let values =
+        boxes.iter().flat_map(|(_, b)| [b.min, b.max, b.whisker_lo, b.whisker_hi, b.q1, b.q3, b.median]);
+    let y_range = padded_range(values, 0.08);
+    render(path, FIGURE_SIZE, |root| {
+        let (chart_area, legend_area) = titled_with_legend(root, title)?;
+        let Some((y_lo, y_hi)) = y_range else {
+            draw_note(&chart_area, "no data")?;
+            return Ok(());
+        };
+        let axis = CategoryAxis { names: boxes.iter().map(|(n, _)| n.clone()).collect() };
+        let mut chart = chart_builder(&chart_area).build_cartesian_2d(axis, y_lo..y_hi)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .y_desc(y_label)
+            .y_label_formatter(&|v| tick_label(*v))
+            .label_style(label_font())
+            .axis_desc_style(desc_font())
+            .bold_line_style(palette::GRID_BOLD)
+            .light_line_style(palette::GRID_LIGHT)
+            .max_light_lines(LIGHT_LINES)
+            .draw()?;
+        let line = |a: (f64, f64), b: (f64, f64), w: u32| {
+            PathElement::new(vec![a, b], palette::MEASURED.stroke_width(w))
+        };
+        for (i, (_, b)) in boxes.iter().enumerate() {
+            let x = i as f64 + 0.5;
+            let (l, r) = (x - BOX_HALF_WIDTH, x + BOX_HALF_WIDTH);
+            chart.draw_series([Rectangle::new([(l, b.q1), (r, b.q3)], palette::FILL.mix(0.3).filled())])?;
+            chart.draw_series([Rectangle::new([(l, b.q1), (r, b.q3)], palette::FILL.stroke_width(2))])?;
+            chart.draw_series([
+                line((x, b.q3), (x, b.whisker_hi), 1),
+                line((x, b.q1), (x, b.whisker_lo), 1),
+                line((x - CAP_HALF_WIDTH, b.whisker_hi), (x + CAP_HALF_WIDTH, b.whisker_hi), 2),
+                line((x - CAP_HALF_WIDTH, b.whisker_lo), (x + CAP_HALF_WIDTH, b.whisker_lo), 2),
+                line((l, b.median), (r, b.median), 3),
+            ])?;
+            let extremes = [(b.min, b.min < b.whisker_lo), (b.max, b.max > b.whisker_hi)];
+            let beyond = extremes.into_iter().filter(|(v, out)| *out && v.is_finite());
+            chart.draw_series(
+                beyond.map(|(v, _)| Circle::new((x, v), 5, palette::MEASURED.stroke_width(2))),
+            )?;
+            if b.outliers > 0 && b.max.is_finite() {
+                let style = font(14.0).color(&palette::NOTE).pos(Pos::new(HPos::Center, VPos::Bottom));
+                let note = format!("{} outside", b.outliers);
+                let at = EmptyElement::at((x, b.max.max(b.whisker_hi))) + Text::new(note, (0, -8), style);
+                chart.plotting_area().draw(&at)?;
+            }
+        }
+        let entries = [
+            LegendEntry::new("quartiles q1–q3", Swatch::Bar(palette::FILL)),
+            LegendEntry::line("median", palette::MEASURED, 3),
+            LegendEntry::line("whiskers", palette::MEASURED, 1),
+            LegendEntry::new("min / max beyond", Swatch::Ring(palette::MEASURED)),
+            LegendEntry::text("n outside: points beyond"),
+            LegendEntry::text("  the whiskers"),
+        ];
+        draw_legend(&legend_area, &entries)
+    })
+}

@@ -1,0 +1,163 @@
+//! Line and scatter figures: the static-map fit and the validation traces.
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::legend::{LegendEntry, Swatch, draw_legend};
+use super::{
+    Area, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, check_len, desc_font, draw_note,
+    label_font, padded_range, palette, render, tick_label, titled_with_legend,
+};
+
+/// Share of the traces figure's height given to the traces; the residual panel gets the rest.
+const TRACE_SHARE: f64 = 0.62;
+/// Line widths: measured data and residuals (noisy) thin, model traces thicker.
+const MEASURED_PX: u32 = 1;
+const MODEL_PX: u32 = 2;
+
+/// Draws the steady-state points and the fitted static map.
+pub fn static_map_png(
+    path: &Path,
+    title: &str,
+    points: &[(f64, f64)],
+    curve: &[(f64, f64)],
+    x_label: &str,
+    y_label: &str,
+) -> Result<(), FigureError> {
+    let finite = |(x, y): &(f64, f64)| x.is_finite() && y.is_finite();
+    let points: Vec<(f64, f64)> = points.iter().copied().filter(finite).collect();
+    let mut curve: Vec<(f64, f64)> = curve.iter().copied().filter(finite).collect();
+    curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let all = || points.iter().chain(&curve);
+    let ranges = padded_range(all().map(|p| p.0), 0.04).zip(padded_range(all().map(|p| p.1), 0.06));
+    render(path, FIGURE_SIZE, |root| {
+        let (chart_area, legend_area) = titled_with_legend(root, title)?;
+        let Some(((x_lo, x_hi), (y_lo, y_hi))) = ranges else {
+            draw_note(&chart_area, "no steady-state data")?;
+            return Ok(());
+        };
+        let mut chart = chart_builder(&chart_area).build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .x_label_formatter(&|v| tick_label(*v))
+            .y_label_formatter(&|v| tick_label(*v))
+            .label_style(label_font())
+            .axis_desc_style(desc_font())
+            .bold_line_style(palette::GRID_BOLD)
+            .light_line_style(palette::GRID_LIGHT)
+            .max_light_lines(LIGHT_LINES)
+            .draw()?;
+        chart.draw_series(points.iter().map(|p| Circle::new(*p, 5, palette::MEASURED.filled())))?;
+        chart.draw_series(LineSeries::new(curve.iter().copied(), palette::FIT.stroke_width(3)))?;
+        let entries = [
+            LegendEntry::new(format!("steady state (n = {})", points.len()), Swatch::Dot(palette::MEASURED)),
+            LegendEntry::line("fitted static map", palette::FIT, 3),
+        ];
+        draw_legend(&legend_area, &entries)
+    })
+}
+
+/// Draws the measured trace with the model traces over it and, below, the residual of the first
+/// model (measured − model). Every trace must have one value per entry of `t_secs`.
+pub fn traces_png(
+    path: &Path,
+    title: &str,
+    t_secs: &[f64],
+    measured: &[f64],
+    models: &[(String, Vec<f64>)],
+    y_label: &str,
+) -> Result<(), FigureError> {
+    check_len(path, "measured trace", measured.len(), t_secs.len())?;
+    for (name, y) in models {
+        check_len(path, &format!("model trace `{name}`"), y.len(), t_secs.len())?;
+    }
+    let residual: Option<(&str, Vec<f64>)> =
+        models.first().map(|(name, y)| (name.as_str(), measured.iter().zip(y).map(|(m, y)| m - y).collect()));
+    let t_range = padded_range(t_secs.iter().copied(), 0.0);
+    render(path, FIGURE_SIZE, |root| {
+        let (chart_area, legend_area) = titled_with_legend(root, title)?;
+        let Some(t_range) = t_range else {
+            draw_note(&chart_area, "no samples")?;
+            return Ok(());
+        };
+        let (_, h) = chart_area.dim_in_pixel();
+        let (top, bottom) = chart_area.split_vertically((TRACE_SHARE * h as f64) as u32);
+        let mut series: Vec<(&[f64], RGBColor, u32)> = vec![(measured, palette::MEASURED, MEASURED_PX)];
+        series.extend(
+            models.iter().enumerate().map(|(i, (_, y))| (y.as_slice(), palette::series(i), MODEL_PX)),
+        );
+        draw_lines(&top, t_secs, t_range, &series, y_label)?;
+        let mut entries = vec![LegendEntry::line("measured", palette::MEASURED, MEASURED_PX + 1)];
+        entries.extend(
+            models
+                .iter()
+                .enumerate()
+                .map(|(i, (n, _))| LegendEntry::line(n.clone(), palette::series(i), MODEL_PX)),
+        );
+        match &residual {
+            Some((name, r)) => {
+                draw_lines(
+                    &bottom,
+                    t_secs,
+                    t_range,
+                    &[(r, palette::series(0), MEASURED_PX)],
+                    &format!("residual {}", unit_of(y_label)),
+                )?;
+                entries.push(LegendEntry::text("lower panel: residual"));
+                entries.push(LegendEntry::line(
+                    format!("measured − {name}"),
+                    palette::series(0),
+                    MEASURED_PX + 1,
+                ));
+            }
+            None => draw_note(&bottom, "no model trace: no residual")?,
+        }
+        draw_legend(&legend_area, &entries)
+    })
+}
+
+/// The "(unit)" at the end of an axis label, or "" when there is none.
+fn unit_of(label: &str) -> &str {
+    match label.rfind('(') {
+        Some(i) if label.ends_with(')') => label.get(i..).unwrap_or(""),
+        _ => "",
+    }
+}
+
+/// One panel of traces against time.
+fn draw_lines(
+    area: &Area<'_>,
+    t_secs: &[f64],
+    (t_lo, t_hi): (f64, f64),
+    series: &[(&[f64], RGBColor, u32)],
+    y_desc: &str,
+) -> DrawResult {
+    let values = series.iter().flat_map(|(y, _, _)| y.iter().copied());
+    let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
+    let mut chart = chart_builder(area).build_cartesian_2d(t_lo..t_hi, y_lo..y_hi)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc(y_desc)
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
+        .label_style(label_font())
+        .axis_desc_style(desc_font())
+        .bold_line_style(palette::GRID_BOLD)
+        .light_line_style(palette::GRID_LIGHT)
+        .max_light_lines(LIGHT_LINES)
+        .draw()?;
+    for (y, color, width) in series {
+        let points: Vec<(f64, f64)> = t_secs.iter().zip(y.iter()).map(|(t, y)| (*t, *y)).collect();
+        // Separate two-point paths: plotters joins a wide polyline with mitres, which spike at
+        // the sharp turns of a noisy trace. A non-finite value leaves a gap.
+        let pieces = points.windows(2).filter_map(|w| match w {
+            [a, b] if [a.0, a.1, b.0, b.1].iter().all(|v| v.is_finite()) => Some(vec![*a, *b]),
+            _ => None,
+        });
+        chart.draw_series(pieces.map(|piece| PathElement::new(piece, color.stroke_width(*width))))?;
+    }
+    Ok(())
+}

@@ -80,25 +80,25 @@ pub fn output_figures(
         ),
     );
 
-    if let Some(run) = validation {
-        if let (Some(y), Ok(gray), Ok(lin)) = (
+    if let Some(run) = validation
+        && let (Some(y), Ok(gray), Ok(lin)) = (
             run.output(output),
             predict_wiener(&model.wiener, run, output),
             predict_linear(&model.wiener.linear, run, output),
-        ) {
-            let name = format!("{output}_traces_{}.png", run.name);
-            keep(
-                name.clone(),
-                figures::traces_png(
-                    &dir.join(&name),
-                    &format!("{output} on '{}'", run.name),
-                    &run.t_secs,
-                    &y.values,
-                    &[("gray-box".into(), gray.y_hat), ("linear".into(), lin.y_hat)],
-                    output,
-                ),
-            );
-        }
+        )
+    {
+        let name = format!("{output}_traces_{}.png", run.name);
+        keep(
+            name.clone(),
+            figures::traces_png(
+                &dir.join(&name),
+                &format!("{output} on '{}'", run.name),
+                &run.t_secs,
+                &y.values,
+                &[("gray-box".into(), gray.y_hat), ("linear".into(), lin.y_hat)],
+                output,
+            ),
+        );
     }
     (written, notes)
 }

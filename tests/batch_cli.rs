@@ -127,8 +127,20 @@ fn batch_errors_name_what_is_wrong() {
     let out = dir.path().join("out");
     let out = out.to_str().unwrap();
     expect_error(&["--batch", "--ident", "/no/such/run.csv", "--out", out], &["/no/such/run.csv"]);
-    let bad = write(dir.path(), "bad.csv", "time_s,fuel_flow_gph,shaft_speed_rpm\n0,1,2\n0.1,x,3\n");
-    expect_error(&["--batch", "--ident", bad.to_str().unwrap(), "--out", out], &["bad.csv", "fuel_flow_gph"]);
+    let mut text = String::from("time_s,fuel_flow_gph,shaft_speed_rpm\n");
+    for k in 0..20 {
+        text.push_str(&format!(
+            "{},{},{}\n",
+            k as f64 * 0.1,
+            if k == 5 { "x".into() } else { "1".to_string() },
+            2
+        ));
+    }
+    let bad = write(dir.path(), "bad.csv", &text);
+    expect_error(
+        &["--batch", "--ident", bad.to_str().unwrap(), "--out", out],
+        &["bad.csv", "fuel_flow_gph", "data row 6"],
+    );
     let toml = write(dir.path(), "p.toml", "idnet = \"ident.csv\"\n");
     expect_error(&["--batch", toml.to_str().unwrap(), "--out", out], &["p.toml", "idnet"]);
     let proj = samples().join("project.toml");

@@ -127,6 +127,9 @@ fn step_threshold(u: &[f64], w: usize, settings: &SegmentSettings) -> (f64, f64)
     let sigma = d.get(d.len() / 2).copied().unwrap_or(0.0) / (0.6745 * std::f64::consts::SQRT_2);
     let (lo, hi) = u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
     let noise_floor = 10.0 * sigma * (2.0 / w as f64).sqrt();
+    // Rounding in the running means is ~ε·|u|: never count that as a step, even on a noiseless input.
+    let rounding_floor = 1e-9 * lo.abs().max(hi.abs()).max(f64::MIN_POSITIVE);
+    let noise_floor = noise_floor.max(rounding_floor);
     let auto = noise_floor.max(0.02 * (hi - lo));
     (settings.min_step.map_or(auto, |m| m.max(noise_floor)), sigma)
 }
@@ -229,6 +232,15 @@ mod tests {
         assert!(matches!(
             detect_steps(&u[..10], 0.113, &SegmentSettings::default()),
             Err(SegmentError::TooShort { .. })
+        ));
+    }
+
+    #[test]
+    fn noiseless_flat_input_has_no_steps() {
+        let u = vec![5.43; 400];
+        assert!(matches!(
+            detect_steps(&u, 0.113, &SegmentSettings::default()),
+            Err(SegmentError::NoSteps { .. })
         ));
     }
 

@@ -55,6 +55,7 @@ pub fn project_from_args(args: &BatchArgs) -> Result<Project> {
             settings: BTreeMap::new(),
             segments: BTreeMap::new(),
             clusters: BTreeMap::new(),
+            clusters_from: None,
         },
         (None, None) => load_project(&bundled_project_path()?)?,
     };
@@ -78,6 +79,9 @@ pub fn project_from_args(args: &BatchArgs) -> Result<Project> {
         project.outputs = args.outputs.clone();
     }
     project.add_effects.extend(args.add_effects.iter().cloned());
+    if let Some(p) = &args.clusters_from {
+        project.clusters_from = Some(p.clone());
+    }
     Ok(project)
 }
 
@@ -237,6 +241,8 @@ pub fn run(args: &BatchArgs) -> Result<()> {
     }
     let runs = timings.time("load_runs", || load_runs(&project))?;
     let outputs = outputs_to_model(&project, &runs.ident)?;
+    let mut project = project;
+    let cluster_notes = apply_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
     let out_dir = &args.out;
     std::fs::create_dir_all(out_dir)
         .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
@@ -255,7 +261,7 @@ pub fn run(args: &BatchArgs) -> Result<()> {
         monte_carlo: None,
         timings_ms: BTreeMap::new(),
         figures: Vec::new(),
-        diagnostics: Vec::new(),
+        diagnostics: cluster_notes,
     };
     for output in &outputs {
         let identified = timings
@@ -290,6 +296,31 @@ pub fn run(args: &BatchArgs) -> Result<()> {
     write_report_md(&out_dir.join("report.md"), &report)?;
     print_summary(&report, out_dir);
     Ok(())
+}
+
+/// Take the clusters of the project's saved model (`clusters_from` / `--clusters`) for every output
+/// that has none of its own; say which outputs fall back to the automatic proposal.
+fn apply_saved_clusters(project: &mut Project, dt_secs: f64, outputs: &[String]) -> Result<Vec<String>> {
+    let Some(path) = &project.clusters_from else { return Ok(Vec::new()) };
+    let saved = crate::io::model_file::clusters_from_model(path, dt_secs)?;
+    let mut notes = Vec::new();
+    for output in outputs {
+        if project.clusters.contains_key(output) {
+            notes.push(format!(
+                "'{output}': the project's own clusters take precedence over {}",
+                path.display()
+            ));
+        } else if let Some(clusters) = saved.get(output) {
+            project.clusters.insert(output.clone(), clusters.clone());
+            notes.push(format!("'{output}': {} clusters taken from {}", clusters.len(), path.display()));
+        } else {
+            notes.push(format!(
+                "'{output}': {} holds no clusters for it; the automatic proposal is used",
+                path.display()
+            ));
+        }
+    }
+    Ok(notes)
 }
 
 fn run_roles(runs: &Runs) -> BTreeMap<String, String> {

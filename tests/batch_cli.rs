@@ -191,3 +191,87 @@ fn predict_errors_name_what_is_wrong() {
     );
     assert!(!pred.exists());
 }
+
+#[test]
+fn batch_starts_from_the_clusters_of_a_saved_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first");
+    let project = samples().join("project.toml");
+    let o = jetid(&[
+        "--batch",
+        project.to_str().unwrap(),
+        "--output",
+        "shaft_speed_rpm",
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    // An engineer keeps only the real pole cluster of the automatic proposal and saves the model.
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(first.join("model.json")).unwrap()).unwrap();
+    let clusters = model["outputs"][0]["clusters"].as_array().unwrap().clone();
+    let real_pole = clusters
+        .iter()
+        .find(|c| c["kind"] == "Pole" && c["centre"][1].as_f64().unwrap().abs() < 1e-9)
+        .expect("the proposal has a real pole cluster")
+        .clone();
+    model["outputs"][0]["clusters"] = serde_json::json!([real_pole]);
+    let edited = dir.path().join("edited.json");
+    std::fs::write(&edited, serde_json::to_string(&model).unwrap()).unwrap();
+
+    let second = dir.path().join("second");
+    let o = jetid(&[
+        "--batch",
+        project.to_str().unwrap(),
+        "--clusters",
+        edited.to_str().unwrap(),
+        "--out",
+        second.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(second.join("report.json")).unwrap()).unwrap();
+    let speed = &report["outputs"]["shaft_speed_rpm"]["identified"];
+    assert_eq!(speed["clusters"].as_array().unwrap().len(), 1, "{speed}");
+    assert_eq!(speed["poles"].as_array().unwrap().len(), 1, "one cluster gives a first-order model");
+    // Thrust is not in the saved model: it falls back to the automatic proposal, and the report says so.
+    assert!(!report["outputs"]["thrust_n"]["identified"]["clusters"].as_array().unwrap().is_empty());
+    let notes = report["diagnostics"].to_string();
+    assert!(notes.contains("thrust_n") && notes.contains("automatic proposal"), "{notes}");
+}
+
+#[test]
+fn saved_clusters_from_another_sample_time_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first");
+    let project = samples().join("project.toml");
+    let o = jetid(&[
+        "--batch",
+        project.to_str().unwrap(),
+        "--output",
+        "thrust_n",
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(first.join("model.json")).unwrap()).unwrap();
+    model["dt_secs"] = serde_json::json!(0.01);
+    let edited = write(dir.path(), "fast.json", &serde_json::to_string(&model).unwrap());
+    expect_error(
+        &[
+            "--batch",
+            project.to_str().unwrap(),
+            "--clusters",
+            edited.to_str().unwrap(),
+            "--out",
+            first.to_str().unwrap(),
+        ],
+        &["fast.json", "sample time", "0.01000"],
+    );
+    expect_error(
+        &["--batch", project.to_str().unwrap(), "--clusters", "/nonexistent/model.json"],
+        &["/nonexistent/model.json"],
+    );
+}

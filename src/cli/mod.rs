@@ -52,6 +52,10 @@ pub struct BatchArgs {
     /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
     #[arg(long = "map")]
     pub maps: Vec<String>,
+    /// Start from the clusters of a saved model.json (e.g. one exported from the app) instead of
+    /// the automatic proposal, for every output the model holds.
+    #[arg(long = "clusters", value_name = "MODEL.json")]
+    pub clusters_from: Option<PathBuf>,
     /// Sample time in seconds, for files without a time column.
     #[arg(long)]
     pub sample_time: Option<f64>,

@@ -84,6 +84,24 @@ impl ModelFile {
     }
 }
 
+/// The clusters of every output of a saved model, checked against the sample time they will be used
+/// with: a z-plane position means a different frequency at another sample time.
+pub fn clusters_from_model(
+    path: &Path,
+    dt_secs: f64,
+) -> Result<std::collections::BTreeMap<String, Vec<Cluster>>> {
+    let model = read_model(path)?;
+    if ((model.dt_secs - dt_secs) / dt_secs).abs() > 0.02 {
+        bail!(
+            "{} was identified at a sample time of {:.5} s, but the identification run is sampled every {:.5} s; its clusters do not apply",
+            path.display(),
+            model.dt_secs,
+            dt_secs
+        );
+    }
+    Ok(model.outputs.into_iter().filter(|o| !o.clusters.is_empty()).map(|o| (o.name, o.clusters)).collect())
+}
+
 pub fn write_model(path: &Path, model: &ModelFile) -> Result<()> {
     let text = serde_json::to_string_pretty(model).context("serialising the model")?;
     write_atomic(path, text.as_bytes())

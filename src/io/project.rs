@@ -8,6 +8,8 @@
 //! steady = "steady.csv"
 //! outputs = ["shaft_speed_rpm", "thrust_n"]  # default: every output of the identification run
 //! add_effects = []
+//! clusters_from = "jetid-out/model.json"  # start from a saved model's clusters (per output; an
+//!                                          # output's own `clusters` below take precedence)
 //! [load]                                   # how to read every run (each run may override)
 //! map = ["input=pump_V", "output=rpm"]
 //! [[validate]]                             # a run may also be a table with its own options
@@ -106,6 +108,7 @@ pub struct ProjectFile {
     pub steady: Option<RunEntry>,
     pub outputs: Vec<String>,
     pub add_effects: Vec<String>,
+    pub clusters_from: Option<String>,
     pub load: LoadSpec,
     pub output: BTreeMap<String, OutputSpec>,
 }
@@ -130,6 +133,8 @@ pub struct Project {
     pub settings: BTreeMap<String, OutputSettings>,
     pub segments: BTreeMap<String, Vec<Segment>>,
     pub clusters: BTreeMap<String, Vec<Cluster>>,
+    /// A saved model.json whose clusters are used for outputs without clusters of their own.
+    pub clusters_from: Option<PathBuf>,
 }
 
 impl Project {
@@ -231,6 +236,7 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
         settings,
         segments,
         clusters,
+        clusters_from: file.clusters_from.as_deref().map(|raw| resolve_path(raw, base)).transpose()?,
     })
 }
 
@@ -267,6 +273,7 @@ mod tests {
     fn parses_paths_tables_and_settings() {
         let text = r#"
             ident = "ident.csv"
+            clusters_from = "out/model.json"
             validate = ["val.csv", { path = "/abs/runA.csv", window = "935:2603" }]
             [load]
             map = ["input=pump_V"]
@@ -284,6 +291,7 @@ mod tests {
         assert_eq!(p.settings["rpm"].orders.na, 4);
         assert_eq!(p.segments["rpm"][1].label, "B");
         assert_eq!(p.clusters["rpm"].len(), 1);
+        assert_eq!(p.clusters_from, Some(PathBuf::from("/data/out/model.json")));
     }
 
     #[test]

@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use crate::cli::BatchArgs;
 use crate::core::pipeline::{self, Identified, PipelineError, segments_for};
 use crate::core::run::Run;
-use crate::core::segment::SegmentSettings;
+use crate::core::segment::{SegmentSettings, auto_segments_joined};
 use crate::io::csv_run::load_run;
 use crate::io::model_file::{ModelFile, SignalInfo, write_model};
 use crate::io::project::{LoadSpec, Project, RunSource, bundled_project_path, load_project};
@@ -21,6 +21,8 @@ use crate::io::report::{
 /// The loaded runs of a project, by role.
 pub struct Runs {
     pub ident: Run,
+    /// Where each further identification run starts when several were joined.
+    pub ident_junctions: Vec<usize>,
     pub validate: Vec<Run>,
     pub chirp: Option<Run>,
     pub steady: Option<Run>,
@@ -46,7 +48,7 @@ pub fn project_from_args(args: &BatchArgs) -> Result<Project> {
         (Some(path), _) => load_project(path)?,
         (None, Some(_)) => Project {
             name: "command line".into(),
-            ident: None,
+            ident: vec![],
             validate: vec![],
             chirp: None,
             steady: None,
@@ -56,6 +58,7 @@ pub fn project_from_args(args: &BatchArgs) -> Result<Project> {
             segments: BTreeMap::new(),
             clusters: BTreeMap::new(),
             clusters_from: None,
+            steps_from: None,
         },
         (None, None) => load_project(&bundled_project_path()?)?,
     };
@@ -64,7 +67,7 @@ pub fn project_from_args(args: &BatchArgs) -> Result<Project> {
     let cwd = PathBuf::from(".");
     let src = |p: &PathBuf| RunSource { path: cwd.join(p), load: cli_load.clone() };
     if let Some(p) = &args.ident {
-        project.ident = Some(src(p));
+        project.ident = vec![src(p)];
     }
     if !args.validate.is_empty() {
         project.validate = args.validate.iter().map(src).collect();
@@ -91,10 +94,20 @@ pub fn load_source(source: &RunSource) -> Result<Run> {
 }
 
 pub fn load_runs(project: &Project) -> Result<Runs> {
-    let Some(ident) = &project.ident else {
+    if project.ident.is_empty() {
         bail!("the project names no identification run (give one with --ident FILE)");
-    };
-    let ident = load_source(ident)?;
+    }
+    let parts = project.ident.iter().map(load_source).collect::<Result<Vec<_>>>()?;
+    let (ident, ident_junctions) =
+        crate::core::run::join_runs(&parts).context("joining the identification runs")?;
+    if let Some(name) = &project.steps_from
+        && ident.channel(name).is_none()
+    {
+        bail!(
+            "steps_from = \"{name}\": the identification run '{}' has no such channel (map it with aux={name})",
+            ident.name
+        );
+    }
     let validate = project.validate.iter().map(load_source).collect::<Result<Vec<_>>>()?;
     let chirp = project.chirp.as_ref().map(load_source).transpose()?;
     let steady = project.steady.as_ref().map(load_source).transpose()?;
@@ -109,7 +122,7 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             );
         }
     }
-    Ok(Runs { ident, validate, chirp, steady })
+    Ok(Runs { ident, ident_junctions, validate, chirp, steady })
 }
 
 /// Outputs to model: the project's list (each must exist), else every output of the ident run.
@@ -130,11 +143,23 @@ pub fn outputs_to_model(project: &Project, ident: &Run) -> Result<Vec<String>> {
     Ok(project.outputs.clone())
 }
 
-/// Identify one output as the project says.
-pub fn identify(project: &Project, ident: &Run, output: &str) -> Result<Identified, PipelineError> {
+/// Identify one output as the project says: the project's segments, else steps detected on the
+/// input (or the project's `steps_from` channel) of each joined identification run.
+pub fn identify(project: &Project, runs: &Runs, output: &str) -> Result<Identified, PipelineError> {
+    let ident = &runs.ident;
     let settings = project.settings_for(output);
-    let given = project.segments.get(output).map(Vec::as_slice);
-    let segments = segments_for(ident, given, &SegmentSettings::default())?;
+    let segments = match project.segments.get(output) {
+        Some(given) => segments_for(ident, Some(given), &SegmentSettings::default())?,
+        None => {
+            let signal = project
+                .steps_from
+                .as_deref()
+                .and_then(|name| ident.channel(name))
+                .map_or(ident.input.values.as_slice(), |c| c.values.as_slice());
+            auto_segments_joined(signal, &runs.ident_junctions, ident.dt_secs, &SegmentSettings::default())
+                .map_err(|source| PipelineError::Segment { run: ident.name.clone(), source })?
+        }
+    };
     pipeline::identify_output(
         ident,
         output,
@@ -265,7 +290,7 @@ pub fn run(args: &BatchArgs) -> Result<()> {
     };
     for output in &outputs {
         let identified = timings
-            .time(&format!("identify_{output}"), || identify(&project, &runs.ident, output))
+            .time(&format!("identify_{output}"), || identify(&project, &runs, output))
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
         let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
         model_file.push(&identified.model, &unit);

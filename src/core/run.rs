@@ -51,6 +51,68 @@ impl Run {
     }
 }
 
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    #[error("no runs to join")]
+    NothingToJoin,
+    #[error(
+        "run '{run}' is sampled every {dt_secs:.5} s but '{first}' every {first_dt_secs:.5} s; resample it before joining"
+    )]
+    SampleTimeMismatch { run: String, dt_secs: f64, first: String, first_dt_secs: f64 },
+    #[error("run '{run}' has input '{input}' but '{first}' has '{first_input}'")]
+    InputMismatch { run: String, input: String, first: String, first_input: String },
+    #[error("run '{run}' lacks the channel '{channel}' that '{first}' has")]
+    MissingChannel { run: String, channel: String, first: String },
+}
+
+/// Join runs end to end into one (e.g. several identification runs of an engine): channels are
+/// matched by name, time continues one sample after the previous run's end, and `junctions` holds the
+/// index where each later run starts. Every run must have the first run's input, outputs and
+/// auxiliary channels and its sample time (±2 %). The join is a jump in input and output: segments
+/// must not straddle it (the step detector sees it as a step, which is what it is).
+pub fn join_runs(runs: &[Run]) -> Result<(Run, Vec<usize>), RunError> {
+    let Some(first) = runs.first() else { return Err(RunError::NothingToJoin) };
+    let mut joined = first.clone();
+    let mut junctions = Vec::new();
+    for run in runs.iter().skip(1) {
+        if ((run.dt_secs - first.dt_secs) / first.dt_secs).abs() > 0.02 {
+            return Err(RunError::SampleTimeMismatch {
+                run: run.name.clone(),
+                dt_secs: run.dt_secs,
+                first: first.name.clone(),
+                first_dt_secs: first.dt_secs,
+            });
+        }
+        if run.input.name != first.input.name {
+            return Err(RunError::InputMismatch {
+                run: run.name.clone(),
+                input: run.input.name.clone(),
+                first: first.name.clone(),
+                first_input: first.input.name.clone(),
+            });
+        }
+        let missing = |c: &Channel| RunError::MissingChannel {
+            run: run.name.clone(),
+            channel: c.name.clone(),
+            first: first.name.clone(),
+        };
+        junctions.push(joined.len());
+        let t0 = joined.t_secs.last().map_or(0.0, |t| t + joined.dt_secs);
+        joined.t_secs.extend((0..run.len()).map(|k| t0 + k as f64 * joined.dt_secs));
+        joined.input.values.extend_from_slice(&run.input.values);
+        for c in &mut joined.outputs {
+            let other = run.output(&c.name).ok_or_else(|| missing(c))?;
+            c.values.extend_from_slice(&other.values);
+        }
+        for c in &mut joined.aux {
+            let other = run.aux(&c.name).ok_or_else(|| missing(c))?;
+            c.values.extend_from_slice(&other.values);
+        }
+        joined.name = format!("{}+{}", joined.name, run.name);
+    }
+    Ok((joined, junctions))
+}
+
 /// The unit implied by a canonical column-name suffix; empty when unknown.
 pub fn unit_from_column_name(name: &str) -> &'static str {
     let lower = name.to_ascii_lowercase();
@@ -73,7 +135,48 @@ pub fn unit_from_column_name(name: &str) -> &'static str {
 
 #[cfg(test)]
 mod tests {
+    #![allow(clippy::unwrap_used)]
     use super::*;
+
+    fn run(name: &str, n: usize, dt_secs: f64) -> Run {
+        Run {
+            name: name.into(),
+            dt_secs,
+            t_secs: (0..n).map(|k| k as f64 * dt_secs).collect(),
+            input: Channel::new("pump_v", vec![1.0; n]),
+            outputs: vec![Channel::new("rpm", (0..n).map(|k| k as f64).collect())],
+            aux: vec![Channel::new("egt_c", vec![500.0; n])],
+        }
+    }
+
+    #[test]
+    fn joined_runs_continue_in_time_and_mark_junctions() {
+        let (j, junctions) = join_runs(&[run("a", 3, 0.1), run("b", 2, 0.1005)]).unwrap();
+        assert_eq!(j.len(), 5);
+        assert_eq!(junctions, vec![3]);
+        assert_eq!(j.name, "a+b");
+        assert!((j.t_secs[3] - 0.3).abs() < 1e-12 && (j.t_secs[4] - 0.4).abs() < 1e-12);
+        assert_eq!(j.outputs[0].values, vec![0.0, 1.0, 2.0, 0.0, 1.0]);
+        assert_eq!(j.aux[0].values.len(), 5);
+    }
+
+    #[test]
+    fn runs_that_do_not_match_are_not_joined() {
+        assert_eq!(join_runs(&[]), Err(RunError::NothingToJoin));
+        assert!(matches!(
+            join_runs(&[run("a", 3, 0.1), run("b", 3, 0.2)]),
+            Err(RunError::SampleTimeMismatch { .. })
+        ));
+        let mut b = run("b", 3, 0.1);
+        b.aux.clear();
+        assert!(matches!(
+            join_runs(&[run("a", 3, 0.1), b]),
+            Err(RunError::MissingChannel { channel, .. }) if channel == "egt_c"
+        ));
+        let mut c = run("c", 3, 0.1);
+        c.input.name = "fuel".into();
+        assert!(matches!(join_runs(&[run("a", 3, 0.1), c]), Err(RunError::InputMismatch { .. })));
+    }
 
     #[test]
     fn units_follow_suffixes() {

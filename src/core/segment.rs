@@ -168,6 +168,35 @@ pub fn auto_segments(
     Ok(segments_from_steps(&steps, u.len(), dt_secs, settings))
 }
 
+/// Segments of a run made of parts joined end to end (`core::run::join_runs`): each part
+/// `[junctions[i-1], junctions[i])` is segmented on its own, so no segment straddles a join, and the
+/// labels run on (A, B, … across all parts). `step_signal` is the signal steps are detected on: the
+/// input, or e.g. a set-point channel when the input is a controller's output.
+pub fn auto_segments_joined(
+    step_signal: &[f64],
+    junctions: &[usize],
+    dt_secs: f64,
+    settings: &SegmentSettings,
+) -> Result<Vec<Segment>, SegmentError> {
+    let mut bounds = vec![0];
+    bounds.extend(junctions.iter().copied().filter(|&j| j > 0 && j < step_signal.len()));
+    bounds.push(step_signal.len());
+    let mut all = Vec::new();
+    for pair in bounds.windows(2) {
+        let &[a, b] = pair else { continue };
+        let Some(part) = step_signal.get(a..b) else { continue };
+        for seg in auto_segments(part, dt_secs, settings)? {
+            all.push(Segment {
+                label: segment_label(all.len()),
+                start: seg.start + a,
+                step_at: seg.step_at + a,
+                end: seg.end + a,
+            });
+        }
+    }
+    Ok(all)
+}
+
 /// Check user-given segments against the run length.
 pub fn check_segments(segments: &[Segment], n_samples: usize) -> Result<(), SegmentError> {
     for s in segments {
@@ -190,6 +219,24 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
+
+    #[test]
+    fn joined_parts_are_segmented_apart() {
+        let (a, steps_a) = staircase(&[(2.0, 300), (4.0, 300), (3.0, 300)], 0.003, 1);
+        let (b, steps_b) = staircase(&[(2.5, 300), (5.0, 300)], 0.003, 2);
+        let mut u = a.clone();
+        u.extend(&b);
+        let segs = auto_segments_joined(&u, &[a.len()], 0.113, &SegmentSettings::default()).unwrap();
+        let steps: Vec<usize> = segs.iter().map(|s| s.step_at).collect();
+        let mut expected = steps_a.clone();
+        expected.extend(steps_b.iter().map(|s| s + a.len()));
+        assert_eq!(steps.len(), expected.len(), "{steps:?} vs {expected:?}");
+        for (got, want) in steps.iter().zip(&expected) {
+            assert!(got.abs_diff(*want) <= 2, "{steps:?} vs {expected:?}");
+        }
+        assert!(segs.iter().all(|s| s.end <= a.len() || s.start >= a.len()), "no segment straddles the join");
+        assert_eq!(segs.last().unwrap().label, segment_label(expected.len() - 1));
+    }
 
     fn staircase(levels: &[(f64, usize)], noise: f64, seed: u64) -> (Vec<f64>, Vec<usize>) {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

@@ -2,12 +2,14 @@
 //!
 //! ```toml
 //! name = "SR-30 sample runs"
-//! ident = "ident.csv"                      # paths are relative to the project file;
+//! ident = "ident.csv"                      # paths are relative to the project file; a list
+//!                                          # of runs is joined end to end (`core::run::join_runs`);
 //! validate = ["validation.csv"]            # "$VAR/..." takes the folder from an environment variable
 //! chirp = "chirp.csv"
 //! steady = "steady.csv"
 //! outputs = ["shaft_speed_rpm", "thrust_n"]  # default: every output of the identification run
 //! add_effects = []
+//! steps_from = "rpm_setpoint"             # detect the steps on this channel (default: the input)
 //! clusters_from = "jetid-out/model.json"  # start from a saved model's clusters (per output; an
 //!                                          # output's own `clusters` below take precedence)
 //! [load]                                   # how to read every run (each run may override)
@@ -85,6 +87,14 @@ pub enum RunEntry {
 }
 
 /// Per-output settings as written in a project file.
+/// The identification run, or several runs joined end to end.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum IdentEntry {
+    One(RunEntry),
+    Many(Vec<RunEntry>),
+}
+
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OutputSpec {
@@ -102,13 +112,14 @@ pub struct OutputSpec {
 #[serde(default, deny_unknown_fields)]
 pub struct ProjectFile {
     pub name: Option<String>,
-    pub ident: Option<RunEntry>,
+    pub ident: Option<IdentEntry>,
     pub validate: Vec<RunEntry>,
     pub chirp: Option<RunEntry>,
     pub steady: Option<RunEntry>,
     pub outputs: Vec<String>,
     pub add_effects: Vec<String>,
     pub clusters_from: Option<String>,
+    pub steps_from: Option<String>,
     pub load: LoadSpec,
     pub output: BTreeMap<String, OutputSpec>,
 }
@@ -124,7 +135,8 @@ pub struct RunSource {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Project {
     pub name: String,
-    pub ident: Option<RunSource>,
+    /// The identification run(s); several are joined end to end.
+    pub ident: Vec<RunSource>,
     pub validate: Vec<RunSource>,
     pub chirp: Option<RunSource>,
     pub steady: Option<RunSource>,
@@ -135,6 +147,9 @@ pub struct Project {
     pub clusters: BTreeMap<String, Vec<Cluster>>,
     /// A saved model.json whose clusters are used for outputs without clusters of their own.
     pub clusters_from: Option<PathBuf>,
+    /// Channel the identification steps are detected on (default: the input), e.g. a set-point
+    /// when the input is a closed-loop controller's output.
+    pub steps_from: Option<String>,
 }
 
 impl Project {
@@ -227,7 +242,13 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
     let opt = |e: &Option<RunEntry>| e.as_ref().map(|e| source(e, base, defaults)).transpose();
     Ok(Project {
         name: file.name.clone().unwrap_or_else(|| origin.to_owned()),
-        ident: opt(&file.ident)?,
+        ident: match &file.ident {
+            None => Vec::new(),
+            Some(IdentEntry::One(e)) => vec![source(e, base, defaults)?],
+            Some(IdentEntry::Many(list)) => {
+                list.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?
+            }
+        },
         validate: file.validate.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?,
         chirp: opt(&file.chirp)?,
         steady: opt(&file.steady)?,
@@ -237,6 +258,7 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
         segments,
         clusters,
         clusters_from: file.clusters_from.as_deref().map(|raw| resolve_path(raw, base)).transpose()?,
+        steps_from: file.steps_from.clone(),
     })
 }
 
@@ -284,7 +306,15 @@ mod tests {
             clusters = [{ kind = "Pole", centre = [0.9, 0.0], radius = 0.02 }]
         "#;
         let p = parse_project(text, Path::new("/data"), "t.toml").unwrap();
-        assert_eq!(p.ident.as_ref().unwrap().path, PathBuf::from("/data/ident.csv"));
+        assert_eq!(p.ident[0].path, PathBuf::from("/data/ident.csv"));
+        let two = parse_project(
+            "ident = [\"b.csv\", { path = \"d.csv\", window = \"9:99\" }]",
+            Path::new("/x"),
+            "t",
+        )
+        .unwrap();
+        assert_eq!(two.ident.len(), 2);
+        assert_eq!(two.ident[1].load.window.as_deref(), Some("9:99"));
         assert_eq!(p.validate[1].path, PathBuf::from("/abs/runA.csv"));
         assert_eq!(p.validate[1].load.window.as_deref(), Some("935:2603"));
         assert_eq!(p.validate[1].load.map, vec!["input=pump_V".to_owned()]);

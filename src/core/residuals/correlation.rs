@@ -17,6 +17,7 @@ pub struct Correlogram {
     /// Lags in samples. For a cross-correlation a positive lag pairs the residual with the input
     /// that many samples *earlier* (the input leads).
     pub lags_samples: Vec<i64>,
+    /// Correlation coefficient at each lag, −1..1.
     pub values: Vec<f64>,
     /// ±2.576/√N, the 99 % bounds when the residual is white (N: samples used).
     pub bound_99: f64,
@@ -48,9 +49,14 @@ pub struct InputCrossCorrelation {
     /// correlating (0: not prewhitened). Prewhitening makes the white-noise bounds valid for a
     /// coloured input and sharpens the peak to where the residual responds to input changes.
     pub prewhitening_order: usize,
-    /// Lag of the largest |value|, samples; positive when the input leads the residual.
+    /// Lag of the largest |value|, samples; positive when the input leads the residual. The
+    /// prewhitened cross-correlation estimates the impulse response from the input to the residual,
+    /// so a missing dead time `d` puts the peak at `d` plus the rise time of the engine's own impulse
+    /// response (a few samples): an upper bound on the missing delay, not an estimate of it.
     pub peak_lag_samples: i64,
+    /// The peak lag in seconds.
     pub peak_lag_secs: f64,
+    /// The correlation at the peak lag (its sign is the sign of the residual's response).
     pub peak_value: f64,
     /// Whether the peak lies outside the 99 % bounds.
     pub peak_exceeds_bound: bool,
@@ -149,7 +155,9 @@ pub(super) fn input_cross_correlation(
 /// The residual against one recorded channel the model does not use.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ChannelCorrelation {
+    /// Channel name.
     pub channel: String,
+    /// Channel unit.
     pub unit: String,
     /// Pearson r of residual and channel, sample by sample.
     pub r: f64,
@@ -159,7 +167,9 @@ pub struct ChannelCorrelation {
     pub p_value: f64,
     /// Pearson r after both are smoothed by the centred moving average (reveals slow dependence).
     pub r_slow: f64,
+    /// Effective sample size of `r_slow`.
     pub n_eff_slow: f64,
+    /// Two-sided p-value of `r_slow`.
     pub p_value_slow: f64,
     /// Whether either p-value is below the scan's per-test level.
     pub significant: bool,
@@ -182,14 +192,18 @@ pub enum ExclusionReason {
     UsedByModel,
     /// It does not vary on this run.
     Constant,
+    /// It holds a NaN or infinity (first at `index`).
     NonFinite { index: usize },
+    /// It is not as long as the run.
     LengthMismatch { found: usize, expected: usize },
 }
 
 /// A channel left out of the scan, and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ExcludedChannel {
+    /// Channel name.
     pub channel: String,
+    /// Why it was left out.
     pub reason: ExclusionReason,
 }
 
@@ -198,6 +212,7 @@ pub struct ExcludedChannel {
 pub struct ChannelScan {
     /// Sorted by the larger of |r| and |r_slow|, descending.
     pub channels: Vec<ChannelCorrelation>,
+    /// Recorded channels left out, with the reason.
     pub excluded: Vec<ExcludedChannel>,
     /// Moving-average window of the slow versions, s.
     pub slow_window_secs: f64,
@@ -216,13 +231,8 @@ pub(super) struct Candidate<'a> {
 /// autocorrelations (lags 0..), clamped to 2..=n.
 fn effective_samples(n: usize, rho_a: &[f64], rho_b: &[f64]) -> f64 {
     let nf = n as f64;
-    let sum: f64 = rho_a
-        .iter()
-        .zip(rho_b)
-        .enumerate()
-        .skip(1)
-        .map(|(k, (a, b))| (1.0 - k as f64 / nf) * a * b)
-        .sum();
+    let sum: f64 =
+        rho_a.iter().zip(rho_b).enumerate().skip(1).map(|(k, (a, b))| (1.0 - k as f64 / nf) * a * b).sum();
     (nf / (1.0 + 2.0 * sum).max(f64::MIN_POSITIVE)).clamp(2.0, nf)
 }
 
@@ -260,15 +270,16 @@ pub(super) fn scan_channels(
     let alpha_per_test = alpha / (2 * candidates.len()).max(1) as f64;
     let mut channels: Vec<ChannelCorrelation> = candidates
         .iter()
-        .filter_map(|c| {
+        .map(|c| {
             let slow = moving_average(c.values, slow_window);
             let (rho_x, rho_x_slow) = autocorrelation_pair(c.values, &slow, max_lag);
-            let r = pearson(residual, c.values)?;
+            // A residual without spread (a perfect model) correlates with nothing.
+            let r = pearson(residual, c.values).unwrap_or(0.0);
             let r_slow = pearson(&residual_slow, &slow).unwrap_or(0.0);
             let n_eff = effective_samples(n, &rho_e, &rho_x);
             let n_eff_slow = effective_samples(n, &rho_e_slow, &rho_x_slow);
             let (p, p_slow) = (p_value(r, n_eff), p_value(r_slow, n_eff_slow));
-            Some(ChannelCorrelation {
+            ChannelCorrelation {
                 channel: c.name.to_owned(),
                 unit: c.unit.to_owned(),
                 r,
@@ -279,7 +290,7 @@ pub(super) fn scan_channels(
                 p_value_slow: p_slow,
                 significant: p.min(p_slow) < alpha_per_test,
                 collinear_with: collinear_with(c, candidates),
-            })
+            }
         })
         .collect();
     channels.sort_by(|a, b| b.strongest().0.abs().total_cmp(&a.strongest().0.abs()));

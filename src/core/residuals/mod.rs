@@ -4,7 +4,7 @@
 //! 1. the residual trace and the measurement-noise band (±`band_sigmas`·σ, default ±2σ) with the share
 //!    of samples outside it;
 //! 2. the error split by regime — steady / transient, accelerating / decelerating, low / mid / high
-//!    operating point, and the whole run (callers combine runs) — rules in [`regimes`];
+//!    operating point, and the whole run (callers combine runs) — rules in [`RegimeTable`];
 //! 3. the residual autocorrelation (lags 0..L) and the residual–input cross-correlation (lags −L..L,
 //!    input prewhitened) with the 99 % white-noise bounds ±2.576/√N;
 //! 4. the residual spectrum (Welch, Hann window) with its largest peak;
@@ -12,7 +12,7 @@
 //!    significance from an effective sample size that accounts for autocorrelation;
 //! 6. the worst stretches of the run, for jumping to them.
 //!
-//! [`summary`] turns the numbers into a few plain sentences.
+//! [`summary()`] turns the numbers into a few plain sentences.
 #![deny(clippy::indexing_slicing)]
 
 use serde::{Deserialize, Serialize};
@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::core::run::{Channel, Run};
 
 mod correlation;
-pub mod regimes;
+mod regimes;
 mod signal;
 mod spectrum;
 mod stretches;
@@ -56,6 +56,7 @@ pub struct ResidualSettings {
     /// A sample is transient when |slope| exceeds this share of the run's output range per second
     /// (or 4 slope-noise σ, whichever is larger).
     pub transient_range_frac_per_s: f64,
+    /// How the low / mid / high operating-point bands are drawn.
     pub operating_bands: OperatingBands,
     /// Welch segment length, samples (a power of two; shortened to the run).
     pub welch_segment_len: usize,
@@ -93,10 +94,15 @@ impl Default for ResidualSettings {
 /// Settings converted to samples for one sample time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CheckedSettings {
+    /// The settings as given.
     pub settings: ResidualSettings,
+    /// Largest correlation lag, samples.
     pub max_lag: usize,
+    /// Half-width of the slope window, samples (the window is `2·slope_half + 1`).
     pub slope_half: usize,
+    /// Moving-average window of the slow channel correlations, samples.
     pub slow_window: usize,
+    /// Length of a worst stretch, samples.
     pub stretch_len: usize,
 }
 
@@ -131,7 +137,11 @@ impl ResidualSettings {
             return Err(bad("prewhiten_order", self.prewhiten_order as f64, "must be at most 50"));
         }
         if !(self.transient_range_frac_per_s.is_finite() && self.transient_range_frac_per_s > 0.0) {
-            return Err(bad("transient_range_frac_per_s", self.transient_range_frac_per_s, "must be positive"));
+            return Err(bad(
+                "transient_range_frac_per_s",
+                self.transient_range_frac_per_s,
+                "must be positive",
+            ));
         }
         if let OperatingBands::Fixed { low_below, high_from } = self.operating_bands
             && !(low_below.is_finite() && high_from.is_finite() && low_below <= high_from)
@@ -139,7 +149,11 @@ impl ResidualSettings {
             return Err(bad("operating_bands.low_below", low_below, "must be finite and ≤ high_from"));
         }
         if !self.welch_segment_len.is_power_of_two() || self.welch_segment_len < 16 {
-            return Err(bad("welch_segment_len", self.welch_segment_len as f64, "must be a power of two ≥ 16"));
+            return Err(bad(
+                "welch_segment_len",
+                self.welch_segment_len as f64,
+                "must be a power of two ≥ 16",
+            ));
         }
         if !(self.channel_alpha > 0.0 && self.channel_alpha < 1.0) {
             return Err(bad("channel_alpha", self.channel_alpha, "must lie in (0, 1)"));
@@ -160,20 +174,28 @@ impl ResidualSettings {
 /// What can stop the residual analysis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ResidualError {
+    /// The run has no output of that name.
     #[error("run '{run}' has no output '{output}' (outputs: {available})")]
     UnknownOutput { run: String, output: String, available: String },
+    /// The model's simulation is not as long as the run.
     #[error("the model gave {found} samples but the run has {expected}")]
     LengthMismatch { expected: usize, found: usize },
+    /// The input or the analysed output is not as long as the run's time axis.
     #[error("channel '{channel}' has {found} samples but the run has {expected}")]
     ChannelLength { channel: String, expected: usize, found: usize },
+    /// The run is shorter than the correlations and spectrum need.
     #[error("{samples} samples are too few for the residual analysis (need at least {needed})")]
     TooFewSamples { samples: usize, needed: usize },
+    /// The input, the measured output or the model output (`signal`) holds a NaN or infinity.
     #[error("{signal} is not finite at sample {index}")]
     NonFinite { signal: String, index: usize },
+    /// The supplied noise σ is zero, negative or not finite.
     #[error("the noise standard deviation {sigma} must be positive and finite")]
     BadNoiseSigma { sigma: f64 },
+    /// The run's sample time is zero, negative or not finite.
     #[error("the sample time {dt_secs} s must be positive and finite")]
     BadSampleTime { dt_secs: f64 },
+    /// A setting is out of its range.
     #[error("setting {name} = {value} is invalid: it {reason}")]
     BadSetting { name: &'static str, value: f64, reason: &'static str },
 }
@@ -181,23 +203,31 @@ pub enum ResidualError {
 /// Everything [`analyse_residuals`] finds for one output on one run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ResidualAnalysis {
+    /// Name of the run analysed.
     pub run: String,
+    /// Name of the output analysed.
     pub output: String,
     /// Unit of the output, the residual and every error figure not named otherwise.
     pub unit: String,
+    /// Sample time of the run, s.
     pub dt_secs: f64,
     /// The residual y − ŷ, one value per sample (positive: the model under-predicts).
     pub residual: Vec<f64>,
+    /// The measurement-noise band and the share of samples outside it.
     pub band: NoiseBand,
+    /// The error split by regime.
     pub regimes: RegimeTable,
+    /// The regime of every sample, for shading the trace.
     pub sample_regimes: SampleRegimes,
     /// Autocorrelation of the residual, lags 0..=L.
     pub autocorrelation: Correlogram,
     /// `None` when the input does not vary on this run.
     pub input_xcorr: Option<InputCrossCorrelation>,
+    /// Welch spectrum of the residual.
     pub spectrum: ResidualSpectrum,
+    /// The residual against every recorded channel the model does not use.
     pub channels: ChannelScan,
-    /// Worst first.
+    /// Non-overlapping windows with the largest residual RMS, worst first.
     pub worst_stretches: Vec<Stretch>,
 }
 
@@ -255,19 +285,22 @@ fn scan_candidates<'a>(
     let mut candidates = Vec::new();
     let mut excluded = Vec::new();
     for c in run.outputs.iter().filter(|c| c.name != output).chain(&run.aux) {
-        let reason = if settings.model_channels.iter().any(|m| *m == c.name) {
+        let reason = if settings.model_channels.contains(&c.name) {
             Some(ExclusionReason::UsedByModel)
         } else if c.values.len() != n {
             Some(ExclusionReason::LengthMismatch { found: c.values.len(), expected: n })
         } else if let Some(index) = c.values.iter().position(|v| !v.is_finite()) {
             Some(ExclusionReason::NonFinite { index })
         } else {
-            let (lo, hi) = c.values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+            let (lo, hi) =
+                c.values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
             (hi - lo <= 1e-12 * lo.abs().max(hi.abs())).then_some(ExclusionReason::Constant)
         };
         match reason {
             Some(reason) => excluded.push(ExcludedChannel { channel: c.name.clone(), reason }),
-            None => candidates.push(correlation::Candidate { name: &c.name, unit: &c.unit, values: &c.values }),
+            None => {
+                candidates.push(correlation::Candidate { name: &c.name, unit: &c.unit, values: &c.values })
+            }
         }
     }
     (candidates, excluded)

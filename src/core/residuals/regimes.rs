@@ -30,6 +30,7 @@ pub enum SigmaSource {
 pub struct NoiseBand {
     /// Measurement-noise standard deviation, in the output's unit.
     pub sigma: f64,
+    /// Where `sigma` came from.
     pub sigma_source: SigmaSource,
     /// The band is ±`band_sigmas`·σ.
     pub band_sigmas: f64,
@@ -59,16 +60,22 @@ impl NoiseBand {
 /// The motion of the measured output at one sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Motion {
+    /// |slope| at or below the transient threshold.
     Steady,
+    /// Rising faster than the threshold.
     Accelerating,
+    /// Falling faster than the threshold.
     Decelerating,
 }
 
 /// The operating-point band of one sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum OperatingBand {
+    /// Below the lower limit.
     Low,
+    /// Between the limits.
     Mid,
+    /// At or above the upper limit.
     High,
 }
 
@@ -87,12 +94,19 @@ pub enum OperatingBands {
 pub enum Regime {
     /// Every sample of the run.
     Run,
+    /// Samples whose measured output is steady.
     Steady,
+    /// Samples whose measured output moves: accelerating or decelerating.
     Transient,
+    /// Transient samples with a rising output.
     Accelerating,
+    /// Transient samples with a falling output.
     Decelerating,
+    /// The low operating point.
     Low,
+    /// The mid operating point.
     Mid,
+    /// The high operating point.
     High,
 }
 
@@ -140,7 +154,9 @@ impl Regime {
 /// Error statistics of one regime; errors are `y − ŷ` in the output's unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RegimeRow {
+    /// The regime of this row.
     pub regime: Regime,
+    /// Samples in the regime.
     pub samples: usize,
     /// Share of the run's samples in this regime, %.
     pub share_of_samples_pct: f64,
@@ -155,8 +171,14 @@ pub struct RegimeRow {
 }
 
 /// The error split by regime, one row per [`Regime`] in [`Regime::ALL`] order, with the rule used.
+///
+/// Rules (on the *measured* output, so the split does not depend on the model): a sample is
+/// transient when the least-squares slope over `slope_window_secs` exceeds, in magnitude, the larger
+/// of `transient_range_frac_per_s` × the run's output range per second and 4 × the slope's own noise;
+/// accelerating / decelerating by the sign of that slope; low / mid / high by [`OperatingBands`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RegimeTable {
+    /// One row per regime, in [`Regime::ALL`] order.
     pub rows: Vec<RegimeRow>,
     /// |slope| above which a sample is transient, output unit per second.
     pub transient_slope_per_s: f64,
@@ -174,7 +196,9 @@ impl RegimeTable {
 /// Per-sample regime labels, for shading a trace.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SampleRegimes {
+    /// Steady, accelerating or decelerating, per sample.
     pub motion: Vec<Motion>,
+    /// Low, mid or high operating point, per sample.
     pub band: Vec<OperatingBand>,
 }
 
@@ -190,7 +214,8 @@ pub(super) fn split_by_regime(
 ) -> (RegimeTable, SampleRegimes) {
     let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
     let range = (hi - lo).max(0.0);
-    let threshold = (range_frac_per_s * range).max(SLOPE_NOISE_FACTOR * sigma * slope_noise_per_sec(slope_half, dt_secs));
+    let threshold =
+        (range_frac_per_s * range).max(SLOPE_NOISE_FACTOR * sigma * slope_noise_per_sec(slope_half, dt_secs));
     let motion: Vec<Motion> = ls_slope_per_sec(y, slope_half, dt_secs)
         .into_iter()
         .map(|s| match s {
@@ -217,7 +242,13 @@ pub(super) fn split_by_regime(
     (RegimeTable { rows, transient_slope_per_s: threshold, band_limits }, labels)
 }
 
-fn regime_row(regime: Regime, y: &[f64], residual: &[f64], labels: &SampleRegimes, total_sq: f64) -> RegimeRow {
+fn regime_row(
+    regime: Regime,
+    y: &[f64],
+    residual: &[f64],
+    labels: &SampleRegimes,
+    total_sq: f64,
+) -> RegimeRow {
     let (mut n, mut sum, mut sum_sq, mut sum_pct_sq, mut pct_defined) = (0usize, 0.0, 0.0, 0.0, true);
     let samples = y.iter().zip(residual).zip(labels.motion.iter().zip(&labels.band));
     for ((yk, rk), (motion, band)) in samples {

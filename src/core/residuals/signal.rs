@@ -19,7 +19,7 @@ pub(super) fn median(x: &[f64]) -> f64 {
     sorted.sort_by(f64::total_cmp);
     let mid = sorted.len() / 2;
     match (sorted.get(mid.wrapping_sub(1)), sorted.get(mid)) {
-        (Some(a), Some(b)) if sorted.len() % 2 == 0 => 0.5 * (a + b),
+        (Some(a), Some(b)) if sorted.len().is_multiple_of(2) => 0.5 * (a + b),
         (_, Some(b)) => *b,
         _ => 0.0,
     }
@@ -96,7 +96,8 @@ pub(super) fn slope_noise_per_sec(half: usize, dt_secs: f64) -> f64 {
 
 /// Noise σ from second differences, robust to the signal's own motion: 1.4826·MAD(Δ²y)/√6.
 pub(super) fn sigma_from_second_differences(y: &[f64]) -> f64 {
-    let d2: Vec<f64> = y.windows(3).map(|w| w.iter().zip([1.0, -2.0, 1.0]).map(|(v, c)| v * c).sum()).collect();
+    let d2: Vec<f64> =
+        y.windows(3).map(|w| w.iter().zip([1.0, -2.0, 1.0]).map(|(v, c)| v * c).sum()).collect();
     let med = median(&d2);
     let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
     1.4826 * median(&abs_dev) / 6f64.sqrt()
@@ -196,7 +197,7 @@ pub(super) fn autocorrelation_pair(x: &[f64], y: &[f64], max_lag: usize) -> (Vec
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
+    #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
     use super::*;
 
     #[test]
@@ -208,7 +209,9 @@ mod tests {
             let want: Complex64 = x
                 .iter()
                 .enumerate()
-                .map(|(j, v)| v * Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * (j * k) as f64 / 16.0))
+                .map(|(j, v)| {
+                    v * Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * (j * k) as f64 / 16.0)
+                })
                 .sum();
             assert!((got - want).norm() < 1e-10, "bin {k}");
         }

@@ -14,11 +14,13 @@ pub struct ResidualSpectrum {
     pub omega_rad_s: Vec<f64>,
     /// One-sided power spectral density, (output unit)²/Hz.
     pub psd_per_hz: Vec<f64>,
-    /// Welch segment length and the number of segments averaged.
+    /// Welch segment length, samples.
     pub segment_len: usize,
+    /// Number of segments averaged.
     pub segments: usize,
     /// Frequency of the largest bin above 0 Hz.
     pub peak_freq_hz: f64,
+    /// The peak frequency in rad/s.
     pub peak_omega_rad_s: f64,
     /// Peak PSD over the median PSD of the bins above 0 Hz (≈ 1–3 for white noise).
     pub peak_prominence: f64,
@@ -62,11 +64,8 @@ pub(super) fn welch(x: &[f64], segment_len: usize, dt_secs: f64) -> ResidualSpec
     let freq_hz: Vec<f64> = (0..bins).map(|k| k as f64 * fs_hz / len as f64).collect();
     let omega_rad_s = freq_hz.iter().map(|f| 2.0 * std::f64::consts::PI * f).collect();
     let above_dc = psd_per_hz.get(1..).unwrap_or_default();
-    let (peak_bin, peak_psd) = above_dc
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map_or((0, 0.0), |(i, p)| (i + 1, *p));
+    let (peak_bin, peak_psd) =
+        above_dc.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or((0, 0.0), |(i, p)| (i + 1, *p));
     let level = median(above_dc);
     let peak_freq_hz = freq_hz.get(peak_bin).copied().unwrap_or(0.0);
     ResidualSpectrum {
@@ -89,7 +88,8 @@ mod tests {
     #[test]
     fn psd_integrates_to_the_variance() {
         let dt = 0.1;
-        let x: Vec<f64> = (0..4096).map(|k| 3.0 * (1.3 * k as f64 * dt).sin() + ((k * 7919) % 11) as f64 - 5.0).collect();
+        let x: Vec<f64> =
+            (0..4096).map(|k| 3.0 * (1.3 * k as f64 * dt).sin() + ((k * 7919) % 11) as f64 - 5.0).collect();
         let s = welch(&x, 256, dt);
         let df = 1.0 / (dt * 256.0);
         let power: f64 = s.psd_per_hz.iter().sum::<f64>() * df;

@@ -32,7 +32,8 @@ fn rmse(table: &RegimeTable, regime: Regime) -> Option<f64> {
 fn overall(a: &ResidualAnalysis) -> String {
     let unit = &a.unit;
     let whole = a.regimes.row(Regime::Run);
-    let (rms, bias) = (whole.and_then(|r| r.rmse).unwrap_or(0.0), whole.and_then(|r| r.mean_error).unwrap_or(0.0));
+    let (rms, bias) =
+        (whole.and_then(|r| r.rmse).unwrap_or(0.0), whole.and_then(|r| r.mean_error).unwrap_or(0.0));
     let b = &a.band;
     let estimated = match b.sigma_source {
         super::SigmaSource::Supplied => "",
@@ -55,9 +56,15 @@ fn overall(a: &ResidualAnalysis) -> String {
 fn worse(table: &RegimeTable, unit: &str, pairs: &[(Regime, Regime, &str, &str)]) -> Option<String> {
     pairs.iter().find_map(|&(a, b, name_a, name_b)| {
         let (ra, rb) = (rmse(table, a)?, rmse(table, b)?);
-        let (hi, lo, hi_name, lo_name) = if ra >= rb { (ra, rb, name_a, name_b) } else { (rb, ra, name_b, name_a) };
+        let (hi, lo, hi_name, lo_name) =
+            if ra >= rb { (ra, rb, name_a, name_b) } else { (rb, ra, name_b, name_a) };
         (lo > 0.0 && hi / lo >= NOTABLE_RATIO).then(|| {
-            format!("{hi_name} are {:.1}× worse than {lo_name} (RMSE {} vs {} {unit})", hi / lo, fmt3(hi), fmt3(lo))
+            format!(
+                "{hi_name} are {:.1}× worse than {lo_name} (RMSE {} vs {} {unit})",
+                hi / lo,
+                fmt3(hi),
+                fmt3(lo)
+            )
         })
     })
 }
@@ -89,7 +96,9 @@ fn regimes(a: &ResidualAnalysis) -> String {
     } else if share_n >= 100.0 {
         "Every sample is transient".to_owned()
     } else {
-        format!("{share_sq:.0} % of the squared error is in transients, which are {share_n:.0} % of the samples")
+        format!(
+            "{share_sq:.0} % of the squared error is in transients, which are {share_n:.0} % of the samples"
+        )
     };
     let motion = [(Regime::Decelerating, Regime::Accelerating, "decelerations", "accelerations")];
     let detail = worse(t, &a.unit, &motion).or_else(|| worst_operating_point(t, &a.unit));
@@ -172,7 +181,9 @@ fn whiteness_sentence(acf: &Correlogram) -> String {
     let over = acf.exceeding_lags_samples.len();
     let lag1 = acf.values.get(1).copied().unwrap_or(0.0);
     if over * 20 <= lags {
-        format!("The residual is close to white: {over} of {lags} autocorrelation lags exceed the 99 % bound.")
+        format!(
+            "The residual is close to white: {over} of {lags} autocorrelation lags exceed the 99 % bound."
+        )
     } else {
         format!(
             "The residual is not white: {over} of {lags} autocorrelation lags exceed the 99 % bound \

@@ -8,6 +8,7 @@ pub mod metrics;
 pub mod pipeline;
 pub mod poly;
 pub mod refine;
+pub mod residuals;
 pub mod run;
 pub mod segment;
 pub mod static_map;

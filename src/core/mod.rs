@@ -10,6 +10,7 @@ pub mod poly;
 pub mod refine;
 pub mod run;
 pub mod segment;
+pub mod spectral;
 pub mod static_map;
 pub mod tf;
 pub mod wiener;

@@ -5,6 +5,7 @@ pub mod cluster_proposal;
 pub mod lm;
 pub mod lstsq;
 pub mod metrics;
+pub mod monte_carlo;
 pub mod noise_fit;
 pub mod pipeline;
 pub mod poly;

@@ -1,5 +1,6 @@
 //! The headless core: pure numerics. No egui, no files, no threads.
 pub mod arx;
+pub mod baselines;
 pub mod cluster;
 pub mod cluster_proposal;
 pub mod lm;

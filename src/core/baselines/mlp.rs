@@ -1,0 +1,111 @@
+//! A one-hidden-layer perceptron with tanh hidden units and a linear output,
+//! `ŷ = c + Σⱼ vⱼ·tanh(bⱼ + Σᵢ Wⱼᵢ xᵢ)`, with its analytic gradient (backpropagation).
+//!
+//! Weight layout: for each hidden unit `j`, `[Wⱼ₁ … Wⱼₙ, bⱼ]`; then `[v₁ … v_H, c]`.
+use rand::Rng;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct MlpShape {
+    pub n_inputs: usize,
+    pub hidden: usize,
+}
+
+impl MlpShape {
+    pub fn n_weights(&self) -> usize {
+        self.hidden * (self.n_inputs + 1) + self.hidden + 1
+    }
+
+    /// The network output for input `x`; NaN when `w` or `x` has the wrong length.
+    pub fn output(&self, w: &[f64], x: &[f64]) -> f64 {
+        let (n, stride, out0) = (self.n_inputs, self.n_inputs + 1, self.hidden * (self.n_inputs + 1));
+        if w.len() != self.n_weights() || x.len() != n {
+            return f64::NAN;
+        }
+        // Index loops on checked lengths: this is the training hot path, run unoptimised in tests.
+        let mut y = w[out0 + self.hidden];
+        for j in 0..self.hidden {
+            let unit = j * stride;
+            let mut a = w[unit + n];
+            for i in 0..n {
+                a += w[unit + i] * x[i];
+            }
+            y += w[out0 + j] * a.tanh();
+        }
+        y
+    }
+
+    /// The network output for input `x`, writing `∂ŷ/∂w` into `grad`; NaN (and `grad` untouched)
+    /// when a length is wrong.
+    pub fn output_and_gradient(&self, w: &[f64], x: &[f64], grad: &mut [f64]) -> f64 {
+        let (n, stride, out0) = (self.n_inputs, self.n_inputs + 1, self.hidden * (self.n_inputs + 1));
+        if w.len() != self.n_weights() || x.len() != n || grad.len() != w.len() {
+            return f64::NAN;
+        }
+        let mut y = w[out0 + self.hidden];
+        for j in 0..self.hidden {
+            let unit = j * stride;
+            let mut a = w[unit + n];
+            for i in 0..n {
+                a += w[unit + i] * x[i];
+            }
+            let h = a.tanh();
+            let v = w[out0 + j];
+            y += v * h;
+            grad[out0 + j] = h;
+            let delta = v * (1.0 - h * h);
+            for i in 0..n {
+                grad[unit + i] = delta * x[i];
+            }
+            grad[unit + n] = delta;
+        }
+        grad[out0 + self.hidden] = 1.0;
+        y
+    }
+
+    /// Random weights for standardised inputs: uniform in `±1/√(fan-in + 1)` per layer.
+    pub fn random_weights(&self, rng: &mut impl Rng) -> Vec<f64> {
+        let hidden_bound = 1.0 / ((self.n_inputs + 1) as f64).sqrt();
+        let out_bound = 1.0 / ((self.hidden + 1) as f64).sqrt();
+        let n_hidden = self.hidden * (self.n_inputs + 1);
+        (0..self.n_weights())
+            .map(|i| {
+                let bound = if i < n_hidden { hidden_bound } else { out_bound };
+                bound * (2.0 * rng.random::<f64>() - 1.0)
+            })
+            .collect()
+    }
+
+    /// A bound on `|ŷ|` over all inputs: `|c| + Σ|vⱼ|`.
+    pub fn output_bound(&self, w: &[f64]) -> f64 {
+        w.iter().skip(self.hidden * (self.n_inputs + 1)).map(|v| v.abs()).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let shape = MlpShape { n_inputs: 4, hidden: 10 };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let w = shape.random_weights(&mut rng);
+        assert_eq!(w.len(), 61);
+        let x = [0.3, -1.2, 0.7, 2.0];
+        let mut grad = vec![0.0; w.len()];
+        let y = shape.output_and_gradient(&w, &x, &mut grad);
+        assert!((y - shape.output(&w, &x)).abs() < 1e-15);
+        for j in 0..w.len() {
+            let h = 1e-6;
+            let mut wp = w.clone();
+            wp[j] += h;
+            let mut wm = w.clone();
+            wm[j] -= h;
+            let fd = (shape.output(&wp, &x) - shape.output(&wm, &x)) / (2.0 * h);
+            assert!((fd - grad[j]).abs() < 1e-8, "weight {j}: {fd} vs {}", grad[j]);
+        }
+        assert!(y.abs() <= shape.output_bound(&w));
+    }
+}

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 
+use crate::batch_compare::MonteCarloSummary;
 use crate::cli::BatchArgs;
 use crate::core::pipeline::{self, Identified, PipelineError, segments_for};
 use crate::core::run::Run;
@@ -223,23 +224,19 @@ pub fn scored_runs(runs: &Runs) -> Vec<&Run> {
 }
 
 fn score_output(
-    identified: &Identified,
+    models: &crate::batch_compare::OutputModels,
     runs: &Runs,
     output: &str,
     report: &mut OutputReport,
     notes: &mut Vec<String>,
 ) {
-    let wiener = &identified.model.wiener;
     for run in scored_runs(runs) {
         if run.output(output).is_none() {
             notes.push(format!("run '{}' has no '{output}' column; not scored for it", run.name));
             continue;
         }
-        for (name, result) in [
-            ("gray_box", pipeline::predict_wiener(wiener, run, output)),
-            ("linear", pipeline::predict_linear(&wiener.linear, run, output)),
-        ] {
-            match result {
+        for (name, y_hat) in models.simulate_all(&run.input.values) {
+            match pipeline::score(run, output, y_hat) {
                 Ok(p) => {
                     report.models.entry(name.to_owned()).or_default().insert(run.name.clone(), p.metrics);
                 }
@@ -288,6 +285,12 @@ pub fn run(args: &BatchArgs) -> Result<()> {
         figures: Vec::new(),
         diagnostics: cluster_notes,
     };
+    let noise = runs.steady.as_ref().map(|s| crate::batch_compare::noise_fits(s, &mut report.diagnostics));
+    let input_noise = noise
+        .as_ref()
+        .and_then(|n| n.get(&runs.ident.input.name))
+        .and_then(|r| r.best().map(|f| f.distribution));
+    let mut monte_carlo = BTreeMap::new();
     for output in &outputs {
         let identified = timings
             .time(&format!("identify_{output}"), || identify(&project, &runs, output))
@@ -301,11 +304,53 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             diagnosis: Vec::new(),
             effects_applied: Vec::new(),
             error_history: Vec::new(),
+            error_boxes: BTreeMap::new(),
+            cutoff_rad_s: BTreeMap::new(),
         };
-        timings
-            .time("validate", || score_output(&identified, &runs, output, &mut out, &mut report.diagnostics));
+        let models = timings.time(&format!("baselines_{output}"), || {
+            crate::batch_compare::fit_baselines(&identified, &runs.ident, output, &mut report.diagnostics)
+        });
+        timings.time("validate", || score_output(&models, &runs, output, &mut out, &mut report.diagnostics));
+        let scored = scored_runs(&runs);
+        out.error_boxes = crate::batch_compare::error_boxes(&models, &scored, output);
+        let freq = timings.time("frequency", || {
+            runs.chirp.as_ref().and_then(|chirp| {
+                crate::batch_compare::frequency_comparison(&models, chirp, output, &mut report.diagnostics)
+            })
+        });
+        out.cutoff_rad_s = freq.as_ref().map(|f| f.cutoff_rad_s.clone()).unwrap_or_default();
+        if let (Some(steady), Some(input_fit)) = (&runs.steady, &input_noise) {
+            let u0 = steady.input.values.iter().sum::<f64>() / steady.input.values.len().max(1) as f64;
+            let mc = timings.time("monte_carlo", || {
+                crate::batch_compare::monte_carlo_all(
+                    &models,
+                    u0,
+                    steady.dt_secs,
+                    input_fit,
+                    &mut report.diagnostics,
+                )
+            });
+            monte_carlo.insert(
+                output.clone(),
+                mc.iter()
+                    .map(|(k, r)| (k.clone(), MonteCarloSummary::from_result(r)))
+                    .collect::<BTreeMap<_, _>>(),
+            );
+            let (figs, notes) =
+                timings.time("figures", || crate::batch_figures::monte_carlo_figures(out_dir, output, &mc));
+            report.figures.extend(figs);
+            report.diagnostics.extend(notes);
+        }
         let (figs, notes) = timings.time("figures", || {
-            crate::batch_figures::output_figures(out_dir, output, &identified, runs.validate.first())
+            crate::batch_figures::output_figures(
+                out_dir,
+                output,
+                &identified,
+                &models,
+                &runs.validate,
+                freq.as_ref(),
+                &out.error_boxes,
+            )
         });
         report.figures.extend(figs);
         report.diagnostics.extend(notes);
@@ -313,6 +358,10 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             out.error_history.push(HistoryStep { step: "base".into(), rmspe_pct: rmspe });
         }
         report.outputs.insert(output.clone(), out);
+    }
+    report.noise_fit = noise.map(serde_json::to_value).transpose().context("noise fit")?;
+    if !monte_carlo.is_empty() {
+        report.monte_carlo = Some(serde_json::to_value(monte_carlo).context("Monte Carlo summary")?);
     }
     write_model(&out_dir.join("model.json"), &model_file)?;
     report.timings_ms = timings.0;

@@ -2,17 +2,25 @@
 //! static-map fit, validation traces). A picture that cannot be drawn is a note, not a failure.
 use std::path::Path;
 
-use crate::core::pipeline::{Identified, predict_linear, predict_wiener};
+use std::collections::BTreeMap;
+
+use crate::batch_compare::{FrequencyComparison, GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, OutputModels};
+use crate::core::metrics::BoxStats;
+use crate::core::monte_carlo::MonteCarloResult;
+use crate::core::pipeline::Identified;
 use crate::core::run::Run;
-use crate::core::tf::log_space;
-use crate::io::figures::{self, BodeCurve};
+use crate::core::tf::{BodePoint, log_space};
+use crate::io::figures::{self, BodeCurve, EmpiricalBode};
 
 /// Draw the figures of one output into `dir`; returns the file names written and notes on failures.
 pub fn output_figures(
     dir: &Path,
     output: &str,
     identified: &Identified,
-    validation: Option<&Run>,
+    models: &OutputModels,
+    validation: &[Run],
+    freq: Option<&FrequencyComparison>,
+    boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
 ) -> (Vec<String>, Vec<String>) {
     let (mut written, mut notes) = (Vec::new(), Vec::new());
     let mut keep = |name: String, result: Result<(), figures::FigureError>| match result {
@@ -80,25 +88,126 @@ pub fn output_figures(
         ),
     );
 
-    if let Some(run) = validation
-        && let (Some(y), Ok(gray), Ok(lin)) = (
-            run.output(output),
-            predict_wiener(&model.wiener, run, output),
-            predict_linear(&model.wiener.linear, run, output),
-        )
-    {
+    for run in validation {
+        let Some(y) = run.output(output) else { continue };
+        let traces: Vec<(String, Vec<f64>)> = models
+            .simulate_all(&run.input.values)
+            .into_iter()
+            .map(|(n, y)| (model_label(n).to_owned(), y))
+            .collect();
         let name = format!("{output}_traces_{}.png", run.name);
         keep(
             name.clone(),
             figures::traces_png(
                 &dir.join(&name),
-                &format!("{output} on '{}'", run.name),
+                &format!("{output} on '{}': every model from the input alone", run.name),
                 &run.t_secs,
                 &y.values,
-                &[("gray-box".into(), gray.y_hat), ("linear".into(), lin.y_hat)],
+                &traces,
                 output,
             ),
         );
+    }
+
+    if let Some(freq) = freq
+        && let Some(measured) = freq.responses.get("measured")
+    {
+        let curves: Vec<BodeCurve> = freq
+            .responses
+            .iter()
+            .filter(|(name, _)| name.as_str() != "measured")
+            .map(|(name, r)| BodeCurve {
+                name: model_label(name).to_owned(),
+                points: r
+                    .omega_rad_s
+                    .iter()
+                    .zip(&r.mag_db)
+                    .zip(&r.phase_deg)
+                    .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
+                    .collect(),
+                emphasis: name.as_str() == GRAY_BOX,
+            })
+            .collect();
+        let empirical = EmpiricalBode {
+            omega_rad_s: measured.omega_rad_s.clone(),
+            mag_db: measured.mag_db.clone(),
+            phase_deg: measured.phase_deg.clone(),
+            coherence: measured.coherence.clone(),
+        };
+        let name = format!("{output}_bode_compare.png");
+        keep(
+            name.clone(),
+            figures::bode_png(
+                &dir.join(&name),
+                &format!("{output}: chirp '{}' measured vs every model (same Welch estimate)", freq.run),
+                &curves,
+                Some(&empirical),
+            ),
+        );
+    }
+
+    let box_list: Vec<(String, BoxStats)> = boxes
+        .iter()
+        .flat_map(|(model, runs)| {
+            runs.iter().map(move |(run, b)| (format!("{} / {run}", model_label(model)), *b))
+        })
+        .collect();
+    if !box_list.is_empty() {
+        let name = format!("{output}_error_boxes.png");
+        keep(
+            name.clone(),
+            figures::boxplot_png(
+                &dir.join(&name),
+                &format!("{output}: percentage error 100·(y − ŷ)/y per model and run"),
+                &box_list,
+                "error (%)",
+            ),
+        );
+    }
+    (written, notes)
+}
+
+/// Model names as people read them.
+pub fn model_label(name: &str) -> &str {
+    match name {
+        GRAY_BOX => "gray-box",
+        LINEAR => "linear",
+        HAMMERSTEIN_WIENER => "Hammerstein–Wiener",
+        NNARX => "NNARX",
+        other => other,
+    }
+}
+
+/// One histogram per model of the Monte Carlo differences, with the fitted normal.
+pub fn monte_carlo_figures(
+    dir: &Path,
+    output: &str,
+    results: &BTreeMap<String, MonteCarloResult>,
+) -> (Vec<String>, Vec<String>) {
+    let (mut written, mut notes) = (Vec::new(), Vec::new());
+    for (model, r) in results {
+        let name = format!("{output}_monte_carlo_{model}.png");
+        let (mean, std) = match r.normal_fit {
+            crate::core::noise_fit::Distribution::Normal { mean, std } => (mean, std),
+            _ => (r.mean_difference, r.std_difference),
+        };
+        let result = figures::histogram_png(
+            &dir.join(&name),
+            &format!(
+                "{output}, {}: noisy − nominal over {} runs (std {:.4})",
+                model_label(model),
+                r.std_per_run.len(),
+                r.std_difference
+            ),
+            &r.differences,
+            40,
+            Some((mean, std)),
+            &format!("{output} difference"),
+        );
+        match result {
+            Ok(()) => written.push(name),
+            Err(e) => notes.push(format!("figure {name}: {e}")),
+        }
     }
     (written, notes)
 }

@@ -31,7 +31,7 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["format_version"], 1);
     for output in ["shaft_speed_rpm", "thrust_n"] {
-        for model in ["gray_box", "linear"] {
+        for model in ["gray_box", "linear", "hammerstein_wiener", "nnarx"] {
             for run in ["validation", "chirp"] {
                 let m = &report["outputs"][output]["models"][model][run];
                 for key in ["rmspe_pct", "mape_pct", "se", "fit_pct", "rmse", "max_abs_error"] {
@@ -46,8 +46,30 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         assert!(gray < linear, "{output}: the static map should help ({gray} vs {linear})");
         assert!(report["outputs"][output]["error_history"][0]["rmspe_pct"].as_f64().is_some());
     }
+    for channel in ["fuel_flow_gph", "shaft_speed_rpm", "thrust_n"] {
+        let best = report["noise_fit"][channel]["best_by_log_likelihood"].as_str().unwrap();
+        assert!(
+            ["normal", "logistic", "uniform", "extreme_value", "inverse_gaussian", "nakagami"]
+                .contains(&best)
+        );
+    }
+    for output in ["shaft_speed_rpm", "thrust_n"] {
+        for model in ["gray_box", "linear", "hammerstein_wiener", "nnarx"] {
+            let std = report["monte_carlo"][output][model]["std_difference"].as_f64().unwrap();
+            assert!(std.is_finite() && std > 0.0, "{output}/{model}: {std}");
+        }
+        assert!(report["outputs"][output]["cutoff_rad_s"]["measured"].as_f64().is_some());
+    }
+    assert!(report["timings_ms"]["total"].as_f64().unwrap() > 0.0);
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("Table 1") && md.contains("gray-box (Wiener)"));
+    assert!(md.contains("Table 1") && md.contains("gray-box (Wiener)") && md.contains("paper RMSPE"));
+    assert!(md.contains("Monte Carlo") && md.contains("Noise fit"));
+    for figure in
+        ["shaft_speed_rpm_bode_compare.png", "thrust_n_monte_carlo_nnarx.png", "thrust_n_error_boxes.png"]
+    {
+        assert!(out.join(figure).is_file(), "{figure}");
+        assert!(md.contains(figure), "report.md shows {figure}");
+    }
 
     // predict reproduces the batch's gray-box prediction from model.json alone.
     let pred = dir.path().join("pred.csv");

@@ -84,6 +84,9 @@ pub struct MonteCarloResult {
     /// The nominal (noise-free) output.
     pub nominal: Vec<f64>,
     pub samples_per_run: usize,
+    /// Every noisy − nominal difference, run after run (for pictures; not serialised).
+    #[serde(skip)]
+    pub differences: Vec<f64>,
 }
 
 /// Why a Monte Carlo study cannot run or was stopped.
@@ -176,6 +179,7 @@ pub fn monte_carlo(
         normal_fit,
         nominal,
         samples_per_run: n,
+        differences,
     })
 }
 

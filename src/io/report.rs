@@ -89,6 +89,12 @@ pub struct OutputReport {
     pub diagnosis: Vec<DiagnosisEntry>,
     pub effects_applied: Vec<String>,
     pub error_history: Vec<HistoryStep>,
+    /// model → run → box-plot statistics of the percentage error 100·(y − ŷ)/y.
+    #[serde(default)]
+    pub error_boxes: BTreeMap<String, BTreeMap<String, crate::core::metrics::BoxStats>>,
+    /// −3 dB cut-off on the chirp run (rad/s): "measured" and each model's, from the same estimator.
+    #[serde(default)]
+    pub cutoff_rad_s: BTreeMap<String, Option<f64>>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -197,6 +203,141 @@ fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
     }
 }
 
+/// Mean of a metric of one model over the runs of a role (validation runs, or the chirp run).
+fn role_mean(
+    report: &Report,
+    o: &OutputReport,
+    model: &str,
+    chirp: bool,
+    f: fn(&Metrics) -> f64,
+) -> Option<f64> {
+    let runs = o.models.get(model)?;
+    let vals: Vec<f64> = report
+        .runs
+        .iter()
+        .filter(|(role, _)| if chirp { role.as_str() == "chirp" } else { role.starts_with("validation") })
+        .filter_map(|(_, run)| runs.get(run).map(f))
+        .collect();
+    (!vals.is_empty()).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
+}
+
+fn paper_output_name(output: &str) -> Option<&'static str> {
+    if output.contains("speed") || output.contains("rpm") {
+        Some("shaft speed")
+    } else if output.contains("thrust") {
+        Some("thrust")
+    } else {
+        None
+    }
+}
+
+/// Our Table 1 (mean over the validation runs; the chirp run) beside the paper's.
+fn table1_section(out: &mut String, report: &Report) {
+    let _ = writeln!(
+        out,
+        "\n## Table 1: ours beside the paper's (RMSPE %, SE; time-domain validation / chirp)\n\n\
+         Ours are measured on this project's runs, the paper's on its SR-30 bench data.\n"
+    );
+    let _ = writeln!(
+        out,
+        "| output | model | RMSPE | SE | RMSPE chirp | SE chirp | paper RMSPE | paper SE | paper RMSPE chirp | paper SE chirp |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let cell = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.4}"));
+    for (name, o) in &report.outputs {
+        for (model, paper_model) in [
+            ("gray_box", "gray-box"),
+            ("hammerstein_wiener", "Hammerstein–Wiener"),
+            ("nnarx", "NNARX"),
+            ("linear", ""),
+        ] {
+            if !o.models.contains_key(model) {
+                continue;
+            }
+            let paper = paper_output_name(name)
+                .and_then(|p| PAPER_TABLE1.iter().find(|(po, pm, ..)| *po == p && *pm == paper_model));
+            let (pa, pb, pc, pd) =
+                paper.map_or((None, None, None, None), |t| (Some(t.2), Some(t.3), Some(t.4), Some(t.5)));
+            let _ = writeln!(
+                out,
+                "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                model_title(model),
+                cell(role_mean(report, o, model, false, |m| m.rmspe_pct)),
+                cell(role_mean(report, o, model, false, |m| m.se)),
+                cell(role_mean(report, o, model, true, |m| m.rmspe_pct)),
+                cell(role_mean(report, o, model, true, |m| m.se)),
+                cell(pa),
+                cell(pb),
+                cell(pc),
+                cell(pd)
+            );
+        }
+        if !o.cutoff_rad_s.is_empty() {
+            let cuts: Vec<String> = o
+                .cutoff_rad_s
+                .iter()
+                .map(|(k, v)| {
+                    format!(
+                        "{} {}",
+                        model_title(k),
+                        v.map_or("not reached".to_owned(), |c| format!("{c:.3} rad/s"))
+                    )
+                })
+                .collect();
+            let _ = writeln!(out, "\n−3 dB cut-off of `{name}` on the chirp: {}.\n", cuts.join("; "));
+        }
+    }
+}
+
+fn noise_and_monte_carlo_section(out: &mut String, report: &Report) {
+    if let Some(serde_json::Value::Object(fits)) = &report.noise_fit {
+        let _ = writeln!(out, "\n## Noise fit of the steady run (maximum likelihood)\n");
+        let _ = writeln!(out, "| channel | best | log-likelihoods |\n|---|---|---|");
+        for (channel, fit) in fits {
+            let lls: Vec<String> = fit["fits"]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .map(|f| {
+                            format!(
+                                "{} {:.3}",
+                                f["distribution"]["family"].as_str().unwrap_or("?"),
+                                f["log_likelihood"].as_f64().unwrap_or(f64::NAN)
+                            )
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            let _ = writeln!(
+                out,
+                "| {channel} | {} | {} |",
+                fit["best_by_log_likelihood"].as_str().unwrap_or("?"),
+                lls.join(", ")
+            );
+        }
+    }
+    if let Some(serde_json::Value::Object(mc)) = &report.monte_carlo {
+        let _ = writeln!(
+            out,
+            "\n## Monte Carlo error propagation\n\n100 runs of 20 s at the steady run's mean input from a zero initial condition, input noise drawn from the input's best-fitting distribution; std of noisy − nominal output (paper: gray-box 6.035 rpm / 0.0136 N, HW 14.08 / 0.0352, NNARX 26.5 / 0.1064).\n"
+        );
+        let _ =
+            writeln!(out, "| output | model | std of difference | mean of difference |\n|---|---|---|---|");
+        for (output, models) in mc {
+            if let serde_json::Value::Object(models) = models {
+                for (model, r) in models {
+                    let _ = writeln!(
+                        out,
+                        "| {output} | {} | {:.5} | {:.5} |",
+                        model_title(model),
+                        r["std_difference"].as_f64().unwrap_or(f64::NAN),
+                        r["mean_difference"].as_f64().unwrap_or(f64::NAN)
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// The Markdown report: the same numbers as report.json, as tables a person reads.
 pub fn render_markdown(report: &Report) -> String {
     let mut out = String::new();
@@ -235,12 +376,8 @@ pub fn render_markdown(report: &Report) -> String {
             }
         }
     }
-    let _ = writeln!(out, "\n## The paper's Table 1, for comparison (RMSPE %, SE; validation / chirp)\n");
-    let _ =
-        writeln!(out, "| output | model | RMSPE | SE | RMSPE chirp | SE chirp |\n|---|---|---|---|---|---|");
-    for (o, m, a, b, c, d) in PAPER_TABLE1 {
-        let _ = writeln!(out, "| {o} | {m} | {a} | {b} | {c} | {d} |");
-    }
+    table1_section(&mut out, report);
+    noise_and_monte_carlo_section(&mut out, report);
     if !report.figures.is_empty() {
         let _ = writeln!(out, "\n## Figures\n");
         for f in &report.figures {

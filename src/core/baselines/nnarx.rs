@@ -166,7 +166,7 @@ pub struct NnarxModel {
     pub diagnostics: NnarxDiagnostics,
 }
 
-/// Fill `x` with the regressor at time `k`; samples before 0 read as `u_past` / `y_past`.
+/// Fill `x` with the regressor at time `k`; samples before 0 read as `past.0` (input) / `past.1` (output).
 fn regressor(x: &mut Vec<f64>, u_n: &[f64], y_n: &[f64], k: usize, nu: usize, ny: usize, past: (f64, f64)) {
     x.clear();
     let lagged = |s: &[f64], lag: usize, before: f64| {

@@ -19,9 +19,12 @@ pub mod nnarx;
 mod nnarx_train;
 mod spd;
 
-pub use hammerstein_wiener::{HwDiagnostics, HwModel, HwOptions, HwOrders, fit_hammerstein_wiener};
+pub use hammerstein_wiener::{
+    AscendingPoly, HwDiagnostics, HwModel, HwOptions, HwOrders, fit_hammerstein_wiener,
+};
 pub use nnarx::{
-    Equilibrium, EquilibriumMethod, NnarxDiagnostics, NnarxModel, NnarxOptions, RestartSummary, fit_nnarx,
+    EQUILIBRIUM_CHECKS, Equilibrium, EquilibriumMethod, NnarxDiagnostics, NnarxModel, NnarxOptions,
+    RestartSummary, fit_nnarx,
 };
 
 /// Everything that can go wrong while fitting a baseline.

@@ -3,10 +3,13 @@
 //! the model).
 //!
 //! Training is series-parallel (measured past outputs as regressors) by Levenberg–Marquardt with
-//! Bayesian regularisation (see `nnarx_train`), from `restarts` seeded random initialisations. The
-//! restart kept is the one whose **output-error simulation** of the training data has the smallest
-//! RMS error, because that is how the model is used and validated; every restart's log evidence,
-//! γ and errors are kept in the diagnostics.
+//! Bayesian regularisation (see `nnarx_train`), from `restarts` seeded random initialisations.
+//! Restarts are compared by their **output-error simulation** of the training data, not by their
+//! evidence, because that is how the model is used and validated (on the SR-30 speed the restart
+//! with the highest evidence simulates worst). Among the restarts within `OE_TOLERANCE` of the best
+//! simulation error, the one with the fewest training-range inputs having several equilibria is
+//! kept (a spurious equilibrium can capture the simulation), then the smallest error. Every
+//! restart's log evidence, γ and errors are kept in the diagnostics.
 //!
 //! The model is then run in output-error form: its own past predictions are fed back. The simulation
 //! starts at the network's own equilibrium for the constant input `u[0]` (see [`Equilibrium`]).
@@ -17,6 +20,13 @@ use serde::{Deserialize, Serialize};
 use super::mlp::MlpShape;
 use super::nnarx_train::{TrainData, train};
 use super::{BaselineError, Scaling, check_signals, report, rms_error};
+
+/// Points of the training input range at which the fitted network's equilibria are counted.
+pub const EQUILIBRIUM_CHECKS: usize = 21;
+
+/// Restarts whose training output-error RMS is within this factor of the best compete on the
+/// uniqueness of their equilibria.
+const OE_TOLERANCE: f64 = 2.0;
 
 /// Iterations allowed to the fixed-point search for the equilibrium.
 const FIXED_POINT_ITERATIONS: usize = 20_000;
@@ -84,8 +94,8 @@ impl NnarxOptions {
 pub enum EquilibriumMethod {
     /// Fixed-point iteration `y ← NN(u₀, y, …, y)` from the training mean converged.
     FixedPoint { iterations: usize },
-    /// Fixed-point iteration did not converge (the equilibrium repels it); bisection on
-    /// `NN(u₀, y, …, y) − y` found the root nearest the training mean.
+    /// Fixed-point iteration did not converge (the equilibrium repels it, or the contraction is too
+    /// slow); bisection on `NN(u₀, y, …, y) − y` found the root nearest the training mean.
     Bisection,
     /// Neither found an equilibrium (not expected: the network output is bounded); the training
     /// mean of the output is used.
@@ -109,12 +119,14 @@ pub struct RestartSummary {
     pub one_step_rms: f64,
     /// RMS output-error simulation error on the training data, output units.
     pub oe_rms: f64,
+    /// How many of the `EQUILIBRIUM_CHECKS` training-range inputs have more than one equilibrium.
+    pub several_equilibria: usize,
 }
 
 /// Training diagnostics of the kept restart, in normalised units unless stated.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NnarxDiagnostics {
-    /// Index of the kept restart (smallest training `oe_rms`).
+    /// Index of the kept restart (see the module docs for the rule).
     pub chosen_restart: usize,
     pub iterations: usize,
     /// Weight-decay precision.
@@ -130,6 +142,11 @@ pub struct NnarxDiagnostics {
     pub oe_rms: f64,
     /// How the training simulation found its start (at the first training input).
     pub training_start: EquilibriumMethod,
+    /// Inputs, on an evenly spaced grid of `EQUILIBRIUM_CHECKS` points over the training input range,
+    /// at which the network has more than one equilibrium. A physical engine has one steady state per
+    /// fuel flow; a spurious one can capture the output-error simulation, so a non-empty list is a
+    /// warning that the model may lock up on inputs unlike the training data.
+    pub several_equilibria_at: Vec<f64>,
     pub restarts: Vec<RestartSummary>,
 }
 
@@ -149,7 +166,7 @@ pub struct NnarxModel {
     pub diagnostics: NnarxDiagnostics,
 }
 
-/// Fill `x` with the regressor at time `k`; samples before 0 read as `u_past` / `y_past`.
+/// Fill `x` with the regressor at time `k`; samples before 0 read as `past.0` (input) / `past.1` (output).
 fn regressor(x: &mut Vec<f64>, u_n: &[f64], y_n: &[f64], k: usize, nu: usize, ny: usize, past: (f64, f64)) {
     x.clear();
     let lagged = |s: &[f64], lag: usize, before: f64| {
@@ -288,6 +305,31 @@ fn simulate_normalised(shape: MlpShape, w: &[f64], u_n: &[f64], nu: usize, ny: u
     y_n
 }
 
+/// The normalised inputs, on a grid over the range of `u_n`, with more than one equilibrium.
+/// The kept restart: among those whose training output-error RMS is within `OE_TOLERANCE` times the
+/// best, the one with the fewest inputs having several equilibria, then the smallest RMS.
+fn choose_restart(summaries: &[RestartSummary]) -> Option<usize> {
+    let best = summaries.iter().map(|s| s.oe_rms).filter(|r| r.is_finite()).fold(f64::INFINITY, f64::min);
+    summaries
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.oe_rms <= OE_TOLERANCE * best)
+        .min_by(|(_, a), (_, b)| {
+            a.several_equilibria.cmp(&b.several_equilibria).then(a.oe_rms.total_cmp(&b.oe_rms))
+        })
+        .map(|(i, _)| i)
+}
+
+fn several_equilibria(shape: MlpShape, w: &[f64], u_n: &[f64], opts: &NnarxOptions) -> Vec<f64> {
+    let lo = u_n.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = u_n.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let step = (hi - lo) / (EQUILIBRIUM_CHECKS - 1) as f64;
+    (0..EQUILIBRIUM_CHECKS)
+        .map(|i| lo + step * i as f64)
+        .filter(|u0| all_equilibria_normalised(shape, w, *u0, opts.nu, opts.ny).len() > 1)
+        .collect()
+}
+
 /// Train an NNARX model on `y` driven by `u` (see the module docs for the algorithm). `progress`
 /// receives the fraction done; returning `false` cancels.
 pub fn fit_nnarx(
@@ -313,7 +355,7 @@ pub fn fit_nnarx(
 
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let per_restart = 1.0 / (opts.restarts as f64 * opts.max_iterations as f64);
-    let mut best: Option<(usize, super::nnarx_train::TrainOutcome, f64)> = None;
+    let mut outcomes = Vec::with_capacity(opts.restarts);
     let mut summaries = Vec::with_capacity(opts.restarts);
     for restart in 0..opts.restarts {
         let w0 = shape.random_weights(&mut rng);
@@ -323,27 +365,30 @@ pub fn fit_nnarx(
         })?;
         let one_step: Vec<f64> =
             data.x.chunks_exact(shape.n_inputs).map(|x| shape.output(&out.weights, x)).collect();
-        let oe = simulate_normalised(shape, &out.weights, &u_n, opts.nu, opts.ny);
-        let oe_rms = rms_error(&oe, &y_n);
+        let oe_rms = rms_error(&simulate_normalised(shape, &out.weights, &u_n, opts.nu, opts.ny), &y_n);
         summaries.push(RestartSummary {
             iterations: out.iterations,
             log_evidence: out.log_evidence,
             gamma: out.gamma,
             one_step_rms: rms_error(&one_step, &data.t) * output_scaling.scale,
             oe_rms: if oe_rms.is_finite() { oe_rms * output_scaling.scale } else { f64::INFINITY },
+            several_equilibria: several_equilibria(shape, &out.weights, &u_n, opts).len(),
         });
-        if oe_rms.is_finite() && best.as_ref().is_none_or(|b| oe_rms < b.2) {
-            best = Some((restart, out, oe_rms));
-        }
+        outcomes.push(out);
     }
-    let Some((chosen_restart, out, _)) = best else {
-        return Err(BaselineError::Diverged { stage: "NNARX", rms_normalised: f64::INFINITY });
-    };
-    let Some(chosen) = summaries.get(chosen_restart).cloned() else {
+    let chosen = choose_restart(&summaries)
+        .ok_or(BaselineError::Diverged { stage: "NNARX", rms_normalised: f64::INFINITY })?;
+    let (Some(out), Some(chosen_summary)) =
+        (outcomes.into_iter().nth(chosen), summaries.get(chosen).cloned())
+    else {
         return Err(BaselineError::Diverged { stage: "NNARX", rms_normalised: f64::INFINITY });
     };
     let u0 = u_n.first().copied().unwrap_or(0.0);
     let (_, training_start) = equilibrium_normalised(shape, &out.weights, u0, opts.nu, opts.ny);
+    let several_equilibria_at = several_equilibria(shape, &out.weights, &u_n, opts)
+        .into_iter()
+        .map(|u| input_scaling.physical_from_normalised(u))
+        .collect();
     report(progress, 1.0)?;
     Ok(NnarxModel {
         nu: opts.nu,
@@ -352,16 +397,17 @@ pub fn fit_nnarx(
         input_scaling,
         output_scaling,
         diagnostics: NnarxDiagnostics {
-            chosen_restart,
+            chosen_restart: chosen,
             iterations: out.iterations,
             alpha: out.alpha,
             beta: out.beta,
             gamma: out.gamma,
             n_weights: shape.n_weights(),
             log_evidence: out.log_evidence,
-            one_step_rms: chosen.one_step_rms,
-            oe_rms: chosen.oe_rms,
+            one_step_rms: chosen_summary.one_step_rms,
+            oe_rms: chosen_summary.oe_rms,
             training_start,
+            several_equilibria_at,
             restarts: summaries,
         },
         weights: out.weights,

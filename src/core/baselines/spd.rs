@@ -18,10 +18,7 @@ impl Cholesky {
         let mut l = vec![0.0; p * p];
         for i in 0..p {
             for j in 0..=i {
-                let mut sum = a[i * p + j];
-                for k in 0..j {
-                    sum -= l[i * p + k] * l[j * p + k];
-                }
+                let sum = a[i * p + j] - dot(&l[i * p..i * p + j], &l[j * p..j * p + j]);
                 if i == j {
                     if !(sum > 0.0 && sum.is_finite()) {
                         return None;
@@ -41,11 +38,8 @@ impl Cholesky {
         let mut z = b.to_vec();
         z.resize(p, 0.0);
         for i in 0..p {
-            let mut sum = z[i];
-            for k in 0..i {
-                sum -= self.l[i * p + k] * z[k];
-            }
-            z[i] = sum / self.l[i * p + i];
+            let row = &self.l[i * p..i * p + i];
+            z[i] = (z[i] - dot(row, &z[..i])) / self.l[i * p + i];
         }
         z
     }
@@ -55,11 +49,8 @@ impl Cholesky {
         let p = self.p;
         let mut x = self.forward(b);
         for i in (0..p).rev() {
-            let mut sum = x[i];
-            for k in i + 1..p {
-                sum -= self.l[k * p + i] * x[k];
-            }
-            x[i] = sum / self.l[i * p + i];
+            let below: f64 = x.iter().enumerate().skip(i + 1).map(|(k, xk)| self.l[k * p + i] * xk).sum();
+            x[i] = (x[i] - below) / self.l[i * p + i];
         }
         x
     }
@@ -78,16 +69,16 @@ impl Cholesky {
             column[c] = 1.0 / self.l[c * p + c];
             total += column[c] * column[c];
             for i in c + 1..p {
-                let mut sum = 0.0;
-                for k in c..i {
-                    sum -= self.l[i * p + k] * column[k];
-                }
-                column[i] = sum / self.l[i * p + i];
+                column[i] = -dot(&self.l[i * p + c..i * p + i], &column[c..i]) / self.l[i * p + i];
                 total += column[i] * column[i];
             }
         }
         total
     }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 #[cfg(test)]

@@ -43,8 +43,24 @@ fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     if omega >= 1.0 { format!("{omega:.0}") } else { format!("{omega}") }
 }
 
-fn curve(points: &[BodePoint], value: impl Fn(&BodePoint) -> f64) -> PlotPoints<'static> {
-    points.iter().map(|p| [p.omega_rad_s.log10(), value(p)]).collect()
+/// The two plots of the view.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Part {
+    Magnitude,
+    Phase,
+}
+
+impl Part {
+    fn value(self, p: &BodePoint) -> f64 {
+        match self {
+            Self::Magnitude => p.mag_db,
+            Self::Phase => p.phase_deg,
+        }
+    }
+}
+
+fn curve(points: &[BodePoint], part: Part) -> PlotPoints<'static> {
+    points.iter().map(|p| [p.omega_rad_s.log10(), part.value(p)]).collect()
 }
 
 pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache: &Derived) {
@@ -64,13 +80,10 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
     let height = ((ui.available_height() - spacing) / 2.0).max(120.0);
     let group = egui::Id::unique(("bode_omega_axis", output));
     let unit = &view.output.unit;
-    let plots: [(&str, String, fn(&BodePoint) -> f64, usize); 2] = [
-        ("magnitude", "magnitude [dB]".to_owned(), |p| p.mag_db, 1),
-        ("phase", "phase [deg]".to_owned(), |p| p.phase_deg, 2),
-    ];
-    for (name, y_label, value, column) in plots {
-        let last = name == "phase";
-        let mut plot = Plot::new(("bode", name, output))
+    for part in [Part::Magnitude, Part::Phase] {
+        let last = part == Part::Phase;
+        let y_label = if last { "phase [deg]" } else { "magnitude [dB]" };
+        let mut plot = Plot::new(("bode", last, output))
             .height(height)
             .link_axis(group, [true, false])
             .link_cursor(group, [true, false])
@@ -87,8 +100,8 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
                 plot.legend(Legend::default().position(egui_plot::Corner::LeftBottom).background_alpha(0.85));
         }
         plot.show(ui, |plot_ui| {
-            draw_curves(plot_ui, &view, state, value);
-            draw_empirical(plot_ui, &view.output.empirical_bode, column);
+            draw_curves(plot_ui, &view, state, part);
+            draw_empirical(plot_ui, &view.output.empirical_bode, part);
         });
     }
     if unit.is_empty() {
@@ -96,34 +109,29 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
     }
 }
 
-fn draw_curves(
-    plot_ui: &mut egui_plot::PlotUi<'_>,
-    view: &LiveView<'_>,
-    state: &BodeViewState,
-    value: fn(&BodePoint) -> f64,
-) {
+fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: &BodeViewState, part: Part) {
     if !state.hide_segments
         && let Ok(fits) = &view.output.fits
     {
         for (i, (points, segment)) in view.output.segment_bode.iter().zip(&fits.segments).enumerate() {
             let name = format!("segment {}", segment.label);
-            plot_ui.line(Line::new(name, curve(points, value)).color(theme::segment_colour(i)).width(1.0));
+            plot_ui.line(Line::new(name, curve(points, part)).color(theme::segment_colour(i)).width(1.0));
         }
     }
     if let Ok(live) = view.live {
         plot_ui
-            .line(Line::new("reduced model G(z)", curve(&live.bode, value)).color(theme::REDUCED).width(3.0));
+            .line(Line::new("reduced model G(z)", curve(&live.bode, part)).color(theme::REDUCED).width(3.0));
     }
 }
 
-/// The hook for the chirp's empirical points: (ω, |G| dB, ∠G deg, coherence); `column` picks
-/// magnitude (1) or phase (2). Points with low coherence are drawn faint.
-fn draw_empirical(plot_ui: &mut egui_plot::PlotUi<'_>, points: &[EmpiricalPoint], column: usize) {
+/// The hook for the chirp's empirical points: (ω, |G| dB, ∠G deg, coherence). Points with low
+/// coherence are drawn faint.
+fn draw_empirical(plot_ui: &mut egui_plot::PlotUi<'_>, points: &[EmpiricalPoint], part: Part) {
     if points.is_empty() {
         return;
     }
     for (omega, mag_db, phase_deg, coherence) in points {
-        let y = if column == 1 { *mag_db } else { *phase_deg };
+        let y = if part == Part::Magnitude { *mag_db } else { *phase_deg };
         let colour = theme::EMPIRICAL.gamma_multiply(coherence.clamp(0.2, 1.0) as f32);
         plot_ui.points(
             Points::new("chirp (empirical)", vec![[omega.log10(), y]])

@@ -26,6 +26,8 @@ pub struct DataViewState {
     pub segment_drag: Option<EdgeDrag>,
     /// The pointer was on a segment boundary last frame (the plots then do not pan).
     pub on_boundary: bool,
+    /// Time ↔ screen of the top plot last frame (tests use it to find a boundary).
+    pub last_transform: Option<egui_plot::PlotTransform>,
 }
 
 pub fn data_ui(
@@ -171,7 +173,7 @@ fn plots_ui(
             if last {
                 plot = plot.x_axis_label("time [s]");
             }
-            plot.show(ui, |plot_ui| {
+            let shown = plot.show(ui, |plot_ui| {
                 if let Some(overlay) = overlay {
                     let dragged = segments_ui::interact_segments(
                         plot_ui,
@@ -180,7 +182,8 @@ fn plots_ui(
                         &mut state.on_boundary,
                     );
                     commands.extend(dragged);
-                    segments_ui::draw_segments(plot_ui, overlay, state.segment_drag.as_ref(), i == 0);
+                    let label_y = (i == 0).then(|| label_height(trace));
+                    segments_ui::draw_segments(plot_ui, overlay, state.segment_drag.as_ref(), label_y);
                 }
                 plot_ui.line(
                     Line::new(trace.name.as_str(), PlotPoints::from(trace.points.as_slice()))
@@ -188,12 +191,24 @@ fn plots_ui(
                         .width(1.5),
                 );
             });
+            if i == 0 {
+                state.last_transform = Some(shown.transform);
+            }
         }
     });
     if state.on_boundary {
         ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
     }
     commands
+}
+
+/// A little above the highest sample of the trace.
+fn label_height(trace: &Trace) -> f64 {
+    let (lo, hi) = trace
+        .points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.y), hi.max(p.y)));
+    if lo.is_finite() { hi + 0.12 * (hi - lo).max(1e-9) } else { 0.0 }
 }
 
 fn trace_colour(kind: ChannelKind) -> egui::Color32 {

@@ -100,18 +100,18 @@ impl SegmentOverlay<'_> {
     }
 }
 
-/// Spans, steps, boundaries and (with `labels`) the segment letters.
+/// Spans, steps, boundaries and (with `label_y`, in plot units) the segment letters. The labels
+/// sit at a height taken from the data, not from the plot bounds, which they would push up.
 pub fn draw_segments(
     plot_ui: &mut PlotUi<'_>,
     overlay: &SegmentOverlay<'_>,
     drag: Option<&EdgeDrag>,
-    labels: bool,
+    label_y: Option<f64>,
 ) {
     let segments = match drag {
         Some(drag) => overlay.moved(drag),
         None => overlay.segments.to_vec(),
     };
-    let top = plot_ui.plot_bounds().max()[1];
     for (i, s) in segments.iter().enumerate() {
         let span = Span::new("", overlay.time(s.start)..=overlay.time(s.end))
             .fill(theme::segment_fill(i))
@@ -119,7 +119,7 @@ pub fn draw_segments(
         plot_ui.span(span);
         let step = VLine::new("", overlay.time(s.step_at)).color(theme::SEGMENT_STEP).width(1.0);
         plot_ui.vline(step.style(LineStyle::Dashed { length: 4.0 }).allow_hover(false));
-        if labels {
+        if let Some(top) = label_y {
             let mid = 0.5 * (overlay.time(s.start) + overlay.time(s.end));
             let label = RichText::new(&s.label).size(15.0).strong().color(theme::segment_colour(i));
             plot_ui.text(

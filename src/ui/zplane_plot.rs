@@ -324,7 +324,7 @@ fn interact(
         match hit {
             Some((pos, (index, handle))) => {
                 let grab = transform.value_from_position(pos);
-                let Some(cluster) = clusters.get(index) else { return None };
+                let cluster = clusters.get(index)?;
                 state.selected = Some(index);
                 state.drag = Some(ClusterDrag {
                     output: output.to_owned(),
@@ -345,11 +345,12 @@ fn interact(
         zoom.centre[0] -= f64::from(delta.x) / dx;
         zoom.centre[1] -= f64::from(delta.y) / dy;
     }
-    if response.hovered() && scroll.abs() > 0.0 {
-        if let Some(pos) = response.hover_pos() {
-            let p = transform.value_from_position(pos);
-            zoom.zoom_about([p.x, p.y], (-f64::from(scroll) * 0.002).exp());
-        }
+    if response.hovered()
+        && scroll.abs() > 0.0
+        && let Some(pos) = response.hover_pos()
+    {
+        let p = transform.value_from_position(pos);
+        zoom.zoom_about([p.x, p.y], (-f64::from(scroll) * 0.002).exp());
     }
     if let Some(drag) = &mut state.drag
         && (response.dragged() || response.drag_stopped())

@@ -6,9 +6,10 @@ use egui::RichText;
 
 use super::command::Command;
 use super::derived::Derived;
-use super::file_dialog::{PendingPick, PickPoll};
+use super::file_dialog::{PendingPick, PickPoll, PickPurpose};
 use super::mapping_ui::{self, MappingDialog, MappingTarget};
 use super::session::{LoadFailure, Role, SavedSession, Session, SessionRun, file_label};
+use super::setup::History;
 use super::views::{self, Tab, ViewStates};
 use super::{panels_ui, theme};
 
@@ -17,7 +18,13 @@ use super::{panels_ui, theme};
 pub struct ViewState {
     pub tab: Tab,
     pub selected_run: Option<usize>,
+    /// The output the model views show (the first output when `None` or not present).
+    pub output: Option<String>,
     pub views: ViewStates,
+    /// Undo and redo of segment, cluster and settings changes.
+    pub history: History,
+    /// Model and project file errors, shown until dismissed.
+    pub errors: Vec<String>,
     /// Files that could not be read, shown until dismissed.
     pub failures: Vec<LoadFailure>,
     pub mapping: Option<MappingDialog>,
@@ -29,7 +36,8 @@ pub struct ViewState {
     pub cpu_frame_ms: Option<f32>,
     /// A native file dialog is open.
     pub picker: Option<PendingPick>,
-    pub open_dialog_requested: bool,
+    /// A file dialog to open at the end of the frame.
+    pub dialog_requested: Option<PickPurpose>,
     pub quit_requested: bool,
 }
 
@@ -127,7 +135,32 @@ impl App {
                     self.session.revision += 1;
                 }
             }
-            Command::OpenRunDialog => self.view.open_dialog_requested = true,
+            Command::SetSegments(segments) => {
+                let status = if segments.is_some() { "Segments changed" } else { "Segments detected again" };
+                self.edit_setup(status, |setup| setup.segments = segments);
+            }
+            Command::SetClusters { output, clusters } => {
+                let status = Self::clusters_status(&output, clusters.as_ref().map(Vec::len));
+                self.edit_setup(&status, |setup| setup.output_mut(&output).clusters = clusters);
+            }
+            Command::SetOutputSettings { output, settings } => {
+                let status = format!("{output}: settings changed");
+                self.edit_setup(&status, |setup| setup.output_mut(&output).settings = settings);
+            }
+            Command::Undo => self.undo(),
+            Command::Redo => self.redo(),
+            Command::ExportModel(path) => self.export_model(&path),
+            Command::ImportModel(path) => self.import_model(&path),
+            Command::SaveProject(path) => self.save_project(&path),
+            Command::OpenProject(path) => self.open_project(&path),
+            Command::OpenRunDialog => self.view.dialog_requested = Some(PickPurpose::Runs),
+            Command::ChooseFile(action) => self.view.dialog_requested = Some(PickPurpose::File(action)),
+            Command::DismissError(index) => {
+                if index < self.view.errors.len() {
+                    self.view.errors.remove(index);
+                }
+            }
+            Command::SelectOutput(name) => self.view.output = Some(name),
             Command::MapColumnsOfRun(index) => {
                 if let Some(run) = self.session.runs.get(index) {
                     let target = MappingTarget::Existing { index, path: run.path.clone() };
@@ -227,10 +260,12 @@ impl App {
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let started = Instant::now();
         self.poll_picker();
-        self.cache.refresh(&self.session);
+        self.refresh();
 
         let mut commands = shortcut_commands(ui);
-        egui::Panel::top("menu_bar").show(ui, |ui| commands.extend(panels_ui::menu_bar_ui(ui)));
+        egui::Panel::top("menu_bar").show(ui, |ui| {
+            commands.extend(panels_ui::menu_bar_ui(ui, &self.view.history));
+        });
         egui::Panel::bottom("status_bar").show(ui, |ui| panels_ui::status_bar_ui(ui, &self.view));
         egui::Panel::left("runs_panel").resizable(true).default_size(250.0).min_size(180.0).show(ui, |ui| {
             commands.extend(panels_ui::runs_panel_ui(ui, &self.session, self.view.selected_run))
@@ -244,12 +279,19 @@ impl App {
         if let Some(dialog) = &mut self.view.mapping {
             commands.extend(mapping_ui::mapping_ui(&ctx, dialog));
         }
+        if !self.view.errors.is_empty() {
+            commands.extend(panels_ui::errors_ui(&ctx, &self.view.errors));
+        }
 
         for command in commands {
             self.apply(command);
         }
-        if std::mem::take(&mut self.view.open_dialog_requested) {
-            self.open_picker(&ctx);
+        // Recompute now rather than next frame, and draw the result in one more frame.
+        if self.refresh() {
+            ctx.request_repaint();
+        }
+        if let Some(purpose) = self.view.dialog_requested.take() {
+            self.open_picker(&ctx, purpose);
         }
         if self.view.quit_requested {
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
@@ -271,18 +313,26 @@ impl App {
             panels_ui::empty_session_ui(ui);
             return commands;
         }
-        commands.extend(views::tab_ui(
-            ui,
-            self.view.tab,
-            &self.session,
-            self.view.selected_run,
-            &mut self.view.views,
-            &self.cache,
-        ));
+        commands.extend(views::tab_ui(ui, &self.session, &mut self.view, &self.cache));
         commands
     }
 
-    fn open_picker(&mut self, ctx: &egui::Context) {
+    /// Bring the derived cache up to date with the session and the drag in progress; true when
+    /// anything was recomputed.
+    pub fn refresh(&mut self) -> bool {
+        let stale = self.cache.revision() != Some(self.session.revision);
+        self.cache.refresh(&self.session);
+        let drag = self.view.views.zplane.preview_request();
+        let preview_changed = self.cache.set_preview(drag.as_ref().map(|(o, c)| (o.as_str(), c.as_slice())));
+        stale || preview_changed
+    }
+
+    /// The output the model views show: the chosen one, else the first one identified.
+    pub fn selected_output(&self) -> Option<String> {
+        views::selected_output(&self.view, &self.cache)
+    }
+
+    fn open_picker(&mut self, ctx: &egui::Context, purpose: PickPurpose) {
         if self.view.picker.is_some() {
             return;
         }
@@ -292,31 +342,49 @@ impl App {
             .and_then(|i| self.session.runs.get(i))
             .and_then(|r| r.path.parent().map(ToOwned::to_owned));
         let ctx = ctx.clone();
-        self.view.picker = Some(PendingPick::open_runs(start_dir, move || ctx.request_repaint()));
-        self.view.status = Some("Choosing run files…".into());
+        let repaint = move || ctx.request_repaint();
+        self.view.picker = Some(match purpose {
+            PickPurpose::Runs => PendingPick::open_runs(start_dir, repaint),
+            PickPurpose::File(action) => PendingPick::open_file(action, start_dir, repaint),
+        });
+        self.view.status = Some("Choosing a file…".into());
     }
 
     fn poll_picker(&mut self) {
         let Some(picker) = &self.view.picker else { return };
+        let purpose = picker.purpose;
         let PickPoll::Done(paths) = picker.poll() else { return };
         self.view.picker = None;
         self.view.status = None;
         for path in paths {
-            let role = Role::guess_from_path(&path, &self.session);
-            self.apply(Command::load(path, role));
+            let command = match purpose {
+                PickPurpose::Runs => Command::load(path.clone(), Role::guess_from_path(&path, &self.session)),
+                PickPurpose::File(action) => action.command(path),
+            };
+            self.apply(command);
         }
     }
 }
 
-/// Ctrl+O opens run files, Ctrl+Q quits (Cmd on macOS).
+/// Ctrl+O opens run files, Ctrl+Q quits, Ctrl+Z undoes, Ctrl+Shift+Z and Ctrl+Y redo (Cmd on
+/// macOS). Undo and redo are left to a text field that has the keyboard.
 fn shortcut_commands(ui: &egui::Ui) -> Vec<Command> {
-    let shortcuts = [(egui::Key::O, Command::OpenRunDialog), (egui::Key::Q, Command::Quit)];
+    use egui::{Key, Modifiers};
+    let typing = ui.ctx().egui_wants_keyboard_input();
+    // Ctrl+Shift+Z before Ctrl+Z: a shortcut without Shift also matches with Shift held.
+    let shortcuts = [
+        (Modifiers::COMMAND, Key::O, Command::OpenRunDialog, true),
+        (Modifiers::COMMAND, Key::Q, Command::Quit, true),
+        (Modifiers::COMMAND | Modifiers::SHIFT, Key::Z, Command::Redo, !typing),
+        (Modifiers::COMMAND, Key::Y, Command::Redo, !typing),
+        (Modifiers::COMMAND, Key::Z, Command::Undo, !typing),
+    ];
     shortcuts
         .into_iter()
-        .filter(|(key, _)| {
-            ui.input_mut(|i| i.consume_shortcut(&egui::KeyboardShortcut::new(egui::Modifiers::COMMAND, *key)))
+        .filter(|(modifiers, key, _, enabled)| {
+            *enabled && ui.input_mut(|i| i.consume_shortcut(&egui::KeyboardShortcut::new(*modifiers, *key)))
         })
-        .map(|(_, command)| command)
+        .map(|(_, _, command, _)| command)
         .collect()
 }
 

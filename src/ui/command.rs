@@ -5,6 +5,9 @@ use std::path::PathBuf;
 
 use super::session::Role;
 use super::views::Tab;
+use crate::core::cluster::Cluster;
+use crate::core::pipeline::OutputSettings;
+use crate::core::segment::Segment;
 use crate::io::csv_run::LoadOptions;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -26,9 +29,37 @@ pub enum Command {
     RemoveRun(usize),
     SetRole(usize, Role),
 
+    // --- Setup changes (undoable) ---
+    /// The segments of the identification run; `None` detects them from the input again.
+    SetSegments(Option<Vec<Segment>>),
+    /// The clusters of an output; `None` follows the automatic proposal.
+    SetClusters {
+        output: String,
+        clusters: Option<Vec<Cluster>>,
+    },
+    SetOutputSettings {
+        output: String,
+        settings: OutputSettings,
+    },
+    Undo,
+    Redo,
+
+    // --- Files (errors are shown, the session is kept) ---
+    /// Write the current model of every output as model.json.
+    ExportModel(PathBuf),
+    /// Take the clusters of every output in a model.json (the model is fitted again on the
+    /// session's runs).
+    ImportModel(PathBuf),
+    /// Write the session as a project file (TOML).
+    SaveProject(PathBuf),
+    /// Replace the session by a project file's runs and setup.
+    OpenProject(PathBuf),
+
     // --- App actions (no session change) ---
     /// Show the native file dialog; chosen files are loaded with a role guessed from their names.
     OpenRunDialog,
+    /// Show the native file dialog for a model or project file.
+    ChooseFile(FileAction),
     /// Open the column-mapping dialog for session run `index`.
     MapColumnsOfRun(usize),
     /// Open the column-mapping dialog for load failure `index` (a file that is not in the session).
@@ -36,9 +67,34 @@ pub enum Command {
     CloseMappingDialog,
     DismissFailure(usize),
     DismissAllFailures,
+    /// Close error message `index` (model and project files).
+    DismissError(usize),
     SelectRun(usize),
+    /// The output the model views show.
+    SelectOutput(String),
     ShowTab(Tab),
     Quit,
+}
+
+/// What a file dialog is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileAction {
+    ExportModel,
+    ImportModel,
+    SaveProject,
+    OpenProject,
+}
+
+impl FileAction {
+    /// The command to run on the chosen file.
+    pub fn command(self, path: PathBuf) -> Command {
+        match self {
+            Self::ExportModel => Command::ExportModel(path),
+            Self::ImportModel => Command::ImportModel(path),
+            Self::SaveProject => Command::SaveProject(path),
+            Self::OpenProject => Command::OpenProject(path),
+        }
+    }
 }
 
 impl Command {

@@ -1,5 +1,6 @@
 //! The Data view: the selected run's input, outputs and (on demand) auxiliary channels against
-//! time, one plot per channel, with linked time axes.
+//! time, one plot per channel, with linked time axes. The identification run also shows its
+//! segments, whose boundaries can be dragged.
 use std::collections::BTreeSet;
 
 use egui::RichText;
@@ -8,6 +9,7 @@ use egui_plot::{Line, Plot, PlotPoints};
 use super::command::Command;
 use super::derived::{ChannelKind, Derived, Trace};
 use super::plot_util;
+use super::segments_ui::{self, EdgeDrag, SegmentOverlay};
 use super::session::{Session, SessionRun};
 use super::theme;
 
@@ -20,6 +22,12 @@ const Y_AXIS_WIDTH: f32 = 64.0;
 pub struct DataViewState {
     /// Auxiliary channels the user asked to see, by name (kept when switching runs).
     pub shown_aux: BTreeSet<String>,
+    /// A segment boundary being dragged.
+    pub segment_drag: Option<EdgeDrag>,
+    /// The pointer was on a segment boundary last frame (the plots then do not pan).
+    pub on_boundary: bool,
+    /// Time ↔ screen of the top plot last frame (tests use it to find a boundary).
+    pub last_transform: Option<egui_plot::PlotTransform>,
 }
 
 pub fn data_ui(
@@ -29,7 +37,7 @@ pub fn data_ui(
     state: &mut DataViewState,
     cache: &Derived,
 ) -> Vec<Command> {
-    let commands = Vec::new();
+    let mut commands = Vec::new();
     let Some(index) = selected_run else {
         ui.label(RichText::new("Select a run in the list on the left.").color(theme::HINT));
         return commands;
@@ -39,6 +47,10 @@ pub fn data_ui(
     };
 
     header_ui(ui, entry);
+    let ident = cache.ident.as_ref().filter(|ident| ident.run_index == index);
+    if let Some(ident) = ident {
+        commands.extend(segments_header_ui(ui, &ident.segments, ident.segments_are_automatic()));
+    }
     let aux: Vec<&Trace> = run_traces.aux().collect();
     if !aux.is_empty() {
         aux_toggles_ui(ui, &aux, state);
@@ -50,8 +62,46 @@ pub fn data_ui(
         .chain(run_traces.outputs())
         .chain(aux.iter().copied().filter(|t| state.shown_aux.contains(&t.name)))
         .collect();
-    plots_ui(ui, index, &shown);
+    let overlay = ident.and_then(|ident| ident.segments.as_ref().ok()).map(|segments| SegmentOverlay {
+        segments,
+        t0_secs: entry.run.t_secs.first().copied().unwrap_or(0.0),
+        dt_secs: entry.run.dt_secs,
+        samples: entry.run.len(),
+    });
+    commands.extend(plots_ui(ui, index, &shown, overlay.as_ref(), state));
     commands
+}
+
+fn segments_header_ui(
+    ui: &mut egui::Ui,
+    segments: &Result<Vec<crate::core::segment::Segment>, String>,
+    automatic: bool,
+) -> Option<Command> {
+    let mut command = None;
+    ui.horizontal_wrapped(|ui| {
+        match segments {
+            Ok(segments) => {
+                let how = if automatic { "detected from the input steps" } else { "moved by hand" };
+                ui.label(RichText::new(format!("{} segments, {how}", segments.len())).strong());
+                ui.label(
+                    RichText::new("drag a boundary (yellow line) to move it; the fits are redone on release")
+                        .color(theme::HINT),
+                );
+            }
+            Err(err) => {
+                ui.label(RichText::new(format!("Segments: {err}")).color(theme::ERROR));
+            }
+        }
+        if !automatic
+            && ui
+                .button("Detect again")
+                .on_hover_text("Replace the segments by those detected from the input")
+                .clicked()
+        {
+            command = Some(Command::SetSegments(None));
+        }
+    });
+    command
 }
 
 fn header_ui(ui: &mut egui::Ui, entry: &SessionRun) {
@@ -91,7 +141,15 @@ fn aux_toggles_ui(ui: &mut egui::Ui, aux: &[&Trace], state: &mut DataViewState) 
     });
 }
 
-fn plots_ui(ui: &mut egui::Ui, run_index: usize, traces: &[&Trace]) {
+fn plots_ui(
+    ui: &mut egui::Ui,
+    run_index: usize,
+    traces: &[&Trace],
+    overlay: Option<&SegmentOverlay<'_>>,
+    state: &mut DataViewState,
+) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let on_boundary = std::mem::take(&mut state.on_boundary) || state.segment_drag.is_some();
     let count = traces.len().max(1) as f32;
     let spacing = ui.spacing().item_spacing.y;
     let available = ui.available_height() - spacing * (count - 1.0);
@@ -110,19 +168,47 @@ fn plots_ui(ui: &mut egui::Ui, run_index: usize, traces: &[&Trace]) {
                 .x_grid_spacer(plot_util::grid_125_x)
                 .y_grid_spacer(plot_util::grid_125_y)
                 // Time tick labels only under the bottom plot: the axes are linked.
-                .show_axes([last, true]);
+                .show_axes([last, true])
+                .allow_drag(!on_boundary);
             if last {
                 plot = plot.x_axis_label("time [s]");
             }
-            plot.show(ui, |plot_ui| {
+            let shown = plot.show(ui, |plot_ui| {
+                if let Some(overlay) = overlay {
+                    let dragged = segments_ui::interact_segments(
+                        plot_ui,
+                        overlay,
+                        &mut state.segment_drag,
+                        &mut state.on_boundary,
+                    );
+                    commands.extend(dragged);
+                    let label_y = (i == 0).then(|| label_height(trace));
+                    segments_ui::draw_segments(plot_ui, overlay, state.segment_drag.as_ref(), label_y);
+                }
                 plot_ui.line(
                     Line::new(trace.name.as_str(), PlotPoints::from(trace.points.as_slice()))
                         .color(trace_colour(trace.kind))
                         .width(1.5),
                 );
             });
+            if i == 0 {
+                state.last_transform = Some(shown.transform);
+            }
         }
     });
+    if state.on_boundary {
+        ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+    }
+    commands
+}
+
+/// A little above the highest sample of the trace.
+fn label_height(trace: &Trace) -> f64 {
+    let (lo, hi) = trace
+        .points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.y), hi.max(p.y)));
+    if lo.is_finite() { hi + 0.12 * (hi - lo).max(1e-9) } else { 0.0 }
 }
 
 fn trace_colour(kind: ChannelKind) -> egui::Color32 {

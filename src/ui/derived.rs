@@ -1,10 +1,13 @@
-//! Data computed from the session and recomputed when its revision changes: for now the plot
-//! traces of each run. Later views add their caches (models, Bode curves, …) here.
+//! Data computed from the session and recomputed when its revision changes: the plot traces of
+//! each run and the identification (see [`model_cache`](super::model_cache)), plus the live preview
+//! of a cluster drag.
 use std::sync::Arc;
 
 use egui_plot::PlotPoint;
 
+use super::model_cache::{IdentCache, LiveModel, OutputCache, Preview};
 use super::session::Session;
+use crate::core::cluster::{Cluster, ClusterEval};
 use crate::core::run::{Channel, Run};
 
 /// Which part of a run a channel is.
@@ -74,6 +77,20 @@ pub struct Derived {
     revision: Option<u64>,
     /// One entry per session run, same order.
     pub runs: Vec<RunTraces>,
+    /// The identification; `None` when the session has no identification run.
+    pub ident: Option<IdentCache>,
+    /// The live path on the clusters being dragged.
+    pub preview: Option<Preview>,
+}
+
+/// What a model view shows for one output: the committed model or, during a drag, the preview.
+pub struct LiveView<'a> {
+    pub output: &'a OutputCache,
+    pub clusters: &'a [Cluster],
+    pub evals: &'a Result<Vec<ClusterEval>, String>,
+    pub live: &'a Result<LiveModel, String>,
+    /// The clusters are being dragged: the model is a preview, centroids not polished.
+    pub is_preview: bool,
 }
 
 impl Derived {
@@ -91,7 +108,50 @@ impl Derived {
                 None => RunTraces::new(&entry.run),
             })
             .collect();
+        self.ident = IdentCache::refresh(self.ident.take(), session);
+        self.preview = None;
         self.revision = Some(session.revision);
+    }
+
+    /// Run the live path on clusters being dragged (`None`: no drag). Returns true when the
+    /// preview changed, so the caller can ask for another frame.
+    pub fn set_preview(&mut self, request: Option<(&str, &[Cluster])>) -> bool {
+        let Some((output, clusters)) = request else {
+            return self.preview.take().is_some();
+        };
+        if self.preview.as_ref().is_some_and(|p| p.output == output && p.clusters == clusters) {
+            return false;
+        }
+        self.preview =
+            self.ident.as_ref().and_then(|ident| Preview::compute(ident, output, clusters.to_vec()));
+        true
+    }
+
+    /// The output's cache, if the identification has it.
+    pub fn output(&self, name: &str) -> Option<&OutputCache> {
+        self.ident.as_ref()?.output(name)
+    }
+
+    /// The output's model as the views should show it (the drag preview when there is one).
+    pub fn live_view(&self, name: &str) -> Option<LiveView<'_>> {
+        let output = self.output(name)?;
+        Some(match self.preview.as_ref().filter(|p| p.output == name) {
+            Some(p) => {
+                LiveView { output, clusters: &p.clusters, evals: &p.evals, live: &p.live, is_preview: true }
+            }
+            None => LiveView {
+                output,
+                clusters: &output.clusters,
+                evals: &output.evals,
+                live: &output.live,
+                is_preview: false,
+            },
+        })
+    }
+
+    /// The names of the outputs being identified.
+    pub fn output_names(&self) -> Vec<&str> {
+        self.ident.as_ref().map(|i| i.outputs.iter().map(|o| o.name.as_str()).collect()).unwrap_or_default()
     }
 
     pub fn revision(&self) -> Option<u64> {

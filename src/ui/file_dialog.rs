@@ -1,5 +1,6 @@
-//! The native "open file" dialog, run off the UI thread so the app keeps repainting while it is
-//! open. The result comes back through a channel that the app polls each frame.
+//! The native file dialogs (open runs, import/export a model, open/save a project), run off the UI
+//! thread so the app keeps repainting while one is open. The result comes back through a channel
+//! that the app polls each frame.
 use std::future::Future;
 use std::path::PathBuf;
 use std::pin::pin;
@@ -8,8 +9,18 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::task::{Context, Poll, Wake, Waker};
 use std::thread::{self, Thread};
 
+use super::command::FileAction;
+
+/// What the chosen files are for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PickPurpose {
+    Runs,
+    File(FileAction),
+}
+
 /// A file dialog in progress.
 pub struct PendingPick {
+    pub purpose: PickPurpose,
     rx: Receiver<Vec<PathBuf>>,
 }
 
@@ -33,15 +44,59 @@ impl PendingPick {
         }
         // Created here (the UI thread, as some platforms require), awaited on a worker thread.
         let future = dialog.pick_files();
+        Self::spawn(PickPurpose::Runs, repaint, async move {
+            future.await.unwrap_or_default().iter().map(|f| f.path().to_owned()).collect()
+        })
+    }
+
+    /// Open a dialog to choose a model or project file to read or write.
+    pub fn open_file(
+        action: FileAction,
+        start_dir: Option<PathBuf>,
+        repaint: impl Fn() + Send + 'static,
+    ) -> Self {
+        let (title, filter, extension, default_name) = match action {
+            FileAction::ExportModel => ("Export model", "Model (JSON)", "json", "model.json"),
+            FileAction::ImportModel => ("Import model", "Model (JSON)", "json", "model.json"),
+            FileAction::SaveProject => ("Save project", "Project (TOML)", "toml", "project.toml"),
+            FileAction::OpenProject => ("Open project", "Project (TOML)", "toml", "project.toml"),
+        };
+        let mut dialog = rfd::AsyncFileDialog::new()
+            .set_title(title)
+            .add_filter(filter, &[extension])
+            .add_filter("All files", &["*"]);
+        if let Some(dir) = start_dir {
+            dialog = dialog.set_directory(dir);
+        }
+        let purpose = PickPurpose::File(action);
+        match action {
+            FileAction::ExportModel | FileAction::SaveProject => {
+                let future = dialog.set_file_name(default_name).save_file();
+                Self::spawn(purpose, repaint, async move {
+                    future.await.map(|f| f.path().to_owned()).into_iter().collect()
+                })
+            }
+            FileAction::ImportModel | FileAction::OpenProject => {
+                let future = dialog.pick_file();
+                Self::spawn(purpose, repaint, async move {
+                    future.await.map(|f| f.path().to_owned()).into_iter().collect()
+                })
+            }
+        }
+    }
+
+    fn spawn(
+        purpose: PickPurpose,
+        repaint: impl Fn() + Send + 'static,
+        future: impl Future<Output = Vec<PathBuf>> + Send + 'static,
+    ) -> Self {
         let (tx, rx) = mpsc::channel();
         thread::spawn(move || {
-            let files = block_on(future).unwrap_or_default();
-            let paths = files.iter().map(|f| f.path().to_owned()).collect();
             // The receiver is gone only if the app closed; nothing to do then.
-            let _ = tx.send(paths);
+            let _ = tx.send(block_on(future));
             repaint();
         });
-        Self { rx }
+        Self { purpose, rx }
     }
 
     pub fn poll(&self) -> PickPoll {

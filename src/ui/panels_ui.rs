@@ -3,17 +3,27 @@
 use egui::RichText;
 
 use super::app::{ViewState, hint};
-use super::command::Command;
+use super::command::{Command, FileAction};
 use super::session::{LoadFailure, Role, Session, file_label};
+use super::setup::History;
 use super::theme;
 
-pub fn menu_bar_ui(ui: &mut egui::Ui) -> Vec<Command> {
+pub fn menu_bar_ui(ui: &mut egui::Ui, history: &History) -> Vec<Command> {
     let mut commands = Vec::new();
     egui::MenuBar::new().ui(ui, |ui| {
         ui.menu_button("File", |ui| {
-            if ui.button("Open run…").clicked() {
-                commands.push(Command::OpenRunDialog);
-                ui.close();
+            let items = [
+                ("Open run…", Command::OpenRunDialog),
+                ("Open project…", Command::ChooseFile(FileAction::OpenProject)),
+                ("Save project…", Command::ChooseFile(FileAction::SaveProject)),
+                ("Import model (clusters)…", Command::ChooseFile(FileAction::ImportModel)),
+                ("Export model…", Command::ChooseFile(FileAction::ExportModel)),
+            ];
+            for (label, command) in items {
+                if ui.button(label).clicked() {
+                    commands.push(command);
+                    ui.close();
+                }
             }
             ui.separator();
             if ui.button("Quit").clicked() {
@@ -21,7 +31,46 @@ pub fn menu_bar_ui(ui: &mut egui::Ui) -> Vec<Command> {
                 ui.close();
             }
         });
+        ui.menu_button("Edit", |ui| {
+            if ui.add_enabled(history.can_undo(), egui::Button::new("Undo").shortcut_text("Ctrl+Z")).clicked()
+            {
+                commands.push(Command::Undo);
+                ui.close();
+            }
+            let redo = egui::Button::new("Redo").shortcut_text("Ctrl+Shift+Z");
+            if ui.add_enabled(history.can_redo(), redo).clicked() {
+                commands.push(Command::Redo);
+                ui.close();
+            }
+        });
     });
+    commands
+}
+
+/// Model and project file errors, each with its whole message.
+pub fn errors_ui(ctx: &egui::Context, errors: &[String]) -> Vec<Command> {
+    let mut commands = Vec::new();
+    egui::Window::new("Error")
+        .id(egui::Id::unique("file_errors_window"))
+        .collapsible(false)
+        .default_width(560.0)
+        .pivot(egui::Align2::CENTER_TOP)
+        .default_pos(ctx.content_rect().center_top() + egui::vec2(0.0, 120.0))
+        .show(ctx, |ui| {
+            for (i, message) in errors.iter().enumerate() {
+                ui.group(|ui| {
+                    ui.set_width(ui.available_width());
+                    ui.add(
+                        egui::Label::new(RichText::new(message).monospace().color(theme::ERROR))
+                            .wrap()
+                            .selectable(true),
+                    );
+                    if ui.button("Dismiss").clicked() {
+                        commands.push(Command::DismissError(i));
+                    }
+                });
+            }
+        });
     commands
 }
 

@@ -1,4 +1,5 @@
-//! The session: what the user has loaded and decided (runs, their roles and load options).
+//! The session: what the user has loaded and decided (runs, their roles and load options, and the
+//! identification setup: segments, per-output settings and clusters).
 //!
 //! It is the only app state that is saved. The run data itself is not saved: on start the runs are
 //! read again from their files with the saved options.
@@ -7,6 +8,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use super::setup::ModelSetup;
 use crate::core::run::Run;
 use crate::io::csv_run::{ColumnMap, LoadOptions, RunFileError, load_run};
 
@@ -137,7 +139,7 @@ impl SessionRun {
         if self.run.name.is_empty() { file_label(&self.path) } else { self.run.name.clone() }
     }
 
-    fn source(&self) -> RunSource {
+    pub fn source(&self) -> RunSource {
         RunSource { path: self.path.clone(), role: self.role, options: (&self.options).into() }
     }
 }
@@ -163,27 +165,29 @@ impl LoadFailure {
     }
 }
 
-/// The user's work: loaded runs with their roles and options. `revision` changes whenever the
-/// session does, so derived data can tell it is stale.
+/// The user's work: loaded runs with their roles and options, and the identification setup.
+/// `revision` changes whenever the session does, so derived data can tell it is stale.
 #[derive(Clone, Debug, Default)]
 pub struct Session {
     pub runs: Vec<SessionRun>,
+    pub setup: ModelSetup,
     pub revision: u64,
 }
 
 impl Session {
-    /// The saved form (paths, roles, options; no data).
+    /// The saved form (paths, roles, options, setup; no data).
     pub fn to_saved(&self) -> SavedSession {
         SavedSession {
             format_version: SavedSession::FORMAT_VERSION,
             runs: self.runs.iter().map(SessionRun::source).collect(),
+            setup: self.setup.clone(),
         }
     }
 
     /// Read every saved run again. Runs that fail to load are returned as failures (the user sees
     /// them and can remap them); the others make up the session.
     pub fn restore(saved: &SavedSession) -> (Self, Vec<LoadFailure>) {
-        let mut session = Self::default();
+        let mut session = Self { setup: saved.setup.clone(), ..Self::default() };
         let mut failures = Vec::new();
         for source in &saved.runs {
             match SessionRun::load(&source.path, source.role, (&source.options).into()) {
@@ -206,12 +210,21 @@ impl Session {
             })
             .filter(|source| source.path.is_file())
             .collect();
-        Some(Self::restore(&SavedSession { format_version: SavedSession::FORMAT_VERSION, runs }))
+        Some(Self::restore(&SavedSession {
+            format_version: SavedSession::FORMAT_VERSION,
+            runs,
+            setup: ModelSetup::default(),
+        }))
     }
 
     /// The first run with this role.
     pub fn first_with_role(&self, role: Role) -> Option<usize> {
         self.runs.iter().position(|r| r.role == role)
+    }
+
+    /// The identification run (the first with that role), with its index.
+    pub fn ident_run(&self) -> Option<(usize, &SessionRun)> {
+        self.runs.iter().enumerate().find(|(_, r)| r.role == Role::Identification)
     }
 }
 
@@ -240,6 +253,8 @@ pub const BUNDLED_RUNS: [(&str, Role); 4] = [
 pub struct SavedSession {
     pub format_version: u32,
     pub runs: Vec<RunSource>,
+    /// Segments, settings and clusters (absent in sessions saved before they existed).
+    pub setup: ModelSetup,
 }
 
 impl SavedSession {

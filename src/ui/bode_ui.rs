@@ -1,0 +1,143 @@
+//! The Bode view: magnitude and phase of every segment's ARX model (thin, coloured by segment) and
+//! of the reduced linear block G(z) (thick), against ω in rad/s on a log axis; the chirp run's
+//! empirical frequency response on top when the cache has one.
+use egui_plot::{GridInput, GridMark, Legend, Line, MarkerShape, Plot, PlotPoints, Points};
+
+use super::derived::{Derived, LiveView};
+use super::model_cache::EmpiricalPoint;
+use super::model_ui;
+use super::plot_util;
+use super::theme;
+use crate::core::tf::BodePoint;
+
+const Y_AXIS_WIDTH: f32 = 64.0;
+
+#[derive(Default)]
+pub struct BodeViewState {
+    /// Draw the segment models (they can hide the reduced model at high frequency).
+    pub hide_segments: bool,
+}
+
+/// Log-ω grid (x is log10 ω): decades labelled, 2…9 thin.
+fn log_grid(input: GridInput) -> Vec<GridMark> {
+    let (lo, hi) = input.bounds;
+    let mut marks = Vec::new();
+    let (first, last) = (lo.floor() as i32 - 1, hi.ceil() as i32 + 1);
+    for decade in first..=last {
+        let d = f64::from(decade);
+        marks.push(GridMark { value: d, step_size: 1.0 });
+        for k in 2..10 {
+            marks.push(GridMark { value: d + f64::from(k).log10(), step_size: 0.1 });
+        }
+    }
+    marks.retain(|m| m.value >= lo && m.value <= hi);
+    marks
+}
+
+/// Labels at decades only: 0.1, 1, 10 …
+fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+    if (mark.value - mark.value.round()).abs() > 1e-6 {
+        return String::new();
+    }
+    let omega = 10f64.powf(mark.value.round());
+    if omega >= 1.0 { format!("{omega:.0}") } else { format!("{omega}") }
+}
+
+/// The two plots of the view.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Part {
+    Magnitude,
+    Phase,
+}
+
+impl Part {
+    fn value(self, p: &BodePoint) -> f64 {
+        match self {
+            Self::Magnitude => p.mag_db,
+            Self::Phase => p.phase_deg,
+        }
+    }
+}
+
+fn curve(points: &[BodePoint], part: Part) -> PlotPoints<'static> {
+    points.iter().map(|p| [p.omega_rad_s.log10(), part.value(p)]).collect()
+}
+
+pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache: &Derived) {
+    let Some(view) = cache.live_view(output) else { return };
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut state.hide_segments, "Hide segment models");
+        model_ui::hint(
+            ui,
+            "Thin: each segment's high-order ARX model. Thick: the reduced linear block G(z) (its gain is \
+             fitted so that v is in output units). ω in rad/s.",
+        );
+    });
+    if !model_ui::model_state_ui(ui, &view) && view.output.segment_bode.is_empty() {
+        return;
+    }
+    let spacing = ui.spacing().item_spacing.y;
+    let height = ((ui.available_height() - spacing) / 2.0).max(120.0);
+    let group = egui::Id::unique(("bode_omega_axis", output));
+    let unit = &view.output.unit;
+    for part in [Part::Magnitude, Part::Phase] {
+        let last = part == Part::Phase;
+        let y_label = if last { "phase [deg]" } else { "magnitude [dB]" };
+        let mut plot = Plot::new(("bode", last, output))
+            .height(height)
+            .link_axis(group, [true, false])
+            .link_cursor(group, [true, false])
+            .x_grid_spacer(log_grid)
+            .x_axis_formatter(log_label)
+            .y_grid_spacer(plot_util::grid_125_y)
+            .y_axis_label(y_label)
+            .y_axis_min_width(Y_AXIS_WIDTH)
+            .show_axes([last, true]);
+        if last {
+            plot = plot.x_axis_label("ω [rad/s]");
+        } else {
+            plot =
+                plot.legend(Legend::default().position(egui_plot::Corner::LeftBottom).background_alpha(0.85));
+        }
+        plot.show(ui, |plot_ui| {
+            draw_curves(plot_ui, &view, state, part);
+            draw_empirical(plot_ui, &view.output.empirical_bode, part);
+        });
+    }
+    if unit.is_empty() {
+        model_ui::hint(ui, "The output has no unit; magnitudes are in output units per input unit.");
+    }
+}
+
+fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: &BodeViewState, part: Part) {
+    if !state.hide_segments
+        && let Ok(fits) = &view.output.fits
+    {
+        for (i, (points, segment)) in view.output.segment_bode.iter().zip(&fits.segments).enumerate() {
+            let name = format!("segment {}", segment.label);
+            plot_ui.line(Line::new(name, curve(points, part)).color(theme::segment_colour(i)).width(1.0));
+        }
+    }
+    if let Ok(live) = view.live {
+        plot_ui
+            .line(Line::new("reduced model G(z)", curve(&live.bode, part)).color(theme::REDUCED).width(3.0));
+    }
+}
+
+/// The hook for the chirp's empirical points: (ω, |G| dB, ∠G deg, coherence). Points with low
+/// coherence are drawn faint.
+fn draw_empirical(plot_ui: &mut egui_plot::PlotUi<'_>, points: &[EmpiricalPoint], part: Part) {
+    if points.is_empty() {
+        return;
+    }
+    for (omega, mag_db, phase_deg, coherence) in points {
+        let y = if part == Part::Magnitude { *mag_db } else { *phase_deg };
+        let colour = theme::EMPIRICAL.gamma_multiply(coherence.clamp(0.2, 1.0) as f32);
+        plot_ui.points(
+            Points::new("chirp (empirical)", vec![[omega.log10(), y]])
+                .shape(MarkerShape::Diamond)
+                .radius(3.5)
+                .color(colour),
+        );
+    }
+}

@@ -1,0 +1,155 @@
+//! Model and project files: export and import model.json, save and open a project. Every failure
+//! is shown in the error window and leaves the session as it was.
+use std::path::Path;
+
+use anyhow::{Result, anyhow, bail};
+
+use super::app::App;
+use super::project_io;
+use super::session::file_label;
+use crate::io::atomic::write_atomic;
+use crate::io::model_file::{ModelFile, SignalInfo, read_model, write_model};
+use crate::io::project::load_project;
+
+/// A model file's sample time may differ from the identification run's by this fraction.
+const DT_TOLERANCE: f64 = 0.02;
+
+impl App {
+    /// Show an error until dismissed (and name it in the status bar).
+    pub(super) fn push_error(&mut self, error: &anyhow::Error) {
+        let message = format!("{error:#}");
+        self.view.status = Some(message.lines().next().unwrap_or_default().to_owned());
+        self.view.errors.retain(|e| *e != message);
+        self.view.errors.push(message);
+    }
+
+    pub(super) fn export_model(&mut self, path: &Path) {
+        self.refresh();
+        match self.model_file().and_then(|(file, skipped)| {
+            write_model(path, &file)?;
+            Ok((file.outputs.len(), skipped))
+        }) {
+            Ok((written, skipped)) => {
+                let mut status = format!("Exported {written} output model(s) to {}", file_label(path));
+                if !skipped.is_empty() {
+                    status += &format!("; not exported (no valid model): {}", skipped.join(", "));
+                }
+                self.view.status = Some(status);
+            }
+            Err(err) => self.push_error(&err.context(format!("exporting the model to {}", path.display()))),
+        }
+    }
+
+    /// The committed model of every output that has one, and the names of those that have none.
+    fn model_file(&self) -> Result<(ModelFile, Vec<String>)> {
+        let Some(ident) = &self.cache.ident else {
+            bail!("there is no identification run, so there is no model");
+        };
+        let input = SignalInfo { name: ident.run.input.name.clone(), unit: ident.run.input.unit.clone() };
+        let mut file = ModelFile::new(ident.run.dt_secs, input);
+        let mut skipped = Vec::new();
+        for output in &ident.outputs {
+            match &output.live {
+                Ok(live) => file.push(&live.model, &output.unit),
+                Err(_) => skipped.push(output.name.clone()),
+            }
+        }
+        if file.outputs.is_empty() {
+            bail!("no output has a valid model ({})", skipped.join(", "));
+        }
+        Ok((file, skipped))
+    }
+
+    /// Take the clusters of every output the file and the identification run share, as one
+    /// undoable change; the model is fitted again on the session's runs.
+    pub(super) fn import_model(&mut self, path: &Path) {
+        self.refresh();
+        let clusters = read_model(path).and_then(|file| {
+            let Some(ident) = &self.cache.ident else {
+                bail!("open an identification run first: clusters are fitted on it");
+            };
+            let ratio = file.dt_secs / ident.run.dt_secs;
+            if (ratio - 1.0).abs() > DT_TOLERANCE {
+                bail!(
+                    "the model is sampled every {:.5} s but the identification run every {:.5} s",
+                    file.dt_secs,
+                    ident.run.dt_secs
+                );
+            }
+            let shared: Vec<_> = file
+                .outputs
+                .iter()
+                .filter(|o| ident.output(&o.name).is_some())
+                .map(|o| (o.name.clone(), o.clusters.clone()))
+                .collect();
+            if shared.is_empty() {
+                let in_file: Vec<&str> = file.outputs.iter().map(|o| o.name.as_str()).collect();
+                bail!(
+                    "the model's outputs ({}) are not outputs of the identification run ({})",
+                    in_file.join(", "),
+                    ident.outputs.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+                );
+            }
+            Ok(shared)
+        });
+        match clusters {
+            Ok(clusters) => {
+                let names: Vec<String> = clusters.iter().map(|(name, _)| name.clone()).collect();
+                let status = format!(
+                    "Imported the clusters of {} from {}; the model is fitted again on the session's runs",
+                    names.join(", "),
+                    file_label(path)
+                );
+                self.edit_setup(&status, |setup| {
+                    for (name, clusters) in clusters {
+                        setup.output_mut(&name).clusters = Some(clusters);
+                    }
+                });
+                self.view.status = Some(status);
+            }
+            Err(err) => self.push_error(&err.context("importing a model (the clusters were kept)")),
+        }
+    }
+
+    pub(super) fn save_project(&mut self, path: &Path) {
+        let written = project_io::project_text(&self.session, path)
+            .and_then(|(text, notes)| write_atomic(path, text.as_bytes()).map(|()| notes));
+        match written {
+            Ok(notes) => {
+                let mut status = format!("Saved the project as {}", file_label(path));
+                for note in notes {
+                    status += &format!("; {note}");
+                }
+                self.view.status = Some(status);
+            }
+            Err(err) => self.push_error(&err.context(format!("saving the project to {}", path.display()))),
+        }
+    }
+
+    /// Replace the session by the project's, unless none of its runs can be read.
+    pub(super) fn open_project(&mut self, path: &Path) {
+        let project = match load_project(path) {
+            Ok(project) => project,
+            Err(err) => return self.push_error(&err.context("opening a project (the session was kept)")),
+        };
+        let (mut session, failures) = project_io::session_from_project(&project);
+        if session.runs.is_empty() {
+            let why = failures.iter().map(|f| f.message.as_str()).collect::<Vec<_>>().join("; ");
+            let err = anyhow!("none of the project's runs could be read: {why}");
+            return self
+                .push_error(&err.context(format!("opening {} (the session was kept)", path.display())));
+        }
+        session.revision = self.session.revision + 1;
+        let loaded = session.runs.len();
+        let failed = failures.len();
+        let mut app = App::with_failures(session, failures);
+        app.view.tab = self.view.tab;
+        app.view.output = self.view.output.take();
+        *self = app;
+        self.view.status = Some(format!(
+            "Opened project {} ({loaded} run(s){})",
+            file_label(path),
+            if failed > 0 { format!(", {failed} could not be read") } else { String::new() }
+        ));
+    }
+}

@@ -1,0 +1,337 @@
+//! The identification as the model views draw it, recomputed from the session when it changes:
+//! segments of the identification run, then per output the segment ARX fits (the expensive part,
+//! redone only when the run, the segments or the orders change), the automatic cluster proposal,
+//! and the live path (clusters → reduced model → static map → validation runs → Bode).
+//!
+//! While a cluster is dragged, [`Preview`] runs the live path on the dragged clusters every frame
+//! without polishing the centroids (`refine = false`); the committed clusters are polished.
+use std::sync::Arc;
+
+use crate::core::cluster::{self, Cluster, ClusterEval};
+use crate::core::pipeline::{
+    self, GrayBoxModel, OutputSettings, RunPrediction, SegmentFits, auto_clusters, fit_segments, live_update,
+    segments_for,
+};
+use crate::core::run::Run;
+use crate::core::segment::{Segment, SegmentSettings};
+use crate::core::tf::{BodePoint, log_space};
+
+use super::session::{Role, Session};
+use super::setup::OutputSetup;
+
+/// Frequencies of the Bode curves: log-spaced from this to the Nyquist frequency.
+const LOWEST_OMEGA_RAD_S: f64 = 0.05;
+const BODE_POINTS: usize = 400;
+/// Runs sampled more than this fraction off the identification run are not scored.
+const DT_TOLERANCE: f64 = 0.02;
+
+/// A point of an empirical frequency response (e.g. from the chirp run): ω [rad/s], |G| [dB],
+/// ∠G [deg], coherence in 0..=1.
+pub type EmpiricalPoint = (f64, f64, f64, f64);
+
+/// The identification run and everything identified from it.
+pub struct IdentCache {
+    /// Index of the identification run in the session.
+    pub run_index: usize,
+    pub run: Arc<Run>,
+    given_segments: Option<Vec<Segment>>,
+    /// The segments in use: the user's (checked) or the detected ones.
+    pub segments: Result<Vec<Segment>, String>,
+    /// One entry per output of the identification run, in its column order.
+    pub outputs: Vec<OutputCache>,
+}
+
+impl IdentCache {
+    /// Bring `old` (the previous cache, if any) up to date with the session; `None` when the
+    /// session has no identification run.
+    pub fn refresh(old: Option<Self>, session: &Session) -> Option<Self> {
+        let (run_index, entry) = session.ident_run()?;
+        let run = Arc::clone(&entry.run);
+        let given = session.setup.segments.clone();
+        let (segments, mut old_outputs) = match old {
+            Some(old) if Arc::ptr_eq(&old.run, &run) && old.given_segments == given => {
+                (old.segments, old.outputs)
+            }
+            Some(old) => (detect_or_check(&run, given.as_deref()), old.outputs),
+            None => (detect_or_check(&run, given.as_deref()), Vec::new()),
+        };
+        let outputs = run
+            .outputs
+            .iter()
+            .map(|channel| {
+                let mut cache = match old_outputs.iter().position(|o| o.name == channel.name) {
+                    Some(i) => old_outputs.swap_remove(i),
+                    None => OutputCache::new(&channel.name, &channel.unit),
+                };
+                let scored = scored_runs(session, &run, &channel.name, &mut cache.notes);
+                cache.update(&run, &segments, session.setup.output(&channel.name), scored);
+                cache
+            })
+            .collect();
+        Some(Self { run_index, run, given_segments: given, segments, outputs })
+    }
+
+    pub fn output(&self, name: &str) -> Option<&OutputCache> {
+        self.outputs.iter().find(|o| o.name == name)
+    }
+
+    /// True when the segments were detected (the user has not moved them).
+    pub fn segments_are_automatic(&self) -> bool {
+        self.given_segments.is_none()
+    }
+}
+
+fn detect_or_check(run: &Run, given: Option<&[Segment]>) -> Result<Vec<Segment>, String> {
+    segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string())
+}
+
+/// A run a model is scored on.
+#[derive(Clone)]
+struct ScoredSource {
+    index: usize,
+    role: Role,
+    run: Arc<Run>,
+}
+
+/// Validation runs, then chirp runs, that have the output and the identification run's sampling.
+fn scored_runs(session: &Session, ident: &Run, output: &str, notes: &mut Vec<String>) -> Vec<ScoredSource> {
+    notes.clear();
+    let mut scored = Vec::new();
+    for role in [Role::Validation, Role::Chirp] {
+        for (index, entry) in session.runs.iter().enumerate().filter(|(_, r)| r.role == role) {
+            let name = entry.display_name();
+            if entry.run.output(output).is_none() {
+                notes.push(format!("{} run {name} has no {output} column; not scored", role.label()));
+            } else if (entry.run.dt_secs / ident.dt_secs - 1.0).abs() > DT_TOLERANCE {
+                notes.push(format!(
+                    "{} run {name} is sampled every {:.4} s, the identification run every {:.4} s; not scored",
+                    role.label(),
+                    entry.run.dt_secs,
+                    ident.dt_secs
+                ));
+            } else {
+                scored.push(ScoredSource { index, role, run: Arc::clone(&entry.run) });
+            }
+        }
+    }
+    scored
+}
+
+/// A model's simulation of one scored run.
+#[derive(Clone, Debug)]
+pub struct ScoredRun {
+    /// Index of the run in the session.
+    pub index: usize,
+    pub name: String,
+    pub role: Role,
+    pub gray_box: RunPrediction,
+    /// The linear block alone (the "linear" baseline).
+    pub linear: Result<RunPrediction, String>,
+}
+
+/// The live path's result for one set of clusters.
+#[derive(Clone, Debug)]
+pub struct LiveModel {
+    pub model: GrayBoxModel,
+    /// Bode of the reduced linear block at [`OutputCache::omegas_rad_s`].
+    pub bode: Vec<BodePoint>,
+    pub runs: Vec<ScoredRun>,
+    /// The centroids were polished by simulation error (asked for in the settings, not while
+    /// dragging).
+    pub polish_requested: bool,
+}
+
+impl LiveModel {
+    /// Mean gray-box RMSPE over the validation runs (the figure of merit shown while dragging).
+    pub fn mean_validation_rmspe(&self) -> Option<f64> {
+        let values: Vec<f64> = self
+            .runs
+            .iter()
+            .filter(|r| r.role == Role::Validation)
+            .map(|r| r.gray_box.metrics.rmspe_pct)
+            .collect();
+        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+    }
+}
+
+#[derive(Clone, PartialEq)]
+struct FitsKey {
+    segments: Vec<Segment>,
+    orders: crate::core::arx::ArxOrders,
+}
+
+/// Everything identified for one output.
+pub struct OutputCache {
+    pub name: String,
+    pub unit: String,
+    /// The setup the results below were computed for.
+    pub setup: OutputSetup,
+    source: Option<Arc<Run>>,
+    fits_key: Option<FitsKey>,
+    pub fits: Result<Arc<SegmentFits>, String>,
+    pub omegas_rad_s: Vec<f64>,
+    /// Bode of every segment's ARX model at `omegas_rad_s`, in segment order.
+    pub segment_bode: Vec<Vec<BodePoint>>,
+    /// The automatic proposal for the current fits.
+    pub automatic: Result<Vec<Cluster>, String>,
+    /// The clusters in use: the user's, else the automatic proposal.
+    pub clusters: Vec<Cluster>,
+    pub evals: Result<Vec<ClusterEval>, String>,
+    scored: Vec<ScoredSource>,
+    pub live: Result<LiveModel, String>,
+    /// The chirp run's empirical frequency response; drawn on the Bode view when not empty.
+    pub empirical_bode: Vec<EmpiricalPoint>,
+    /// Runs that were not scored, and why.
+    pub notes: Vec<String>,
+}
+
+impl OutputCache {
+    fn new(name: &str, unit: &str) -> Self {
+        Self {
+            name: name.to_owned(),
+            unit: unit.to_owned(),
+            setup: OutputSetup::for_output(name),
+            source: None,
+            fits_key: None,
+            fits: Err("not computed yet".into()),
+            omegas_rad_s: Vec::new(),
+            segment_bode: Vec::new(),
+            automatic: Err("not computed yet".into()),
+            clusters: Vec::new(),
+            evals: Err("not computed yet".into()),
+            scored: Vec::new(),
+            live: Err("not computed yet".into()),
+            empirical_bode: Vec::new(),
+            notes: Vec::new(),
+        }
+    }
+
+    /// `name [unit]`.
+    pub fn label(&self) -> String {
+        if self.unit.is_empty() { self.name.clone() } else { format!("{} [{}]", self.name, self.unit) }
+    }
+
+    fn update(
+        &mut self,
+        run: &Arc<Run>,
+        segments: &Result<Vec<Segment>, String>,
+        setup: OutputSetup,
+        scored: Vec<ScoredSource>,
+    ) {
+        let same_run = self.source.as_ref().is_some_and(|s| Arc::ptr_eq(s, run));
+        let key =
+            segments.as_ref().ok().map(|s| FitsKey { segments: s.clone(), orders: setup.settings.orders });
+        let refit = !same_run || key != self.fits_key || self.fits_key.is_none();
+        if refit {
+            self.fits = match segments {
+                Ok(segments) => fit_segments(run, &self.name, segments, setup.settings.orders)
+                    .map(Arc::new)
+                    .map_err(|e| e.to_string()),
+                Err(err) => Err(format!("no segments: {err}")),
+            };
+            self.omegas_rad_s =
+                log_space(LOWEST_OMEGA_RAD_S, std::f64::consts::PI / run.dt_secs, BODE_POINTS);
+            self.segment_bode = match &self.fits {
+                Ok(fits) => fits.models.iter().map(|m| m.bode_response(&self.omegas_rad_s)).collect(),
+                Err(_) => Vec::new(),
+            };
+        }
+        let same_scored = scored.len() == self.scored.len()
+            && scored
+                .iter()
+                .zip(&self.scored)
+                .all(|(a, b)| a.index == b.index && Arc::ptr_eq(&a.run, &b.run));
+        if !refit && same_scored && setup == self.setup {
+            return;
+        }
+        if refit || setup.settings.cluster != self.setup.settings.cluster {
+            self.automatic = match &self.fits {
+                Ok(fits) => auto_clusters(fits, &setup.settings).map_err(|e| e.to_string()),
+                Err(err) => Err(err.clone()),
+            };
+        }
+        self.clusters = match &setup.clusters {
+            Some(clusters) => clusters.clone(),
+            None => self.automatic.clone().unwrap_or_default(),
+        };
+        self.source = Some(Arc::clone(run));
+        self.fits_key = key;
+        self.scored = scored;
+        self.setup = setup;
+        let (evals, live) = self.evaluate(run, &self.clusters, &self.setup.settings);
+        self.evals = evals;
+        self.live = live;
+    }
+
+    /// Cluster evaluations and the live path for `clusters` with `settings`.
+    fn evaluate(
+        &self,
+        run: &Run,
+        clusters: &[Cluster],
+        settings: &OutputSettings,
+    ) -> (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>) {
+        let fits = match &self.fits {
+            Ok(fits) => fits,
+            Err(err) => return (Err(err.clone()), Err(err.clone())),
+        };
+        if clusters.is_empty() {
+            let why = match (&self.setup.clusters, &self.automatic) {
+                (None, Err(err)) => format!("the automatic cluster proposal failed: {err}"),
+                _ => "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned(),
+            };
+            return (Ok(Vec::new()), Err(why));
+        }
+        let evals = cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
+            .map_err(|e| e.to_string());
+        (evals, self.live_path(fits, run, clusters, settings))
+    }
+
+    fn live_path(
+        &self,
+        fits: &SegmentFits,
+        run: &Run,
+        clusters: &[Cluster],
+        settings: &OutputSettings,
+    ) -> Result<LiveModel, String> {
+        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
+        let result = live_update(fits, run, clusters, settings, &runs, &self.omegas_rad_s)
+            .map_err(|e| e.to_string())?;
+        let scored = self
+            .scored
+            .iter()
+            .zip(result.predictions)
+            .map(|(source, gray_box)| ScoredRun {
+                index: source.index,
+                name: source.run.name.clone(),
+                role: source.role,
+                linear: pipeline::predict_linear(&result.model.wiener.linear, &source.run, &self.name)
+                    .map_err(|e| e.to_string()),
+                gray_box,
+            })
+            .collect();
+        Ok(LiveModel {
+            model: result.model,
+            bode: result.bode,
+            runs: scored,
+            polish_requested: settings.refine,
+        })
+    }
+}
+
+/// The live path on clusters being dragged (not yet committed).
+pub struct Preview {
+    pub output: String,
+    pub clusters: Vec<Cluster>,
+    pub evals: Result<Vec<ClusterEval>, String>,
+    pub live: Result<LiveModel, String>,
+}
+
+impl Preview {
+    /// The live path on `clusters` for `output`, without polishing (fast enough for every frame).
+    pub fn compute(ident: &IdentCache, output: &str, clusters: Vec<Cluster>) -> Option<Self> {
+        let cache = ident.output(output)?;
+        let settings = OutputSettings { refine: false, ..cache.setup.settings.clone() };
+        let (evals, live) = cache.evaluate(&ident.run, &clusters, &settings);
+        Some(Self { output: output.to_owned(), clusters, evals, live })
+    }
+}

@@ -1,0 +1,154 @@
+//! Pieces the model views share: the output selector, error and hint lines, number formats, the
+//! cluster status in words and the metrics table.
+use egui::RichText;
+use num_complex::Complex64;
+
+use super::command::Command;
+use super::derived::{Derived, LiveView};
+use super::model_cache::ScoredRun;
+use super::theme;
+use crate::core::cluster::{ClusterEval, ClusterStatus};
+use crate::core::metrics::Metrics;
+
+/// "Output: [shaft_speed_rpm] [thrust_n]"; each output has its own segments fits and clusters.
+pub fn output_bar_ui(ui: &mut egui::Ui, cache: &Derived, selected: &str) -> Option<Command> {
+    let mut command = None;
+    ui.horizontal(|ui| {
+        ui.label("Output:");
+        for name in cache.output_names() {
+            let label = cache.output(name).map_or_else(|| name.to_owned(), |o| o.label());
+            if ui.selectable_label(name == selected, label).clicked() && name != selected {
+                command = Some(Command::SelectOutput(name.to_owned()));
+            }
+        }
+    });
+    command
+}
+
+pub fn hint(ui: &mut egui::Ui, text: &str) {
+    ui.label(RichText::new(text).color(theme::HINT));
+}
+
+pub fn error_ui(ui: &mut egui::Ui, text: &str) {
+    ui.add(egui::Label::new(RichText::new(text).color(theme::ERROR)).wrap());
+}
+
+/// The model's state in one line above a view: an error instead of a model, or a preview note.
+/// Returns false when there is no model to draw.
+pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
+    match view.live {
+        Err(err) => {
+            error_ui(ui, &format!("No model for {}: {err}", view.output.name));
+            false
+        }
+        Ok(_) if view.is_preview => {
+            ui.label(
+                RichText::new("Preview while a cluster is dragged (centroids not polished)")
+                    .color(theme::WARNING),
+            );
+            true
+        }
+        Ok(_) => true,
+    }
+}
+
+/// `0.9369` or `0.8404±0.1982i` (conjugate pairs once).
+pub fn complex_text(z: Complex64) -> String {
+    if z.im.abs() < 5e-5 { format!("{:.4}", z.re) } else { format!("{:.4}{:+.4}i", z.re, z.im) }
+}
+
+/// Roots with conjugate pairs shown once as `a±bi`; `–` when there are none.
+pub fn roots_text(roots: &[Complex64]) -> String {
+    let shown: Vec<String> = roots
+        .iter()
+        .filter(|z| z.im >= -5e-5)
+        .map(|z| if z.im.abs() < 5e-5 { format!("{:.4}", z.re) } else { format!("{:.4}±{:.4}i", z.re, z.im) })
+        .collect();
+    if shown.is_empty() { "–".to_owned() } else { shown.join(", ") }
+}
+
+/// Why a cluster is (in)valid, in a few words.
+pub fn status_text(eval: &ClusterEval) -> String {
+    match &eval.status {
+        ClusterStatus::Valid => "valid".to_owned(),
+        ClusterStatus::TooFewMembers { found, needed } => format!("{found} of {needed} segments"),
+        ClusterStatus::NearOrigin { .. } => "near the origin".to_owned(),
+        ClusterStatus::NearNyquist { .. } => "beyond the exclusion angle".to_owned(),
+        ClusterStatus::Unstable { .. } => "unstable (|z| ≥ 1)".to_owned(),
+    }
+}
+
+/// The same, with the numbers.
+pub fn status_detail(eval: &ClusterEval) -> String {
+    match &eval.status {
+        ClusterStatus::Valid => "Holds a root from enough segment models: it gives the reduced model a root \
+                                 (a conjugate pair off the real axis)."
+            .to_owned(),
+        ClusterStatus::TooFewMembers { found, needed } => format!(
+            "Holds roots from {found} segment models, {needed} needed (the aggregation condition): \
+             not in the reduced model"
+        ),
+        ClusterStatus::NearOrigin { modulus, min_modulus } => {
+            format!("Centroid modulus {modulus:.4} is below {min_modulus:.4}: ARX noise roots gather there")
+        }
+        ClusterStatus::NearNyquist { angle_rad, limit_rad } => {
+            format!("Centroid angle {angle_rad:.4} rad is beyond the exclusion angle {limit_rad:.4} rad")
+        }
+        ClusterStatus::Unstable { modulus } => {
+            format!("Pole centroid modulus {modulus:.4} is on or outside the unit circle")
+        }
+    }
+}
+
+const METRIC_COLUMNS: [(&str, &str); 6] = [
+    ("RMSPE [%]", "Root-mean-square percentage error"),
+    ("MAPE [%]", "Mean absolute percentage error"),
+    ("SE", "Standard error of the residual"),
+    ("fit [%]", "Normalised fit: 100 (1 − ‖y − ŷ‖ / ‖y − mean y‖)"),
+    ("RMSE", "Root-mean-square error (output units)"),
+    ("max |e|", "Largest absolute error (output units)"),
+];
+
+fn metric_values(m: &Metrics) -> [String; 6] {
+    [
+        format!("{:.4}", m.rmspe_pct),
+        format!("{:.4}", m.mape_pct),
+        format!("{:.4}", m.se),
+        format!("{:.2}", m.fit_pct),
+        format!("{:.4}", m.rmse),
+        format!("{:.4}", m.max_abs_error),
+    ]
+}
+
+/// Gray-box and linear metrics of every scored run, one row per run and model.
+pub fn metrics_table_ui(ui: &mut egui::Ui, id: &str, runs: &[ScoredRun]) {
+    egui::Grid::new(id).striped(true).num_columns(8).spacing([14.0, 3.0]).show(ui, |ui| {
+        ui.label(RichText::new("run").strong());
+        ui.label(RichText::new("model").strong());
+        for (title, tip) in METRIC_COLUMNS {
+            ui.label(RichText::new(title).strong()).on_hover_text(tip);
+        }
+        ui.end_row();
+        for run in runs {
+            let rows = [
+                ("gray-box", Ok(&run.gray_box), theme::MODEL),
+                ("linear", run.linear.as_ref(), theme::LINEAR),
+            ];
+            for (model, prediction, colour) in rows {
+                ui.label(super::traces_ui::run_label(run));
+                ui.label(RichText::new(model).color(colour));
+                match prediction {
+                    Ok(p) => {
+                        for value in metric_values(&p.metrics) {
+                            ui.label(RichText::new(value).monospace());
+                        }
+                    }
+                    Err(err) => {
+                        ui.label(RichText::new(err.as_str()).color(theme::ERROR));
+                    }
+                }
+                ui.end_row();
+            }
+        }
+    });
+}

@@ -1,0 +1,133 @@
+//! The session as a project file and back. `io::project` reads project files; this writes one
+//! from the session (runs with roles and load options, per-output settings, segments, clusters)
+//! in the same format, so `jetid --batch PROJECT` and File > Open project read it.
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+
+use super::session::{LoadFailure, Role, Session, SessionRun};
+use super::setup::{ModelSetup, OutputSetup};
+use crate::io::csv_run::LoadOptions;
+use crate::io::project::{LoadSpec, OutputSpec, Project, ProjectFile, RunEntry, RunSource};
+
+/// The project file text for `session`, to be written at `project_path`; the notes say what a
+/// project file cannot hold (a second identification, chirp or steady run).
+pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, Vec<String>)> {
+    let base = project_path.parent().unwrap_or(Path::new(""));
+    let mut notes = Vec::new();
+    let mut single = |role: Role| -> Option<RunEntry> {
+        let mut runs = session.runs.iter().filter(|r| r.role == role);
+        let first = runs.next().map(|r| run_entry(r, base));
+        for extra in runs {
+            notes.push(format!(
+                "a project holds one {} run: {} was not saved",
+                role.label(),
+                extra.display_name()
+            ));
+        }
+        first
+    };
+    let ident = single(Role::Identification);
+    let chirp = single(Role::Chirp);
+    let steady = single(Role::Steady);
+    let validate =
+        session.runs.iter().filter(|r| r.role == Role::Validation).map(|r| run_entry(r, base)).collect();
+    let outputs: Vec<String> = session
+        .ident_run()
+        .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
+        .unwrap_or_default();
+    let names: BTreeSet<&String> = outputs.iter().chain(session.setup.outputs.keys()).collect();
+    let output = names.into_iter().map(|name| (name.clone(), output_spec(&session.setup, name))).collect();
+    let file = ProjectFile {
+        name: project_path.file_stem().map(|s| s.to_string_lossy().into_owned()),
+        ident,
+        validate,
+        chirp,
+        steady,
+        outputs,
+        add_effects: Vec::new(),
+        load: LoadSpec::default(),
+        output,
+    };
+    let text = toml::to_string_pretty(&file).context("writing the project as TOML")?;
+    Ok((text, notes))
+}
+
+fn run_entry(run: &SessionRun, base: &Path) -> RunEntry {
+    let relative = run.path.strip_prefix(base).ok().filter(|p| !p.as_os_str().is_empty());
+    let path = relative.unwrap_or(&run.path).to_string_lossy().into_owned();
+    let load = load_spec(&run.options);
+    if load.is_default() { RunEntry::Path(path) } else { RunEntry::Table { path, load } }
+}
+
+/// Load options as the command line (and project files) spell them.
+fn load_spec(options: &LoadOptions) -> LoadSpec {
+    LoadSpec {
+        map: options.map.entries().into_iter().map(|(role, column)| format!("{role}={column}")).collect(),
+        sample_time: options.sample_time_secs,
+        window: options.window.as_ref().map(ToString::to_string),
+        quality: options.quality.clone(),
+        resample: options.resample,
+    }
+}
+
+fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
+    let OutputSetup { settings, clusters } = setup.output(name);
+    OutputSpec {
+        na: Some(settings.orders.na),
+        nb: Some(settings.orders.nb),
+        nk: Some(settings.orders.nk),
+        static_order: settings.static_order,
+        min_segments: settings.cluster.min_segments,
+        refine: Some(settings.refine),
+        segments: setup.segments.as_ref().map(|s| s.iter().map(|s| [s.start, s.step_at, s.end]).collect()),
+        clusters,
+    }
+}
+
+/// A session from a project: its runs read with their roles (those that fail are returned as
+/// failures) and its segments, settings and clusters.
+pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
+    let mut session = Session::default();
+    let mut failures = Vec::new();
+    let sources = project
+        .ident
+        .iter()
+        .map(|s| (s, Role::Identification))
+        .chain(project.validate.iter().map(|s| (s, Role::Validation)))
+        .chain(project.chirp.iter().map(|s| (s, Role::Chirp)))
+        .chain(project.steady.iter().map(|s| (s, Role::Steady)));
+    for (source, role) in sources {
+        match load_source(source, role) {
+            Ok(run) => session.runs.push(run),
+            Err(failure) => failures.push(*failure),
+        }
+    }
+    session.setup.segments = project.segments.values().next().cloned();
+    let names: BTreeSet<&String> = project.settings.keys().chain(project.clusters.keys()).collect();
+    for name in names {
+        session.setup.outputs.insert(
+            name.clone(),
+            OutputSetup {
+                settings: project.settings_for(name),
+                clusters: project.clusters.get(name).cloned(),
+            },
+        );
+    }
+    (session, failures)
+}
+
+fn load_source(source: &RunSource, role: Role) -> Result<SessionRun, Box<LoadFailure>> {
+    match source.load.to_options() {
+        Ok(options) => SessionRun::load(&source.path, role, options),
+        Err(err) => Err(Box::new(LoadFailure {
+            path: source.path.clone(),
+            role,
+            options: LoadOptions::default(),
+            message: format!("load options: {err:#}"),
+            column_problem: false,
+            existing: None,
+        })),
+    }
+}

@@ -1,0 +1,139 @@
+//! The Static map view: the fitted f(v) over the steady-state points (v, y) of the identification
+//! segments, the static-map coefficients and the leave-one-out table the order was chosen from.
+use egui::RichText;
+use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
+
+use super::command::Command;
+use super::derived::Derived;
+use super::model_ui;
+use super::plot_util;
+use super::theme;
+use crate::core::pipeline::OutputSettings;
+
+const CURVE_POINTS: usize = 200;
+const TABLE_WIDTH: f32 = 330.0;
+
+pub fn static_map_ui(ui: &mut egui::Ui, output: &str, cache: &Derived) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let Some(view) = cache.live_view(output) else { return commands };
+    if !model_ui::model_state_ui(ui, &view) {
+        return commands;
+    }
+    let Ok(live) = view.live else { return commands };
+    let model = &live.model;
+    let map = &model.wiener.map;
+    let unit = &view.output.unit;
+    let (v_lo, v_hi) = model
+        .steady_points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (v, _)| (lo.min(*v), hi.max(*v)));
+    let pad = 0.1 * (v_hi - v_lo).max(1e-9);
+    let curve: Vec<[f64; 2]> = (0..=CURVE_POINTS)
+        .map(|k| {
+            let v = v_lo - pad + (v_hi - v_lo + 2.0 * pad) * k as f64 / CURVE_POINTS as f64;
+            [v, map.eval(v)]
+        })
+        .collect();
+    let steady: Vec<[f64; 2]> = model.steady_points.iter().map(|(v, y)| [*v, *y]).collect();
+    let plot_width = (ui.available_width() - TABLE_WIDTH - ui.spacing().item_spacing.x).max(200.0);
+    let height = ui.available_height();
+    ui.horizontal_top(|ui| {
+        ui.allocate_ui(egui::vec2(plot_width, height), |ui| {
+            Plot::new(("static_map", output))
+                .height(height)
+                .x_axis_label(format!("v, linear block output [{unit}]"))
+                .y_axis_label(view.output.label())
+                .y_axis_min_width(64.0)
+                .x_grid_spacer(plot_util::grid_125_x)
+                .y_grid_spacer(plot_util::grid_125_y)
+                .legend(Legend::default().position(egui_plot::Corner::LeftTop).follow_insertion_order(true))
+                .show(ui, |plot_ui| {
+                    plot_ui.line(
+                        Line::new(format!("f(v), order {}", map.order()), curve)
+                            .color(theme::MODEL)
+                            .width(2.0),
+                    );
+                    plot_ui.points(
+                        Points::new("steady states (segment tails)", steady)
+                            .shape(MarkerShape::Circle)
+                            .radius(5.0)
+                            .color(theme::STEADY_POINT),
+                    );
+                });
+        });
+        ui.allocate_ui(egui::vec2(TABLE_WIDTH, height), |ui| {
+            ui.vertical(|ui| commands.extend(side_ui(ui, output, &view.output.setup.settings, model)));
+        });
+    });
+    commands
+}
+
+fn side_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    settings: &OutputSettings,
+    model: &crate::core::pipeline::GrayBoxModel,
+) -> Option<Command> {
+    let mut command = None;
+    let map = &model.wiener.map;
+    ui.label(RichText::new("y = f(v) = β0 + β1 v + β2 v² + …").strong());
+    egui::Grid::new("static_beta").num_columns(2).spacing([12.0, 2.0]).show(ui, |ui| {
+        for (i, beta) in map.beta().iter().enumerate() {
+            ui.label(format!("β{i}"));
+            ui.label(RichText::new(format!("{beta:.6e}")).monospace());
+            ui.end_row();
+        }
+    });
+    ui.add_space(8.0);
+    ui.horizontal(|ui| {
+        let label = ui.label("Order:");
+        let text = settings.static_order.map_or_else(|| "from the data".to_owned(), |o| o.to_string());
+        egui::ComboBox::from_id_salt("static_order")
+            .selected_text(text)
+            .show_ui(ui, |ui| {
+                let choices = std::iter::once(None).chain((1..=settings.max_static_order).map(Some));
+                for choice in choices {
+                    let name =
+                        choice.map_or_else(|| "from the data (leave-one-out)".to_owned(), |o| o.to_string());
+                    if ui.selectable_label(settings.static_order == choice, name).clicked()
+                        && settings.static_order != choice
+                    {
+                        let settings = OutputSettings { static_order: choice, ..settings.clone() };
+                        command = Some(Command::SetOutputSettings { output: output.to_owned(), settings });
+                    }
+                }
+            })
+            .response
+            .labelled_by(label.id);
+    });
+    ui.add_space(4.0);
+    match &model.static_suggestion {
+        Some(suggestion) => {
+            ui.label(RichText::new("Leave-one-out error by order").strong());
+            egui::Grid::new("static_loo").striped(true).num_columns(3).spacing([12.0, 2.0]).show(ui, |ui| {
+                ui.label("order");
+                ui.label("LOO RMSE");
+                ui.label("");
+                ui.end_row();
+                for (order, rmse) in &suggestion.loo_rmse {
+                    ui.label(order.to_string());
+                    ui.label(RichText::new(format!("{rmse:.4}")).monospace());
+                    if *order == suggestion.order {
+                        ui.label(RichText::new("chosen").color(theme::OK));
+                    } else {
+                        ui.label("");
+                    }
+                    ui.end_row();
+                }
+            });
+        }
+        None => model_ui::hint(ui, "The order is set by hand, so no leave-one-out table."),
+    }
+    ui.add_space(8.0);
+    model_ui::hint(
+        ui,
+        "Points: the mean of v and y over the settled tail of each segment (and before the first step). \
+         The linear block's gain is fitted by least squares on the identification run, so v is in output units.",
+    );
+    command
+}

@@ -1,0 +1,401 @@
+//! The Z-plane view: every segment model's poles and zeros, the clusters (drag a centre to move one,
+//! its rim to resize it), the cluster table and a live strip of the reduced model and its errors.
+use std::collections::BTreeMap;
+
+use egui::{RichText, Sense};
+use egui_plot::{PlotBounds, PlotTransform};
+use num_complex::Complex64;
+
+use super::command::Command;
+use super::derived::{Derived, LiveView};
+use super::model_ui::{self, complex_text, roots_text};
+use super::setup::History;
+use super::theme;
+use super::zplane_plot;
+use crate::core::cluster::{Cluster, ClusterEval, RootKind};
+
+/// Width of the column beside the plot (overview, live strip, cluster table).
+const SIDE_WIDTH: f32 = 560.0;
+const OVERVIEW_SIDE: f32 = 210.0;
+
+/// Which part of a cluster circle is dragged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Handle {
+    Centre,
+    Rim,
+}
+
+/// A cluster drag in progress: the live path runs on [`ClusterDrag::preview`] every frame.
+#[derive(Clone, Debug)]
+pub struct ClusterDrag {
+    pub output: String,
+    pub index: usize,
+    pub handle: Handle,
+    /// The clusters when the drag started.
+    pub base: Vec<Cluster>,
+    /// The dragged cluster as it is now.
+    pub current: Cluster,
+    /// Centre minus the pointer where the drag started (so the centre does not jump).
+    pub grab_offset: [f64; 2],
+}
+
+impl ClusterDrag {
+    /// The clusters with the dragged one where it is now.
+    pub fn preview(&self) -> Vec<Cluster> {
+        let mut clusters = self.base.clone();
+        if let Some(slot) = clusters.get_mut(self.index) {
+            *slot = self.current.clone();
+        }
+        clusters
+    }
+}
+
+/// The detail plot's view: a centre and the half-width of the x range (the plot keeps the aspect).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ZoomView {
+    pub centre: [f64; 2],
+    pub half_width: f64,
+}
+
+impl ZoomView {
+    pub const WHOLE: Self = Self { centre: [0.0, 0.0], half_width: 1.15 };
+
+    /// Around the clusters (their upper half-plane side), the points `extra` (the reduced model's
+    /// roots) and z = 1; the whole circle if there are no clusters.
+    pub fn fit(clusters: &[Cluster], extra: &[Complex64]) -> Self {
+        if clusters.is_empty() {
+            return Self::WHOLE;
+        }
+        // z = 1 and room right of the circle for the angle labels.
+        let (mut lo, mut hi) = ([1.0f64, -0.05f64], [1.08f64, 0.05f64]);
+        let circles = clusters.iter().map(|c| (c.centre, c.radius));
+        let points = extra.iter().filter(|z| z.im >= 0.0 && z.norm() < 1.5).map(|z| (*z, 0.02));
+        for (centre, radius) in circles.chain(points) {
+            lo = [lo[0].min(centre.re - radius), lo[1].min(centre.im - radius)];
+            hi = [hi[0].max(centre.re + radius), hi[1].max(centre.im + radius)];
+        }
+        let half_width = (0.5 * (hi[0] - lo[0]).max(hi[1] - lo[1]) * 1.35).clamp(0.05, 1.15);
+        Self { centre: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])], half_width }
+    }
+
+    pub fn bounds(&self) -> PlotBounds {
+        let [x, y] = self.centre;
+        let h = self.half_width;
+        PlotBounds::from_min_max([x - h, y - h], [x + h, y + h])
+    }
+
+    /// Zoom by `factor` (< 1 zooms in) keeping the point `at` where it is.
+    pub fn zoom_about(&mut self, at: [f64; 2], factor: f64) {
+        let factor = factor.clamp(0.5, 2.0);
+        let half_width = (self.half_width * factor).clamp(1e-3, 3.0);
+        let f = half_width / self.half_width;
+        self.centre = [at[0] + (self.centre[0] - at[0]) * f, at[1] + (self.centre[1] - at[1]) * f];
+        self.half_width = half_width;
+    }
+}
+
+#[derive(Default)]
+pub struct ZPlaneViewState {
+    /// The selected cluster (index into the output's clusters).
+    pub selected: Option<usize>,
+    pub drag: Option<ClusterDrag>,
+    pub panning: bool,
+    /// The detail view of each output.
+    pub zoom: BTreeMap<String, ZoomView>,
+    /// Plot coordinates ↔ screen of the last frame (tests use it to find a cluster's handles).
+    pub last_transform: Option<PlotTransform>,
+}
+
+/// The view that fits the clusters and the reduced model's roots.
+pub fn fit_view(view: &LiveView<'_>) -> ZoomView {
+    let roots = match view.live {
+        Ok(live) => {
+            let tf = &live.model.wiener.linear.tf;
+            let mut roots = tf.poles().unwrap_or_default();
+            roots.extend(tf.zeros().unwrap_or_default());
+            roots
+        }
+        Err(_) => Vec::new(),
+    };
+    ZoomView::fit(view.clusters, &roots)
+}
+
+impl ZPlaneViewState {
+    /// The clusters being dragged, for the live preview.
+    pub fn preview_request(&self) -> Option<(String, Vec<Cluster>)> {
+        self.drag.as_ref().map(|d| (d.output.clone(), d.preview()))
+    }
+}
+
+pub fn zplane_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    history: &History,
+    state: &mut ZPlaneViewState,
+    cache: &Derived,
+) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let Some(view) = cache.live_view(output) else { return commands };
+    if state.selected.is_some_and(|i| i >= view.clusters.len()) {
+        state.selected = None;
+    }
+    commands.extend(toolbar_ui(ui, output, &view, history, state));
+    if let Err(err) = &view.output.fits {
+        model_ui::error_ui(ui, &format!("No segment models, so nothing to cluster: {err}"));
+        return commands;
+    }
+    let side_width = SIDE_WIDTH.min(ui.available_width() * 0.45);
+    let plot_width = ui.available_width() - side_width - ui.spacing().item_spacing.x;
+    let height = ui.available_height();
+    ui.horizontal_top(|ui| {
+        ui.allocate_ui(egui::vec2(plot_width, height), |ui| {
+            commands.extend(zplane_plot::main_plot_ui(ui, output, &view, state, height));
+        });
+        ui.allocate_ui(egui::vec2(side_width, height), |ui| {
+            ui.vertical(|ui| {
+                ui.horizontal_top(|ui| {
+                    zplane_plot::overview_ui(ui, output, &view, state, OVERVIEW_SIDE);
+                    ui.vertical(|ui| live_strip_ui(ui, &view));
+                });
+                ui.separator();
+                legend_ui(ui, &view);
+                ui.separator();
+                cluster_table_ui(ui, &view, state);
+            });
+        });
+    });
+    commands
+}
+
+fn toolbar_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    view: &LiveView<'_>,
+    history: &History,
+    state: &mut ZPlaneViewState,
+) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let set =
+        |clusters: Vec<Cluster>| Command::SetClusters { output: output.to_owned(), clusters: Some(clusters) };
+    let zoom = *state.zoom.entry(output.to_owned()).or_insert_with(|| fit_view(view));
+    ui.horizontal_wrapped(|ui| {
+        for (label, kind) in [("+ Pole cluster", RootKind::Pole), ("+ Zero cluster", RootKind::Zero)] {
+            if ui.button(label).on_hover_text("Add a cluster in the middle of the view").clicked() {
+                let mut clusters = view.clusters.to_vec();
+                let centre = Complex64::new(zoom.centre[0], zoom.centre[1]);
+                clusters.push(Cluster::new(kind, centre, 0.08 * zoom.half_width));
+                state.selected = Some(clusters.len() - 1);
+                commands.push(set(clusters));
+            }
+        }
+        let delete_key =
+            ui.input(|i| i.key_pressed(egui::Key::Delete)) && !ui.ctx().egui_wants_keyboard_input();
+        let delete = ui
+            .add_enabled(state.selected.is_some(), egui::Button::new("Delete"))
+            .on_hover_text("Delete the selected cluster (Del)");
+        if (delete.clicked() || delete_key)
+            && let Some(i) = state.selected.filter(|i| *i < view.clusters.len())
+        {
+            let mut clusters = view.clusters.to_vec();
+            clusters.remove(i);
+            state.selected = None;
+            commands.push(set(clusters));
+        }
+        let automatic = view.output.setup.clusters.is_none();
+        let accept = ui
+            .add_enabled(!automatic, egui::Button::new("Accept automatic proposal"))
+            .on_hover_text(match &view.output.automatic {
+                Ok(proposal) => {
+                    format!("Replace the clusters by the {} proposed from the segment roots", proposal.len())
+                }
+                Err(err) => format!("The proposal failed: {err}"),
+            });
+        if accept.clicked() {
+            state.selected = None;
+            commands.push(Command::SetClusters { output: output.to_owned(), clusters: None });
+        }
+        ui.separator();
+        if ui.add_enabled(history.can_undo(), egui::Button::new("Undo")).on_hover_text("Ctrl+Z").clicked() {
+            commands.push(Command::Undo);
+        }
+        if ui
+            .add_enabled(history.can_redo(), egui::Button::new("Redo"))
+            .on_hover_text("Ctrl+Shift+Z")
+            .clicked()
+        {
+            commands.push(Command::Redo);
+        }
+        ui.separator();
+        if ui.button("Fit clusters").clicked() {
+            state.zoom.insert(output.to_owned(), fit_view(view));
+        }
+        if ui.button("Whole circle").clicked() {
+            state.zoom.insert(output.to_owned(), ZoomView::WHOLE);
+        }
+        ui.separator();
+        let mut refine = view.output.setup.settings.refine;
+        let polish = ui.checkbox(&mut refine, "Polish centroids").on_hover_text(
+            "After a change, move the reduced roots to lower the simulation error on the identification run \
+             (not while dragging)",
+        );
+        if polish.changed() {
+            let settings =
+                crate::core::pipeline::OutputSettings { refine, ..view.output.setup.settings.clone() };
+            commands.push(Command::SetOutputSettings { output: output.to_owned(), settings });
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        let source = if view.output.setup.clusters.is_none() { "automatic proposal" } else { "edited" };
+        ui.label(RichText::new(format!("Clusters: {source}")).strong());
+        model_ui::hint(
+            ui,
+            "× pole, o zero of each segment's ARX model · drag a circle's centre to move it, its rim to \
+             resize it · drag empty space to pan, wheel to zoom",
+        );
+    });
+    commands
+}
+
+/// What the marks on the z-plane are.
+#[derive(Clone, Copy)]
+enum Mark {
+    PoleAndZero,
+    Circle { dashed: bool },
+}
+
+fn mark_ui(ui: &mut egui::Ui, mark: Mark, colour: egui::Color32, text: &str) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(26.0, 14.0), Sense::hover());
+    let painter = ui.painter();
+    let stroke = egui::Stroke::new(1.6, colour);
+    match mark {
+        Mark::PoleAndZero => {
+            let c = rect.left_center() + egui::vec2(6.0, 0.0);
+            let d = 4.0;
+            painter.line_segment([c + egui::vec2(-d, -d), c + egui::vec2(d, d)], stroke);
+            painter.line_segment([c + egui::vec2(-d, d), c + egui::vec2(d, -d)], stroke);
+            painter.circle_stroke(rect.left_center() + egui::vec2(19.0, 0.0), 4.0, stroke);
+        }
+        Mark::Circle { dashed } => {
+            if dashed {
+                let pts = [rect.left_center(), rect.right_center()];
+                painter.extend(egui::Shape::dashed_line(&pts, stroke, 4.0, 3.0));
+            } else {
+                painter.circle_stroke(rect.center(), 6.0, stroke);
+            }
+        }
+    }
+    ui.label(RichText::new(text).color(colour));
+}
+
+/// Segment colours (× pole, o zero) and the cluster and model marks.
+fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 4.0;
+        if let Ok(fits) = &view.output.fits {
+            ui.label("segments:");
+            for (i, roots) in fits.roots.iter().enumerate() {
+                mark_ui(ui, Mark::PoleAndZero, theme::segment_colour(i), &roots.label);
+                ui.add_space(6.0);
+            }
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 4.0;
+        mark_ui(ui, Mark::Circle { dashed: false }, theme::CLUSTER_VALID, "valid cluster");
+        ui.add_space(8.0);
+        mark_ui(ui, Mark::Circle { dashed: true }, theme::CLUSTER_INVALID, "invalid cluster");
+        ui.add_space(8.0);
+        mark_ui(ui, Mark::PoleAndZero, theme::REDUCED, "reduced model");
+    });
+}
+
+/// The reduced model and its validation errors, live while dragging.
+fn live_strip_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
+    ui.label(RichText::new("Reduced model").strong());
+    if view.is_preview {
+        ui.label(
+            RichText::new("preview while dragging: centroids not polished").color(theme::WARNING).small(),
+        );
+    }
+    let live = match view.live {
+        Ok(live) => live,
+        Err(err) => {
+            model_ui::error_ui(ui, &format!("No model: {err}"));
+            return;
+        }
+    };
+    if !view.is_preview && live.polish_requested {
+        let text = if live.model.refinement.is_some() {
+            "centroids polished"
+        } else {
+            "centroids (polish did not help)"
+        };
+        ui.label(RichText::new(text).color(theme::HINT).small());
+    }
+    let tf = &live.model.wiener.linear.tf;
+    ui.label(format!("poles: {}", roots_text(&tf.poles().unwrap_or_default())));
+    ui.label(format!("zeros: {}", roots_text(&tf.zeros().unwrap_or_default())));
+    ui.label(format!("static map: order {}", live.model.wiener.map.order()));
+    ui.add_space(4.0);
+    egui::Grid::new("live_strip_metrics").num_columns(3).spacing([10.0, 2.0]).show(ui, |ui| {
+        ui.label(RichText::new("run").small());
+        ui.label(RichText::new("RMSPE").small());
+        ui.label(RichText::new("fit").small());
+        ui.end_row();
+        for run in &live.runs {
+            ui.label(&run.name).on_hover_text(run.role.label());
+            ui.label(RichText::new(format!("{:.3} %", run.gray_box.metrics.rmspe_pct)).monospace().strong());
+            ui.label(RichText::new(format!("{:.1} %", run.gray_box.metrics.fit_pct)).monospace());
+            ui.end_row();
+        }
+    });
+    if live.runs.is_empty() {
+        model_ui::hint(ui, "No validation or chirp run to score the model on.");
+    }
+}
+
+fn cluster_table_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewState) {
+    let evals: &[ClusterEval] = match view.evals {
+        Ok(evals) => evals,
+        Err(err) => {
+            model_ui::error_ui(ui, &format!("The clusters could not be evaluated: {err}"));
+            return;
+        }
+    };
+    if evals.is_empty() {
+        model_ui::hint(ui, "No clusters. Add one, or accept the automatic proposal.");
+        return;
+    }
+    egui::ScrollArea::both().id_salt("cluster_table").auto_shrink([false, true]).show(ui, |ui| {
+        egui::Grid::new("cluster_table_grid").striped(true).num_columns(9).spacing([10.0, 4.0]).show(
+            ui,
+            |ui| {
+                for title in ["", "members", "radius", "spread", "centroid", "ωn [rad/s]", "τ [s]", "status"]
+                {
+                    ui.label(RichText::new(title).strong());
+                }
+                ui.end_row();
+                for (i, eval) in evals.iter().enumerate() {
+                    let kind = if eval.cluster.kind == RootKind::Pole { "p" } else { "z" };
+                    let colour = if eval.valid { theme::CLUSTER_VALID } else { theme::CLUSTER_INVALID };
+                    let name = RichText::new(format!("{kind}{}", i + 1)).color(colour).strong();
+                    if ui.add(egui::Button::selectable(state.selected == Some(i), name)).clicked() {
+                        state.selected = Some(i);
+                    }
+                    ui.label(format!("{} / {}", eval.segments_found, eval.segments_needed));
+                    ui.label(format!("{:.4}", eval.cluster.radius));
+                    ui.label(format!("{:.4}", eval.spread));
+                    ui.label(RichText::new(complex_text(eval.centroid)).monospace());
+                    ui.label(format!("{:.3}", eval.natural_freq_rad_s));
+                    ui.label(eval.time_constant_secs.map_or_else(|| "–".to_owned(), |t| format!("{t:.3}")));
+                    let status = ui.add(
+                        egui::Label::new(RichText::new(model_ui::status_text(eval)).color(colour))
+                            .sense(Sense::hover()),
+                    );
+                    status.on_hover_text(model_ui::status_detail(eval));
+                    ui.end_row();
+                }
+            },
+        );
+    });
+}

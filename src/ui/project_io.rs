@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 use super::session::{LoadFailure, Role, Session, SessionRun};
 use super::setup::{ModelSetup, OutputSetup};
 use crate::io::csv_run::LoadOptions;
-use crate::io::project::{LoadSpec, OutputSpec, Project, ProjectFile, RunEntry, RunSource};
+use crate::io::project::{IdentEntry, LoadSpec, OutputSpec, Project, ProjectFile, RunEntry, RunSource};
 
 /// The project file text for `session`, to be written at `project_path`; the notes say what a
 /// project file cannot hold (a second identification, chirp or steady run).
@@ -41,12 +41,14 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
     let output = names.into_iter().map(|name| (name.clone(), output_spec(&session.setup, name))).collect();
     let file = ProjectFile {
         name: project_path.file_stem().map(|s| s.to_string_lossy().into_owned()),
-        ident,
+        ident: ident.map(IdentEntry::One),
         validate,
         chirp,
         steady,
         outputs,
         add_effects: Vec::new(),
+        clusters_from: None,
+        steps_from: None,
         load: LoadSpec::default(),
         output,
     };

@@ -243,6 +243,7 @@ fn table1_section(out: &mut String, report: &Report) {
         "| output | model | RMSPE | SE | RMSPE chirp | SE chirp | paper RMSPE | paper SE | paper RMSPE chirp | paper SE chirp |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     let cell = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.4}"));
+    let mut cutoffs = Vec::new();
     for (name, o) in &report.outputs {
         for (model, paper_model) in [
             ("gray_box", "gray-box"),
@@ -283,8 +284,11 @@ fn table1_section(out: &mut String, report: &Report) {
                     )
                 })
                 .collect();
-            let _ = writeln!(out, "\n−3 dB cut-off of `{name}` on the chirp: {}.\n", cuts.join("; "));
+            cutoffs.push(format!("−3 dB cut-off of `{name}` on the chirp: {}.", cuts.join("; ")));
         }
+    }
+    for c in cutoffs {
+        let _ = writeln!(out, "\n{c}");
     }
 }
 

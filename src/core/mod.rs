@@ -3,6 +3,8 @@ pub mod arx;
 pub mod baselines;
 pub mod cluster;
 pub mod cluster_proposal;
+pub mod diagnose;
+pub mod effects;
 pub mod lm;
 pub mod lstsq;
 pub mod metrics;

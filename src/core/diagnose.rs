@@ -1,0 +1,275 @@
+//! Which physical effect is the model missing? For every effect of the catalog that applies, a
+//! trial fit (extend the current model with the effect, refit on the identification data, score on
+//! the validation runs) and one sentence of evidence from the current model's residuals. Effects
+//! are ranked by the validation error they remove, best first.
+//!
+//! The trials start from the current model refitted on the identification data as it is (roots,
+//! gain, map and existing effects moved by the same procedure, no new block): that refit is the
+//! yardstick, so a trial is credited only with what its block adds, never with what refitting alone
+//! gives (which matters when the current model was edited by hand or built for another output).
+//!
+//! **When an effect counts as significant.** Validation residuals of simulated models are strongly
+//! autocorrelated, so a plain comparison of error sums says little. Each trial is compared with the
+//! refitted current model by a one-sided Diebold–Mariano test on the per-sample loss differences
+//! `d_k = |p_refit,k| − |p_trial,k|` (`p` the percentage error), with the Newey–West long-run
+//! variance (Bartlett kernel, bandwidth read from the autocorrelation of `d`, lags kept inside each
+//! run; see [`crate::core::effects::stats::diebold_mariano`]). The absolute loss is used rather than
+//! the squared one because squared errors of a simulated model are dominated by a handful of large
+//! transients, which leaves the test with a few effective observations and little power; the
+//! ranking itself stays on RMSPE. An effect is *significant* when `p < SIGNIFICANCE_LEVEL` (0.01)
+//! **and** it removes at least `MIN_RELATIVE_REDUCTION` (10 %) of the refitted model's validation
+//! RMSPE (and beats the current model): a real effect must be both beyond what noise gives and large
+//! enough to matter. The second condition also guards against the many-candidates problem (six
+//! trials per diagnosis) and against the small structural gains any extra parameter buys on an
+//! engine that is not exactly a Wiener system.
+use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
+use crate::core::effects::{
+    AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, apply_effect, evidence, physics,
+    refit,
+};
+use crate::core::pipeline::{OutputSettings, SegmentFits};
+use crate::core::run::Run;
+
+/// Largest one-sided p-value of a significant effect.
+pub const SIGNIFICANCE_LEVEL: f64 = 0.01;
+/// Smallest share of the validation RMSPE a significant effect must remove.
+pub const MIN_RELATIVE_REDUCTION: f64 = 0.10;
+
+/// Errors of a diagnosis that stop it as a whole (a single effect that cannot be tried is skipped).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DiagnoseError {
+    #[error("no validation run to score the effects on")]
+    NoValidationRuns,
+    #[error("run '{run}' has no output column '{output}'")]
+    MissingOutput { run: String, output: String },
+    #[error(
+        "the measurement of '{output}' in run '{run}' is zero at sample {index}; percentage errors are undefined"
+    )]
+    ZeroMeasurement { run: String, output: String, index: usize },
+    #[error("the current model cannot be simulated on run '{run}': {source}")]
+    CurrentModel { run: String, source: EffectError },
+    #[error(transparent)]
+    Effect(#[from] EffectError),
+}
+
+/// One effect's trial: the fitted extension, its validation score and the evidence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diagnosis {
+    pub effect: String,
+    /// What the effect means physically.
+    pub physics: String,
+    pub significant: bool,
+    /// Validation RMSPE of the current model (pooled over the validation runs), %.
+    pub rmspe_before_pct: f64,
+    /// Validation RMSPE with the effect added and refitted, %.
+    pub rmspe_after_pct: f64,
+    /// Diebold–Mariano test of "the extension is no better than the refitted current model".
+    pub test: DmTest,
+    /// One sentence from the current model's residuals, in an engine engineer's words.
+    pub evidence: String,
+    /// The current model with the effect added and refitted on the identification data.
+    pub model: ExtendedModel,
+}
+
+impl Diagnosis {
+    /// Share of the validation RMSPE the effect removes (negative when it makes things worse).
+    pub fn relative_reduction(&self) -> f64 {
+        1.0 - self.rmspe_after_pct / self.rmspe_before_pct.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// An effect that was not tried, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedEffect {
+    pub effect: String,
+    pub reason: String,
+}
+
+/// The diagnosis of one output: tried effects best first, and the ones that were skipped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagnosisReport {
+    pub output: String,
+    /// Validation RMSPE of the current model, %.
+    pub rmspe_current_pct: f64,
+    /// Validation RMSPE of the current model refitted without a new block (the test's yardstick), %.
+    pub rmspe_refit_pct: f64,
+    pub entries: Vec<Diagnosis>,
+    pub skipped: Vec<SkippedEffect>,
+}
+
+impl DiagnosisReport {
+    /// The best-ranked effect, if any was tried.
+    pub fn best(&self) -> Option<&Diagnosis> {
+        self.entries.first()
+    }
+}
+
+/// Percentage errors of a model on each run.
+fn pct_errors(model: &ExtendedModel, runs: &[&Run]) -> Result<Vec<Vec<f64>>, DiagnoseError> {
+    runs.iter()
+        .map(|run| {
+            let y = measured(run, &model.output)?;
+            let y_hat = model
+                .simulate(run)
+                .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
+            Ok(y.iter().zip(&y_hat).map(|(y, yh)| 100.0 * (y - yh) / y).collect())
+        })
+        .collect()
+}
+
+fn measured<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], DiagnoseError> {
+    let y = run
+        .output(output)
+        .map(|c| c.values.as_slice())
+        .ok_or_else(|| DiagnoseError::MissingOutput { run: run.name.clone(), output: output.to_owned() })?;
+    if let Some(index) = y.iter().position(|v| v.abs() <= f64::MIN_POSITIVE) {
+        return Err(DiagnoseError::ZeroMeasurement {
+            run: run.name.clone(),
+            output: output.to_owned(),
+            index,
+        });
+    }
+    Ok(y)
+}
+
+/// RMSPE pooled over all samples of all runs, %.
+fn pooled_rmspe(errors: &[Vec<f64>]) -> f64 {
+    let n: usize = errors.iter().map(Vec::len).sum();
+    (errors.iter().flatten().map(|p| p * p).sum::<f64>() / n.max(1) as f64).sqrt()
+}
+
+/// Validation RMSPE of a model pooled over the runs, %.
+pub fn validation_rmspe(model: &ExtendedModel, validation: &[&Run]) -> Result<f64, DiagnoseError> {
+    Ok(pooled_rmspe(&pct_errors(model, validation)?))
+}
+
+/// Why an effect cannot be tried on these runs, if it cannot.
+fn not_applicable(id: &str, current: &ExtendedModel, runs: &[&Run]) -> Option<String> {
+    if current.effect(id).is_some() {
+        return Some("already in the model".to_owned());
+    }
+    if id == AmbientCorrection::ID {
+        return runs.iter().find_map(|run| AmbientCorrection::conditions(run).err().map(|e| e.to_string()));
+    }
+    None
+}
+
+/// The current model's residual traces: identification range first, then the validation runs.
+fn residual_traces(
+    current: &ExtendedModel,
+    data: &FitData,
+    validation: &[&Run],
+) -> Result<Vec<ResidualTrace>, DiagnoseError> {
+    std::iter::once(&data.run)
+        .chain(validation.iter().copied())
+        .map(|run| {
+            let y = measured(run, &current.output)?.to_vec();
+            let y_hat = current
+                .simulate(run)
+                .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
+            Ok(ResidualTrace {
+                run: run.name.clone(),
+                dt_secs: run.dt_secs,
+                u: run.input.values.clone(),
+                y,
+                y_hat,
+                aux: run.aux.clone(),
+            })
+        })
+        .collect()
+}
+
+/// Try every applicable effect of the catalog on `current`: refit on the identification data of
+/// `fits`, score on `validation`, rank by validation RMSPE (lowest first) and test significance
+/// (see the module documentation).
+pub fn diagnose(
+    current: &ExtendedModel,
+    ident: &Run,
+    fits: &SegmentFits,
+    validation: &[&Run],
+    settings: &OutputSettings,
+) -> Result<DiagnosisReport, DiagnoseError> {
+    if validation.is_empty() {
+        return Err(DiagnoseError::NoValidationRuns);
+    }
+    let data = FitData::new(ident, fits, settings)?;
+    let before = pct_errors(current, validation)?;
+    let rmspe_before_pct = pooled_rmspe(&before);
+    let reference = refit(current, &data)?;
+    let yardstick = pct_errors(&reference, validation)?;
+    let rmspe_refit_pct = pooled_rmspe(&yardstick);
+    let traces = residual_traces(current, &data, validation)?;
+    let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
+    let mut entries = Vec::new();
+    let mut skipped = Vec::new();
+    for id in EFFECT_IDS {
+        if let Some(reason) = not_applicable(id, current, &all_runs) {
+            skipped.push(SkippedEffect { effect: id.to_owned(), reason });
+            continue;
+        }
+        let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
+            let after = pct_errors(&model, validation)?;
+            Ok((model, after))
+        });
+        let (model, after) = match trial {
+            Ok(t) => t,
+            Err(e) => {
+                skipped.push(SkippedEffect { effect: id.to_owned(), reason: e.to_string() });
+                continue;
+            }
+        };
+        let d: Vec<Vec<f64>> = yardstick
+            .iter()
+            .zip(&after)
+            .map(|(b, a)| b.iter().zip(a).map(|(pb, pa)| pb.abs() - pa.abs()).collect())
+            .collect();
+        let test = diebold_mariano(&d);
+        let rmspe_after_pct = pooled_rmspe(&after);
+        let reduction = 1.0 - rmspe_after_pct / rmspe_refit_pct.max(f64::MIN_POSITIVE);
+        let significant = test.p_value < SIGNIFICANCE_LEVEL
+            && reduction >= MIN_RELATIVE_REDUCTION
+            && rmspe_after_pct < rmspe_before_pct;
+        entries.push(Diagnosis {
+            effect: id.to_owned(),
+            physics: physics(id)?.to_owned(),
+            significant,
+            rmspe_before_pct,
+            rmspe_after_pct,
+            test,
+            evidence: evidence(id, &traces)?,
+            model,
+        });
+    }
+    entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
+    Ok(DiagnosisReport {
+        output: current.output.clone(),
+        rmspe_current_pct: rmspe_before_pct,
+        rmspe_refit_pct,
+        entries,
+        skipped,
+    })
+}
+
+/// Add the effect `id` to `current` and refit on the identification data of `fits`.
+pub fn apply(
+    current: &ExtendedModel,
+    id: &str,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+) -> Result<ExtendedModel, DiagnoseError> {
+    let data = FitData::new(ident, fits, settings)?;
+    Ok(apply_effect(current, id, &data)?)
+}
+
+/// Remove the effect `id` from `current` and refit what remains on the identification data.
+pub fn remove(
+    current: &ExtendedModel,
+    id: &str,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+) -> Result<ExtendedModel, DiagnoseError> {
+    let data = FitData::new(ident, fits, settings)?;
+    Ok(refit(&current.without_effect(id)?, &data)?)
+}

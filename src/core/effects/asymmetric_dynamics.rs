@@ -1,0 +1,147 @@
+//! `asymmetric_dynamics`: acceleration and deceleration differ.
+use num_complex::Complex64;
+
+use super::stats::{ResidualTrace, diff};
+use super::{EffectError, ParamSpec};
+use crate::core::lstsq::solve_lstsq;
+use crate::core::tf::DiscreteTf;
+use crate::core::wiener::unit_gain_tf;
+
+/// Acceleration and deceleration differ (acceleration schedule, combustor): the slowest real pole
+/// of G(z), the spool, has its time constant multiplied by `decel_factor` while the response falls.
+/// G is split as `G = G_rest · (1 − p) z⁻¹ / (1 − p z⁻¹)`; the first-order part runs with
+/// `p` while rising and `p^(1/decel_factor)` while falling, so steady states are unchanged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AsymmetricDynamics {
+    pub decel_factor: f64,
+}
+
+/// The unit-gain linear block split into the spool pole and the rest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplitShape {
+    pub pole: f64,
+    /// Unit-gain remainder; `None` when the spool pole is the only root.
+    pub rest: Option<DiscreteTf>,
+}
+
+impl AsymmetricDynamics {
+    pub const ID: &'static str = "asymmetric_dynamics";
+    pub(super) const PARAMS: &'static [ParamSpec] = &[ParamSpec::real("decel_factor", 0.1, 10.0)];
+
+    /// Split off the slowest real pole in (0, 1).
+    pub fn split(poles: &[Complex64], zeros: &[Complex64], dt_secs: f64) -> Result<SplitShape, EffectError> {
+        let not_applicable = |reason: &str| EffectError::NotApplicable {
+            effect: Self::ID.to_owned(),
+            reason: reason.to_owned(),
+        };
+        let index = poles
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.im.abs() <= 1e-9 && p.re > 0.0 && p.re < 1.0)
+            .max_by(|a, b| a.1.re.total_cmp(&b.1.re))
+            .map(|(i, _)| i)
+            .ok_or_else(|| not_applicable("the linear block has no real pole between 0 and 1"))?;
+        let pole = poles.get(index).map_or(0.0, |p| p.re);
+        let others: Vec<Complex64> =
+            poles.iter().enumerate().filter(|(i, _)| *i != index).map(|(_, p)| *p).collect();
+        if zeros.len() > others.len() {
+            return Err(not_applicable("the linear block has as many zeros as poles"));
+        }
+        let rest = if others.is_empty() {
+            None
+        } else {
+            Some(
+                unit_gain_tf(&others, zeros, dt_secs)
+                    .map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?,
+            )
+        };
+        Ok(SplitShape { pole, rest })
+    }
+
+    /// Unit-gain response of the split block to `u`, from the steady state of `u[0]`.
+    pub fn respond(&self, shape: &SplitShape, u: &[f64]) -> Vec<f64> {
+        let r = match &shape.rest {
+            Some(tf) => tf.simulate_from_steady(u),
+            None => u.to_vec(),
+        };
+        let rise = shape.pole;
+        let fall = shape.pole.powf(1.0 / self.decel_factor);
+        let mut x = r.first().copied().unwrap_or(0.0);
+        let mut prev = x;
+        r.iter()
+            .map(|rk| {
+                let a = if prev >= x { rise } else { fall };
+                x = a * x + (1.0 - a) * prev;
+                prev = *rk;
+                x
+            })
+            .collect()
+    }
+
+    pub(super) fn free_params(&self) -> Vec<f64> {
+        vec![self.decel_factor.ln()]
+    }
+
+    pub(super) fn with_free_params(&self, theta: &[f64]) -> Option<Self> {
+        let decel_factor = theta.first()?.exp();
+        (0.1..=10.0).contains(&decel_factor).then_some(Self { decel_factor })
+    }
+
+    pub(super) fn guesses() -> Vec<Self> {
+        [0.5, 0.7, 1.4, 2.0, 3.0].iter().map(|&decel_factor| Self { decel_factor }).collect()
+    }
+}
+
+/// How far the measurement lags the model while the model's response rises and while it falls:
+/// the residual regressed on the model's rate of change, split by its sign (`e ≈ −lag·dŷ/dt`).
+pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+    let (mut rows, mut e) = (Vec::new(), Vec::new());
+    for t in traces {
+        let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
+        for (r, ek) in rate.iter().zip(t.residual()) {
+            rows.push([r.max(0.0), r.min(0.0), 1.0]);
+            e.push(ek);
+        }
+    }
+    let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
+    let Ok(sol) = solve_lstsq(&a, &e) else { return "the response never moves".to_owned() };
+    let (lag_up, lag_down) = (-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c));
+    let meaning = if (lag_down - lag_up).abs() > 0.1 {
+        if lag_down > lag_up {
+            "decelerations are slower than the model"
+        } else {
+            "accelerations are slower than the model"
+        }
+    } else {
+        "rise and fall look alike"
+    };
+    format!(
+        "measured response lags the model by {lag_up:.2} s while it rises and {lag_down:.2} s while it \
+         falls: {meaning}"
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn symmetric_factor_reproduces_the_linear_block() {
+        let poles = [Complex64::new(0.9, 0.0), Complex64::new(0.5, 0.2), Complex64::new(0.5, -0.2)];
+        let tf = unit_gain_tf(&poles, &[], 0.1).unwrap();
+        let u: Vec<f64> = (0..200).map(|k| if (k / 40) % 2 == 0 { 1.0 } else { 3.0 }).collect();
+        let split = AsymmetricDynamics::split(&poles, &[], 0.1).unwrap();
+        assert!((split.pole - 0.9).abs() < 1e-12);
+        let same = AsymmetricDynamics { decel_factor: 1.0 }.respond(&split, &u);
+        for (a, b) in same.iter().zip(tf.simulate_from_steady(&u)) {
+            assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+        }
+        let slow = AsymmetricDynamics { decel_factor: 3.0 }.respond(&split, &u);
+        assert!(slow[90] > same[90] + 0.1 && (slow[50] - same[50]).abs() < 1e-9);
+        assert!(matches!(
+            AsymmetricDynamics::split(&[Complex64::new(0.5, 0.3), Complex64::new(0.5, -0.3)], &[], 0.1),
+            Err(EffectError::NotApplicable { .. })
+        ));
+    }
+}

@@ -1,0 +1,372 @@
+//! Fitting effect blocks on the identification data.
+//!
+//! Every fit uses the pipeline's own construction, so a model and its extension are compared on
+//! equal terms: for given poles, zeros and effect parameters the unit-gain response `w` is
+//! simulated, gain and offset come from least squares of the (corrected) output on `w`, and the
+//! static map of the model's order is fitted to the steady-state points (pre-step baseline and
+//! settled tail of every segment). Levenberg–Marquardt then moves the poles, zeros and the effects'
+//! continuous parameters together to minimise the simulation error on the identification range
+//! (variable projection, as `core::refine` does for the base model). Discrete choices — the delay
+//! in samples, the starting point of every other parameter — are screened on that same error first.
+use num_complex::Complex64;
+
+use super::model::{ExtendedModel, input_stage, linear_stage, output_stage};
+use super::solver::{LmSettings, minimise};
+use super::static_map_order::fit_map_with_knot;
+use super::stats::mean;
+use super::{
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics, StaticMapOrder,
+    ThermalSoak, TransportDelay, check_id,
+};
+use crate::core::pipeline::{OutputSettings, SegmentFits};
+use crate::core::refine::RootParams;
+use crate::core::run::{Channel, Run};
+use crate::core::tf::DiscreteTf;
+use crate::core::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+
+/// Starting points refined by Levenberg–Marquardt after screening.
+const REFINED_STARTS: usize = 2;
+/// Screening rounds for blocks with a discrete choice.
+const MAX_SCREENING_ROUNDS: usize = 3;
+/// Poles must stay inside this radius.
+const MAX_POLE_RADIUS: f64 = 0.999;
+
+/// The identification data a model is fitted on: the run over the segments' range, and the
+/// steady-state windows inside it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitData {
+    pub output: String,
+    pub dt_secs: f64,
+    /// The identification run cut to the range of the segments.
+    pub run: Run,
+    pub y: Vec<f64>,
+    /// Steady-state windows `(start, end)` in `run`.
+    pub steady_windows: Vec<(usize, usize)>,
+}
+
+impl FitData {
+    /// The data the pipeline fitted `fits` on, for the output of `fits`.
+    pub fn new(ident: &Run, fits: &SegmentFits, settings: &OutputSettings) -> Result<Self, EffectError> {
+        let failed = |reason: String| EffectError::FitFailed { run: ident.name.clone(), reason };
+        let start = fits.segments.first().map_or(0, |s| s.start);
+        let end = fits.segments.last().map_or(0, |s| s.end).min(ident.len());
+        if end < start + 10 {
+            return Err(failed(format!("the segments span only samples {start}..{end}")));
+        }
+        let run = slice_run(ident, start, end);
+        let y = run
+            .output(&fits.output)
+            .map(|c| c.values.clone())
+            .ok_or_else(|| failed(format!("no output column '{}'", fits.output)))?;
+        if y.len() != run.len() || run.input.values.len() != run.len() {
+            return Err(failed("input, output and time have different lengths".to_owned()));
+        }
+        let tail = ((settings.settle_secs / ident.dt_secs).round() as usize).max(3);
+        let mut steady_windows = Vec::with_capacity(fits.segments.len() + 1);
+        if let Some(first) = fits.segments.first() {
+            steady_windows.push((0, first.step_at.saturating_sub(start).max(1)));
+        }
+        for seg in &fits.segments {
+            let (a, b) = seg.settled_tail(tail);
+            steady_windows.push((a.saturating_sub(start), b.saturating_sub(start).min(y.len())));
+        }
+        steady_windows.retain(|(a, b)| a < b);
+        Ok(Self { output: fits.output.clone(), dt_secs: ident.dt_secs, run, y, steady_windows })
+    }
+}
+
+fn slice_run(run: &Run, start: usize, end: usize) -> Run {
+    let cut = |c: &Channel| Channel {
+        name: c.name.clone(),
+        unit: c.unit.clone(),
+        values: c.values.get(start..end).map(<[f64]>::to_vec).unwrap_or_default(),
+    };
+    Run {
+        name: run.name.clone(),
+        dt_secs: run.dt_secs,
+        t_secs: run.t_secs.get(start..end).map(<[f64]>::to_vec).unwrap_or_default(),
+        input: cut(&run.input),
+        outputs: run.outputs.iter().map(cut).collect(),
+        aux: run.aux.iter().map(cut).collect(),
+    }
+}
+
+/// What the fit moves: roots, effects (with their current parameters) and the map order.
+#[derive(Clone, Debug, PartialEq)]
+struct Structure {
+    poles: Vec<Complex64>,
+    zeros: Vec<Complex64>,
+    effects: Vec<EffectBlock>,
+    map_order: usize,
+}
+
+/// A fitted model with its residual on the identification data.
+struct Assembled {
+    model: ExtendedModel,
+    structure: Structure,
+    residual: Vec<f64>,
+    cost: f64,
+}
+
+impl Structure {
+    fn of(model: &ExtendedModel) -> Result<Self, EffectError> {
+        let (poles, zeros) = model.roots()?;
+        Ok(Self { poles, zeros, effects: model.effects.clone(), map_order: model.wiener.map.order().max(1) })
+    }
+
+    fn with(&self, block: EffectBlock) -> Self {
+        let mut s = self.clone();
+        s.effects.retain(|e| e.id() != block.id());
+        s.effects.push(block);
+        s.effects.sort_by_key(EffectBlock::rank);
+        s
+    }
+}
+
+/// Gain, offset and static map for a structure; its simulation error on the data.
+fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
+    let dt = data.dt_secs;
+    let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?;
+    let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
+    let split = match s.effects.iter().any(|e| matches!(e, EffectBlock::AsymmetricDynamics(_))) {
+        true => Some(AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?),
+        false => None,
+    };
+    let unit_block = LinearBlock { tf: unit.clone(), offset: 0.0 };
+    let w = linear_stage(&s.effects, &unit_block, split.as_ref(), &u, dt).ok()?;
+    let factor: Option<Vec<f64>> = s.effects.iter().find_map(|e| match (e, &conditions) {
+        (EffectBlock::AmbientCorrection(a), Some(c)) => Some(a.output_factor(c)),
+        _ => None,
+    });
+    let y_c: Vec<f64> = match &factor {
+        Some(f) => data.y.iter().zip(f).map(|(y, f)| y / f).collect(),
+        None => data.y.clone(),
+    };
+    let w_seen = match s.effects.iter().find_map(|e| match e {
+        EffectBlock::SensorDynamics(sd) => Some(sd),
+        _ => None,
+    }) {
+        Some(sensor) => sensor.apply(&w, dt),
+        None => w.clone(),
+    };
+    let (gain, offset) = fit_gain_offset(&w_seen, &y_c)?;
+    let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
+    let (vs, ys): (Vec<f64>, Vec<f64>) = data
+        .steady_windows
+        .iter()
+        .filter_map(|&(a, b)| Some((mean(v.get(a..b)?), mean(y_c.get(a..b)?))))
+        .unzip();
+    let knot = s.effects.iter().find_map(|e| match e {
+        EffectBlock::StaticMapOrder(k) => Some(k.knot_v),
+        _ => None,
+    });
+    let (map, slope_change) = fit_map_with_knot(&vs, &ys, s.map_order, knot)?;
+    let mut structure = s.clone();
+    for e in &mut structure.effects {
+        if let EffectBlock::StaticMapOrder(k) = e {
+            k.slope_change = slope_change;
+        }
+    }
+    let num = unit.num_zinv.iter().map(|b| b * gain).collect();
+    let tf = DiscreteTf::new(num, unit.den_zinv.clone(), dt).ok()?;
+    let y_hat = output_stage(&structure.effects, &map, &v, conditions.as_ref(), dt);
+    let residual: Vec<f64> = y_hat.iter().zip(&data.y).map(|(a, b)| a - b).collect();
+    let cost: f64 = residual.iter().map(|r| r * r).sum();
+    if !cost.is_finite() {
+        return None;
+    }
+    let model = ExtendedModel {
+        output: data.output.clone(),
+        wiener: WienerModel { linear: LinearBlock { tf, offset }, map },
+        effects: structure.effects.clone(),
+    };
+    Some(Assembled { model, structure, residual, cost })
+}
+
+/// Least squares of `y ≈ gain·w + offset`: one Gram–Schmidt step of the QR factorisation of
+/// `[1, w]` (centre, then project), so no normal equations are formed. `None` when `w` is constant.
+fn fit_gain_offset(w: &[f64], y: &[f64]) -> Option<(f64, f64)> {
+    let (mw, my) = (mean(w), mean(y));
+    let (mut sww, mut swy) = (0.0, 0.0);
+    for (wk, yk) in w.iter().zip(y) {
+        sww += (wk - mw) * (wk - mw);
+        swy += (wk - mw) * (yk - my);
+    }
+    let scale = w.iter().map(|x| x * x).sum::<f64>();
+    if sww <= f64::EPSILON * scale.max(f64::MIN_POSITIVE) * w.len() as f64 {
+        return None;
+    }
+    let gain = swy / sww;
+    Some((gain, my - gain * mw))
+}
+
+/// Move roots and continuous effect parameters together from `start`.
+fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
+    let (pole_params, theta_p) = RootParams::from_roots(&start.poles);
+    let (zero_params, theta_z) = RootParams::from_roots(&start.zeros);
+    let mut theta0: Vec<f64> = theta_p.iter().chain(&theta_z).copied().collect();
+    let lens: Vec<usize> = start.effects.iter().map(|e| e.free_params().len()).collect();
+    theta0.extend(start.effects.iter().flat_map(EffectBlock::free_params));
+    let (np, nz) = (theta_p.len(), theta_z.len());
+    let unpack = |theta: &[f64]| -> Option<Structure> {
+        let poles = pole_params.roots(theta.get(..np)?);
+        if poles.iter().any(|p| p.norm() >= MAX_POLE_RADIUS) {
+            return None;
+        }
+        let zeros = zero_params.roots(theta.get(np..np + nz)?);
+        let mut at = np + nz;
+        let mut effects = Vec::with_capacity(start.effects.len());
+        for (e, len) in start.effects.iter().zip(&lens) {
+            effects.push(e.with_free_params(theta.get(at..at + len)?, data.dt_secs)?);
+            at += len;
+        }
+        Some(Structure { poles, zeros, effects, map_order: start.map_order })
+    };
+    let residual = |theta: &[f64]| unpack(theta).and_then(|s| assemble(&s, data)).map(|a| a.residual);
+    let (theta, _) = minimise(&theta0, residual, &LmSettings::default())?;
+    assemble(&unpack(&theta)?, data)
+}
+
+/// Refit every parameter of the model's structure (roots, effect parameters, gain, offset, static
+/// map) on the identification data; discrete choices (the delay) stay as they are. Never worse on
+/// the identification data than the model itself, refitted statically.
+pub fn refit(model: &ExtendedModel, data: &FitData) -> Result<ExtendedModel, EffectError> {
+    let start = Structure::of(model)?;
+    check_channels(&start, data)?;
+    let failed =
+        || EffectError::FitFailed { run: data.run.name.clone(), reason: "no admissible fit".to_owned() };
+    let best = [refine(&start, data), assemble(&start, data)]
+        .into_iter()
+        .flatten()
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .ok_or_else(failed)?;
+    Ok(best.model)
+}
+
+/// Refit gain, offset and static map (and a kink's slope) for the model's dynamics as they are:
+/// what changes when the same linear block is used for another output or after a manual edit.
+pub fn refit_static(model: &ExtendedModel, data: &FitData) -> Result<ExtendedModel, EffectError> {
+    let start = Structure::of(model)?;
+    check_channels(&start, data)?;
+    assemble(&start, data).map(|a| a.model).ok_or_else(|| EffectError::FitFailed {
+        run: data.run.name.clone(),
+        reason: "the static map cannot be fitted for these dynamics".to_owned(),
+    })
+}
+
+/// Fail early, with the run's name, when the data lack a channel the effects need.
+fn check_channels(s: &Structure, data: &FitData) -> Result<(), EffectError> {
+    input_stage(&s.effects, &data.run).map(|_| ())
+}
+
+/// Add the effect `id` to `model` and refit on the identification data.
+///
+/// Starting points for the new block come from the data (see each block's `guesses`) plus, where
+/// the block has one, its neutral setting (so the extension is never worse on the identification
+/// data than the model it extends). They are screened on the identification error with the current
+/// roots; the best [`REFINED_STARTS`] and the neutral start are refined with the roots and the other
+/// effects. For a block with a discrete choice (the delay, the kink's position) the screening is
+/// repeated around the refined roots while it finds better fits: roots that had absorbed part of a
+/// delay only let go of it once the delay is in the model.
+pub fn apply_effect(model: &ExtendedModel, id: &str, data: &FitData) -> Result<ExtendedModel, EffectError> {
+    let id = check_id(id)?;
+    if model.effect(id).is_some() {
+        return Err(EffectError::AlreadyApplied { effect: id.to_owned() });
+    }
+    let base = Structure::of(model)?;
+    let failed =
+        |reason: &str| EffectError::FitFailed { run: data.run.name.clone(), reason: reason.to_owned() };
+    let current = assemble(&base, data).ok_or_else(|| failed("the current model cannot be evaluated"))?;
+    let guesses = starting_points(id, &base, &current.model, data)?;
+    if let Some(first) = guesses.first() {
+        check_channels(&base.with(first.clone()), data)?;
+    }
+    let screen = |around: &Structure| -> Vec<Structure> {
+        let mut scored: Vec<(f64, Structure)> = guesses
+            .iter()
+            .filter_map(|g| {
+                let s = around.with(g.clone());
+                assemble(&s, data).map(|a| (a.cost, s))
+            })
+            .collect();
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        scored.into_iter().map(|(_, s)| s).collect()
+    };
+    let mut starts: Vec<Structure> = screen(&base).into_iter().take(REFINED_STARTS).collect();
+    starts.extend(neutral_block(id, data).map(|b| base.with(b)));
+    let mut tried: Vec<EffectBlock> = Vec::new();
+    let mut best: Option<Assembled> = None;
+    let rounds = if matches!(id, TransportDelay::ID | StaticMapOrder::ID) { MAX_SCREENING_ROUNDS } else { 1 };
+    for _ in 0..rounds {
+        let mut improved = false;
+        for start in starts {
+            tried.extend(start.effects.iter().filter(|e| e.id() == id).cloned());
+            let Some(fitted) = refine(&start, data).or_else(|| assemble(&start, data)) else { continue };
+            if best.as_ref().is_none_or(|b| fitted.cost < b.cost) {
+                best = Some(fitted);
+                improved = true;
+            }
+        }
+        let Some(b) = best.as_ref().filter(|_| improved) else { break };
+        // Screen again around the refined roots and other effects, new starting points only.
+        let around = Structure {
+            effects: b.structure.effects.iter().filter(|e| e.id() != id).cloned().collect(),
+            ..b.structure.clone()
+        };
+        starts = screen(&around)
+            .into_iter()
+            .filter(|s| s.effects.iter().any(|e| e.id() == id && !tried.contains(e)))
+            .take(REFINED_STARTS)
+            .collect();
+    }
+    best.map(|b| b.model).ok_or_else(|| failed("no admissible starting point"))
+}
+
+/// The block's setting that leaves the model unchanged, where there is one.
+fn neutral_block(id: &str, data: &FitData) -> Option<EffectBlock> {
+    match id {
+        ThermalSoak::ID => Some(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.0, tau_s: 20.0 })),
+        AsymmetricDynamics::ID => {
+            Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
+        }
+        SensorDynamics::ID => Some(EffectBlock::SensorDynamics(SensorDynamics {
+            freq_hz: 0.9 * SensorDynamics::max_freq_hz(data.dt_secs),
+            zeta: 0.7,
+            lag_s: 0.01,
+        })),
+        _ => None,
+    }
+}
+
+/// Starting points for the new block, from the data and the current model.
+fn starting_points(
+    id: &str,
+    base: &Structure,
+    current: &ExtendedModel,
+    data: &FitData,
+) -> Result<Vec<EffectBlock>, EffectError> {
+    Ok(match id {
+        TransportDelay::ID => {
+            TransportDelay::guesses(data.dt_secs).into_iter().map(EffectBlock::TransportDelay).collect()
+        }
+        ThermalSoak::ID => ThermalSoak::guesses().into_iter().map(EffectBlock::ThermalSoak).collect(),
+        AmbientCorrection::ID => {
+            vec![EffectBlock::AmbientCorrection(AmbientCorrection::for_output(&data.output)?)]
+        }
+        AsymmetricDynamics::ID => {
+            AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
+            AsymmetricDynamics::guesses().into_iter().map(EffectBlock::AsymmetricDynamics).collect()
+        }
+        SensorDynamics::ID => {
+            let y_hat = current.simulate(&data.run)?;
+            let e: Vec<f64> = data.y.iter().zip(&y_hat).map(|(y, yh)| y - yh).collect();
+            SensorDynamics::guesses(&e, data.dt_secs).into_iter().map(EffectBlock::SensorDynamics).collect()
+        }
+        _ => {
+            let (v, _) = current.simulate_with_v(&data.run)?;
+            let steady_v: Vec<f64> =
+                data.steady_windows.iter().filter_map(|&(a, b)| v.get(a..b).map(mean)).collect();
+            StaticMapOrder::guesses(&steady_v).into_iter().map(EffectBlock::StaticMapOrder).collect()
+        }
+    })
+}

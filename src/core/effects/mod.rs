@@ -1,0 +1,340 @@
+//! The missing-physics catalog of METHOD.md as blocks of the model.
+//!
+//! The base model is the Wiener model `u → G(z) → v → f(v) → y`. Each effect adds one physical
+//! mechanism to it, with its own fitted parameters, and effects compose. Whatever order they are
+//! added in, they act in the order of the signal path:
+//!
+//! ```text
+//! u ─ambient: u/(δ√θ)─▶ transport delay z⁻ᵈ ─▶ G(z) (asymmetric: rise/fall time constants)
+//!   ─▶ thermal soak branch ─▶ v ─▶ f(v) (+ static-map kink) ─ambient: ·√θ or ·δ─▶ sensor ─▶ y
+//! ```
+//!
+//! Every block has a stable serialisable form, [`EffectRecord`] `{ id, params }`, with
+//! [`EffectBlock::params`] and [`EffectBlock::from_params`] as the two directions (parameters are
+//! checked there). [`ExtendedModel`] is the base model with its effects; the fitting of a block on
+//! identification data lives in `fit` and the diagnosis that ranks them in `core::diagnose`.
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+mod ambient_correction;
+mod asymmetric_dynamics;
+mod fit;
+mod model;
+mod sensor_dynamics;
+mod solver;
+mod static_map_order;
+pub mod stats;
+mod thermal_soak;
+mod transport_delay;
+
+pub use ambient_correction::AmbientCorrection;
+pub use asymmetric_dynamics::AsymmetricDynamics;
+pub use fit::{FitData, apply_effect, refit, refit_static};
+pub use model::ExtendedModel;
+pub use sensor_dynamics::SensorDynamics;
+pub use static_map_order::StaticMapOrder;
+pub use thermal_soak::ThermalSoak;
+pub use transport_delay::TransportDelay;
+
+/// Effect ids in the order of METHOD.md's catalog.
+pub const EFFECT_IDS: [&str; 6] = [
+    TransportDelay::ID,
+    ThermalSoak::ID,
+    AmbientCorrection::ID,
+    AsymmetricDynamics::ID,
+    SensorDynamics::ID,
+    StaticMapOrder::ID,
+];
+
+/// One parameter of an effect block: its name (with unit suffix) and admissible range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    pub min: f64,
+    pub max: f64,
+    /// Whether the value must be a whole number.
+    pub integer: bool,
+}
+
+impl ParamSpec {
+    const fn real(name: &'static str, min: f64, max: f64) -> Self {
+        Self { name, min, max, integer: false }
+    }
+
+    const fn whole(name: &'static str, min: f64, max: f64) -> Self {
+        Self { name, min, max, integer: true }
+    }
+}
+
+/// Errors a user can cause with effects: bad ids or parameters, missing channels, misuse.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EffectError {
+    #[error("unknown effect '{id}' (known: {})", known.join(", "))]
+    UnknownEffect { id: String, known: Vec<String> },
+    #[error("effect '{effect}' has no parameter '{param}' (its parameters: {})", known.join(", "))]
+    UnknownParameter { effect: String, param: String, known: Vec<String> },
+    #[error("effect '{effect}' needs the parameter '{param}'")]
+    MissingParameter { effect: String, param: String },
+    #[error("{effect}.{param} = {value} is outside its range [{min}, {max}]")]
+    ParameterOutOfRange { effect: String, param: String, value: f64, min: f64, max: f64 },
+    #[error("{effect}.{param} = {value} must be a whole number")]
+    NotWhole { effect: String, param: String, value: f64 },
+    #[error("effect '{effect}' needs the channel '{channel}', which run '{run}' does not have")]
+    MissingChannel { effect: String, channel: String, run: String },
+    #[error("channel '{channel}' of run '{run}' has {found} samples, the run has {expected}")]
+    ChannelLength { channel: String, run: String, found: usize, expected: usize },
+    #[error("channel '{channel}' of run '{run}' has the unphysical value {value} at sample {index}")]
+    BadChannelValue { channel: String, run: String, index: usize, value: f64 },
+    #[error("effect '{effect}' is already in the model")]
+    AlreadyApplied { effect: String },
+    #[error("effect '{effect}' is not in the model")]
+    NotApplied { effect: String },
+    #[error("effect '{effect}' does not apply to this model: {reason}")]
+    NotApplicable { effect: String, reason: String },
+    #[error("the model's linear block is not usable: {reason}")]
+    BadBaseModel { reason: String },
+    #[error("fitting the model on run '{run}' failed: {reason}")]
+    FitFailed { run: String, reason: String },
+}
+
+/// The stable, serialisable form of an effect block: its catalog id and named parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EffectRecord {
+    pub id: String,
+    pub params: BTreeMap<String, f64>,
+}
+
+/// One effect of the catalog with its fitted parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EffectBlock {
+    TransportDelay(TransportDelay),
+    ThermalSoak(ThermalSoak),
+    AmbientCorrection(AmbientCorrection),
+    AsymmetricDynamics(AsymmetricDynamics),
+    SensorDynamics(SensorDynamics),
+    StaticMapOrder(StaticMapOrder),
+}
+
+/// The catalog's known ids as owned strings (for error messages).
+fn known_ids() -> Vec<String> {
+    EFFECT_IDS.iter().map(|s| (*s).to_owned()).collect()
+}
+
+/// Check that `id` is in the catalog.
+pub fn check_id(id: &str) -> Result<&'static str, EffectError> {
+    EFFECT_IDS
+        .iter()
+        .find(|known| **known == id)
+        .copied()
+        .ok_or_else(|| EffectError::UnknownEffect { id: id.to_owned(), known: known_ids() })
+}
+
+/// The parameters an effect id accepts.
+pub fn param_specs(id: &str) -> Result<&'static [ParamSpec], EffectError> {
+    Ok(match check_id(id)? {
+        TransportDelay::ID => TransportDelay::PARAMS,
+        ThermalSoak::ID => ThermalSoak::PARAMS,
+        AmbientCorrection::ID => AmbientCorrection::PARAMS,
+        AsymmetricDynamics::ID => AsymmetricDynamics::PARAMS,
+        SensorDynamics::ID => SensorDynamics::PARAMS,
+        _ => StaticMapOrder::PARAMS,
+    })
+}
+
+/// What an effect means physically and what it changes in the model, in one sentence.
+pub fn physics(id: &str) -> Result<&'static str, EffectError> {
+    Ok(match check_id(id)? {
+        TransportDelay::ID => "fuel line and valve dead time: the input reaches the engine d samples late",
+        ThermalSoak::ID => {
+            "casing and rotor absorb heat after a power change: a share g of every change arrives \
+             with a slow time constant τ"
+        }
+        AmbientCorrection::ID => {
+            "the engine scales with inlet conditions: it runs on corrected fuel u/(δ√θ) and gives \
+             corrected speed N/√θ or thrust F/δ"
+        }
+        AsymmetricDynamics::ID => {
+            "acceleration and deceleration differ: the spool time constant is scaled while slowing down"
+        }
+        SensorDynamics::ID => "load cell or stand resonance and sensor lag: a second-order sensor block",
+        _ => "the static map is too simple: a kink (bleed valve, limiter) is added to f(v)",
+    })
+}
+
+/// One sentence of evidence for effect `id`, computed from the current model's residuals on the
+/// given runs (identification range and validation runs).
+pub fn evidence(id: &str, traces: &[stats::ResidualTrace]) -> Result<String, EffectError> {
+    Ok(match check_id(id)? {
+        TransportDelay::ID => transport_delay::evidence(traces),
+        ThermalSoak::ID => thermal_soak::evidence(traces),
+        AmbientCorrection::ID => ambient_correction::evidence(traces),
+        AsymmetricDynamics::ID => asymmetric_dynamics::evidence(traces),
+        SensorDynamics::ID => sensor_dynamics::evidence(traces),
+        _ => static_map_order::evidence(traces),
+    })
+}
+
+/// Check named parameters against an effect's specs; returns the values in spec order.
+fn checked_values(id: &str, params: &BTreeMap<String, f64>) -> Result<Vec<f64>, EffectError> {
+    let specs = param_specs(id)?;
+    if let Some(name) = params.keys().find(|name| !specs.iter().any(|s| s.name == name.as_str())) {
+        return Err(EffectError::UnknownParameter {
+            effect: id.to_owned(),
+            param: name.clone(),
+            known: specs.iter().map(|s| s.name.to_owned()).collect(),
+        });
+    }
+    specs.iter().map(|spec| check_value(id, spec, params.get(spec.name).copied())).collect()
+}
+
+fn check_value(id: &str, spec: &ParamSpec, value: Option<f64>) -> Result<f64, EffectError> {
+    let Some(value) = value else {
+        return Err(EffectError::MissingParameter { effect: id.to_owned(), param: spec.name.to_owned() });
+    };
+    if !value.is_finite() || value < spec.min || value > spec.max {
+        return Err(EffectError::ParameterOutOfRange {
+            effect: id.to_owned(),
+            param: spec.name.to_owned(),
+            value,
+            min: spec.min,
+            max: spec.max,
+        });
+    }
+    if spec.integer && (value - value.round()).abs() > 1e-9 {
+        return Err(EffectError::NotWhole { effect: id.to_owned(), param: spec.name.to_owned(), value });
+    }
+    Ok(value)
+}
+
+/// The value at `index` of a checked list (specs and values have equal lengths by construction).
+fn value_at(values: &[f64], index: usize) -> f64 {
+    values.get(index).copied().unwrap_or(0.0)
+}
+
+impl EffectBlock {
+    /// The catalog id.
+    pub fn id(&self) -> &'static str {
+        match self {
+            Self::TransportDelay(_) => TransportDelay::ID,
+            Self::ThermalSoak(_) => ThermalSoak::ID,
+            Self::AmbientCorrection(_) => AmbientCorrection::ID,
+            Self::AsymmetricDynamics(_) => AsymmetricDynamics::ID,
+            Self::SensorDynamics(_) => SensorDynamics::ID,
+            Self::StaticMapOrder(_) => StaticMapOrder::ID,
+        }
+    }
+
+    /// Position in the signal path (and in the catalog).
+    pub fn rank(&self) -> usize {
+        EFFECT_IDS.iter().position(|id| *id == self.id()).unwrap_or(EFFECT_IDS.len())
+    }
+
+    /// Parameter values in the order of [`param_specs`].
+    fn values(&self) -> Vec<f64> {
+        match self {
+            Self::TransportDelay(b) => vec![b.delay_samples as f64],
+            Self::ThermalSoak(b) => vec![b.gain, b.tau_s],
+            Self::AmbientCorrection(b) => vec![b.output_theta_exp, b.output_delta_exp],
+            Self::AsymmetricDynamics(b) => vec![b.decel_factor],
+            Self::SensorDynamics(b) => vec![b.freq_hz, b.zeta, b.lag_s],
+            Self::StaticMapOrder(b) => vec![b.knot_v, b.slope_change],
+        }
+    }
+
+    /// Named parameters (the serialisable form).
+    pub fn params(&self) -> BTreeMap<String, f64> {
+        let specs = param_specs(self.id()).unwrap_or(&[]);
+        specs.iter().zip(self.values()).map(|(s, v)| (s.name.to_owned(), v)).collect()
+    }
+
+    /// Build a block from named parameters; every parameter is required and checked.
+    pub fn from_params(id: &str, params: &BTreeMap<String, f64>) -> Result<Self, EffectError> {
+        let v = checked_values(id, params)?;
+        let at = |i| value_at(&v, i);
+        Ok(match check_id(id)? {
+            TransportDelay::ID => {
+                Self::TransportDelay(TransportDelay { delay_samples: at(0).round() as usize })
+            }
+            ThermalSoak::ID => Self::ThermalSoak(ThermalSoak { gain: at(0), tau_s: at(1) }),
+            AmbientCorrection::ID => Self::AmbientCorrection(AmbientCorrection {
+                output_theta_exp: at(0),
+                output_delta_exp: at(1),
+            }),
+            AsymmetricDynamics::ID => Self::AsymmetricDynamics(AsymmetricDynamics { decel_factor: at(0) }),
+            SensorDynamics::ID => {
+                Self::SensorDynamics(SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2) })
+            }
+            _ => Self::StaticMapOrder(StaticMapOrder { knot_v: at(0), slope_change: at(1) }),
+        })
+    }
+
+    /// The serialisable record.
+    pub fn record(&self) -> EffectRecord {
+        EffectRecord { id: self.id().to_owned(), params: self.params() }
+    }
+
+    /// Build from a record (checked).
+    pub fn from_record(record: &EffectRecord) -> Result<Self, EffectError> {
+        Self::from_params(&record.id, &record.params)
+    }
+
+    /// Channels (besides the input and the output) the block reads from every run.
+    pub fn required_channels(&self) -> &'static [&'static str] {
+        match self {
+            Self::AmbientCorrection(_) => AmbientCorrection::CHANNELS,
+            _ => &[],
+        }
+    }
+
+    /// Parameters the fit moves continuously, in an unconstrained form.
+    fn free_params(&self) -> Vec<f64> {
+        match self {
+            Self::ThermalSoak(b) => b.free_params(),
+            Self::AsymmetricDynamics(b) => b.free_params(),
+            Self::SensorDynamics(b) => b.free_params(),
+            Self::StaticMapOrder(b) => b.free_params(),
+            Self::TransportDelay(_) | Self::AmbientCorrection(_) => Vec::new(),
+        }
+    }
+
+    /// The block with new free parameters, or `None` where they leave the admissible range.
+    fn with_free_params(&self, theta: &[f64], dt_secs: f64) -> Option<Self> {
+        Some(match self {
+            Self::ThermalSoak(b) => Self::ThermalSoak(b.with_free_params(theta)?),
+            Self::AsymmetricDynamics(b) => Self::AsymmetricDynamics(b.with_free_params(theta)?),
+            Self::SensorDynamics(b) => Self::SensorDynamics(b.with_free_params(theta, dt_secs)?),
+            Self::StaticMapOrder(b) => Self::StaticMapOrder(b.with_free_params(theta)?),
+            Self::TransportDelay(_) | Self::AmbientCorrection(_) => self.clone(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn every_effect_round_trips_through_its_record() {
+        let blocks = [
+            EffectBlock::TransportDelay(TransportDelay { delay_samples: 4 }),
+            EffectBlock::ThermalSoak(ThermalSoak { gain: 0.1, tau_s: 40.0 }),
+            EffectBlock::AmbientCorrection(AmbientCorrection {
+                output_theta_exp: 0.5,
+                output_delta_exp: 0.0,
+            }),
+            EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.8 }),
+            EffectBlock::SensorDynamics(SensorDynamics { freq_hz: 1.4, zeta: 0.06, lag_s: 0.3 }),
+            EffectBlock::StaticMapOrder(StaticMapOrder { knot_v: 80_000.0, slope_change: -0.5 }),
+        ];
+        for (block, id) in blocks.iter().zip(EFFECT_IDS) {
+            assert_eq!(block.id(), id);
+            let record = block.record();
+            let json = serde_json::to_string(&record).unwrap();
+            let back: EffectRecord = serde_json::from_str(&json).unwrap();
+            assert_eq!(&EffectBlock::from_record(&back).unwrap(), block);
+            assert!(physics(id).unwrap().len() > 20);
+        }
+    }
+}

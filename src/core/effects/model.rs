@@ -1,0 +1,285 @@
+//! The Wiener model extended with effect blocks, and its simulation along the signal path.
+use num_complex::Complex64;
+
+use super::ambient_correction::Conditions;
+use super::asymmetric_dynamics::SplitShape;
+use super::{
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectRecord, SensorDynamics, check_id,
+};
+use crate::core::pipeline::GrayBoxModel;
+use crate::core::run::Run;
+use crate::core::static_map::StaticMap;
+use crate::core::wiener::{LinearBlock, WienerModel};
+
+/// The gray-box model of one output with the effects added to it.
+///
+/// With no effects it simulates exactly like its [`WienerModel`]. Effects are kept in signal-path
+/// order (see the module documentation), each id at most once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExtendedModel {
+    pub output: String,
+    pub wiener: WienerModel,
+    pub effects: Vec<EffectBlock>,
+}
+
+impl ExtendedModel {
+    /// The base model without effects.
+    pub fn new(output: &str, wiener: WienerModel) -> Self {
+        Self { output: output.to_owned(), wiener, effects: Vec::new() }
+    }
+
+    /// The pipeline's gray-box model without effects.
+    pub fn from_gray_box(model: &GrayBoxModel) -> Self {
+        Self::new(&model.output, model.wiener.clone())
+    }
+
+    /// A model restored from its stored parts (e.g. model.json), every record checked.
+    pub fn from_records(
+        output: &str,
+        wiener: WienerModel,
+        records: &[EffectRecord],
+    ) -> Result<Self, EffectError> {
+        let mut model = Self::new(output, wiener);
+        for record in records {
+            model = model.with_effect(EffectBlock::from_record(record)?)?;
+        }
+        Ok(model)
+    }
+
+    /// The effects' serialisable records, in signal-path order.
+    pub fn records(&self) -> Vec<EffectRecord> {
+        self.effects.iter().map(EffectBlock::record).collect()
+    }
+
+    /// The effect with this id, if applied.
+    pub fn effect(&self, id: &str) -> Option<&EffectBlock> {
+        self.effects.iter().find(|e| e.id() == id)
+    }
+
+    /// Ids of the applied effects, in signal-path order.
+    pub fn effect_ids(&self) -> Vec<&'static str> {
+        self.effects.iter().map(EffectBlock::id).collect()
+    }
+
+    /// The model with one more effect block, as given (nothing is refitted; see `apply_effect`).
+    pub fn with_effect(&self, block: EffectBlock) -> Result<Self, EffectError> {
+        if self.effect(block.id()).is_some() {
+            return Err(EffectError::AlreadyApplied { effect: block.id().to_owned() });
+        }
+        if let EffectBlock::SensorDynamics(s) = &block {
+            let max = SensorDynamics::max_freq_hz(self.wiener.linear.tf.dt_secs);
+            if s.freq_hz > max {
+                return Err(EffectError::ParameterOutOfRange {
+                    effect: SensorDynamics::ID.to_owned(),
+                    param: "freq_hz".to_owned(),
+                    value: s.freq_hz,
+                    min: 0.0,
+                    max,
+                });
+            }
+        }
+        let mut model = self.clone();
+        model.effects.push(block);
+        model.effects.sort_by_key(EffectBlock::rank);
+        Ok(model)
+    }
+
+    /// The model without the effect `id`, as it is (nothing is refitted).
+    pub fn without_effect(&self, id: &str) -> Result<Self, EffectError> {
+        let id = check_id(id)?;
+        if self.effect(id).is_none() {
+            return Err(EffectError::NotApplied { effect: id.to_owned() });
+        }
+        let mut model = self.clone();
+        model.effects.retain(|e| e.id() != id);
+        Ok(model)
+    }
+
+    /// Channels every run must carry for this model, besides its input and output.
+    pub fn required_channels(&self) -> Vec<&'static str> {
+        self.effects.iter().flat_map(|e| e.required_channels().iter().copied()).collect()
+    }
+
+    /// Poles and zeros of the linear block.
+    pub fn roots(&self) -> Result<(Vec<Complex64>, Vec<Complex64>), EffectError> {
+        let tf = &self.wiener.linear.tf;
+        let bad = |e: crate::core::poly::PolyError| EffectError::BadBaseModel { reason: e.to_string() };
+        Ok((tf.poles().map_err(bad)?, tf.zeros().map_err(bad)?))
+    }
+
+    /// Simulate the output from the run's input (and the channels the effects need) alone.
+    pub fn simulate(&self, run: &Run) -> Result<Vec<f64>, EffectError> {
+        Ok(self.simulate_with_v(run)?.1)
+    }
+
+    /// Simulate and also return the linear block's output `v` (what the static map reads).
+    pub fn simulate_with_v(&self, run: &Run) -> Result<(Vec<f64>, Vec<f64>), EffectError> {
+        let (u, conditions) = input_stage(&self.effects, run)?;
+        let split = match self.effect(AsymmetricDynamics::ID) {
+            Some(_) => {
+                let (poles, zeros) = self.roots()?;
+                Some(AsymmetricDynamics::split(&poles, &zeros, run.dt_secs)?)
+            }
+            None => None,
+        };
+        let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, run.dt_secs)?;
+        let y = output_stage(&self.effects, &self.wiener.map, &v, conditions.as_ref(), run.dt_secs);
+        Ok((v, y))
+    }
+}
+
+/// The input as the linear block sees it: corrected for inlet conditions, then delayed. Also
+/// returns the conditions when the model is corrected.
+pub(super) fn input_stage(
+    effects: &[EffectBlock],
+    run: &Run,
+) -> Result<(Vec<f64>, Option<Conditions>), EffectError> {
+    let mut u = run.input.values.clone();
+    let mut conditions = None;
+    for effect in effects {
+        match effect {
+            EffectBlock::AmbientCorrection(_) => {
+                let c = AmbientCorrection::conditions(run)?;
+                u = AmbientCorrection::correct_input(&u, &c);
+                conditions = Some(c);
+            }
+            EffectBlock::TransportDelay(d) => u = d.delay(&u),
+            _ => {}
+        }
+    }
+    Ok((u, conditions))
+}
+
+/// `v`: the linear block (with rise/fall time constants when asymmetric) and the soak branch.
+/// `split` must be given when the asymmetric block is present.
+pub(super) fn linear_stage(
+    effects: &[EffectBlock],
+    linear: &LinearBlock,
+    split: Option<&SplitShape>,
+    u: &[f64],
+    dt_secs: f64,
+) -> Result<Vec<f64>, EffectError> {
+    let asymmetric = effects.iter().find_map(|e| match e {
+        EffectBlock::AsymmetricDynamics(a) => Some(a),
+        _ => None,
+    });
+    let mut v = match (asymmetric, split) {
+        (Some(a), Some(split)) => {
+            let gain =
+                linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
+            a.respond(split, u).iter().map(|w| gain * w).collect()
+        }
+        _ => linear.tf.simulate_from_steady(u),
+    };
+    for effect in effects {
+        if let EffectBlock::ThermalSoak(soak) = effect {
+            v = soak.apply(&v, dt_secs);
+        }
+    }
+    for x in &mut v {
+        *x += linear.offset;
+    }
+    Ok(v)
+}
+
+/// `y`: the static map (with its kink), back to physical units, through the sensor.
+pub(super) fn output_stage(
+    effects: &[EffectBlock],
+    map: &StaticMap,
+    v: &[f64],
+    conditions: Option<&Conditions>,
+    dt_secs: f64,
+) -> Vec<f64> {
+    let kink = effects.iter().find_map(|e| match e {
+        EffectBlock::StaticMapOrder(k) => Some(k),
+        _ => None,
+    });
+    let mut y: Vec<f64> = v.iter().map(|vk| map.eval(*vk) + kink.map_or(0.0, |k| k.eval(*vk))).collect();
+    for effect in effects {
+        match (effect, conditions) {
+            (EffectBlock::AmbientCorrection(a), Some(c)) => {
+                for (yk, f) in y.iter_mut().zip(a.output_factor(c)) {
+                    *yk *= f;
+                }
+            }
+            (EffectBlock::SensorDynamics(s), _) => y = s.apply(&y, dt_secs),
+            _ => {}
+        }
+    }
+    y
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::core::effects::{EFFECT_IDS, ThermalSoak, TransportDelay};
+    use crate::core::run::Channel;
+    use crate::core::wiener::unit_gain_tf;
+
+    fn model() -> ExtendedModel {
+        let tf = unit_gain_tf(&[Complex64::new(0.9, 0.0)], &[], 0.1).unwrap();
+        let map = StaticMap { v_center: 0.0, v_scale: 1.0, coeffs_scaled: vec![1.0, 2.0] };
+        ExtendedModel::new("thrust_n", WienerModel { linear: LinearBlock { tf, offset: 0.5 }, map })
+    }
+
+    fn run(n: usize) -> Run {
+        Run {
+            name: "bench".into(),
+            dt_secs: 0.1,
+            t_secs: (0..n).map(|k| k as f64 * 0.1).collect(),
+            input: Channel::new("fuel_flow_gph", (0..n).map(|k| if k < 20 { 3.0 } else { 5.0 }).collect()),
+            outputs: vec![],
+            aux: vec![],
+        }
+    }
+
+    #[test]
+    fn no_effect_simulates_like_the_wiener_model_and_effects_compose() {
+        let m = model();
+        let r = run(100);
+        let plain = m.simulate(&r).unwrap();
+        assert_eq!(plain, m.wiener.simulate(&r.input.values).1);
+        let soaked = m.with_effect(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.2, tau_s: 5.0 })).unwrap();
+        let both =
+            soaked.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 3 })).unwrap();
+        assert_eq!(both.effect_ids(), vec![EFFECT_IDS[0], EFFECT_IDS[1]]);
+        let y = both.simulate(&r).unwrap();
+        assert!((y[22] - plain[0]).abs() < 1e-12, "the delay holds the start");
+        assert!(y[60] < plain[60], "the soak slows the rise");
+        let back = ExtendedModel::from_records("thrust_n", m.wiener.clone(), &both.records()).unwrap();
+        assert_eq!(back, both);
+    }
+
+    #[test]
+    fn misuse_is_an_error_with_data() {
+        let m =
+            model().with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 1 })).unwrap();
+        assert_eq!(
+            m.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 2 })),
+            Err(EffectError::AlreadyApplied { effect: "transport_delay".into() })
+        );
+        assert_eq!(
+            m.without_effect("thermal_soak"),
+            Err(EffectError::NotApplied { effect: "thermal_soak".into() })
+        );
+        assert!(
+            matches!(m.without_effect("warp"), Err(EffectError::UnknownEffect { known, .. }) if known.len() == 6)
+        );
+        let ambient = model().with_effect(EffectBlock::AmbientCorrection(AmbientCorrection {
+            output_theta_exp: 0.0,
+            output_delta_exp: 1.0,
+        }));
+        assert_eq!(ambient.as_ref().unwrap().required_channels(), AmbientCorrection::CHANNELS.to_vec());
+        assert_eq!(
+            ambient.unwrap().simulate(&run(10)),
+            Err(EffectError::MissingChannel {
+                effect: "ambient_correction".into(),
+                channel: "ambient_temp_c".into(),
+                run: "bench".into()
+            })
+        );
+        let too_fast = EffectBlock::SensorDynamics(SensorDynamics { freq_hz: 6.0, zeta: 0.1, lag_s: 0.0 });
+        assert!(matches!(model().with_effect(too_fast), Err(EffectError::ParameterOutOfRange { .. })));
+    }
+}

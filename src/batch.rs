@@ -8,6 +8,8 @@ use anyhow::{Context, Result, bail};
 
 use crate::batch_compare::MonteCarloSummary;
 use crate::cli::BatchArgs;
+use crate::core::diagnose;
+use crate::core::effects::ExtendedModel;
 use crate::core::pipeline::{self, Identified, PipelineError, segments_for};
 use crate::core::run::Run;
 use crate::core::segment::{SegmentSettings, auto_segments_joined};
@@ -15,8 +17,8 @@ use crate::io::csv_run::load_run;
 use crate::io::model_file::{ModelFile, SignalInfo, write_model};
 use crate::io::project::{LoadSpec, Project, RunSource, bundled_project_path, load_project};
 use crate::io::report::{
-    ClusterSummary, HistoryStep, IdentSummary, OutputReport, Report, SegmentSummary, write_report_json,
-    write_report_md,
+    ClusterSummary, DiagnosisEntry, HistoryStep, IdentSummary, OutputReport, Report, SegmentSummary,
+    write_report_json, write_report_md,
 };
 
 /// The loaded runs of a project, by role.
@@ -235,7 +237,7 @@ fn score_output(
             notes.push(format!("run '{}' has no '{output}' column; not scored for it", run.name));
             continue;
         }
-        for (name, y_hat) in models.simulate_all(&run.input.values) {
+        for (name, y_hat) in models.simulate_run(run) {
             match pipeline::score(run, output, y_hat) {
                 Ok(p) => {
                     report.models.entry(name.to_owned()).or_default().insert(run.name.clone(), p.metrics);
@@ -258,8 +260,8 @@ pub fn run(args: &BatchArgs) -> Result<()> {
     let total = Instant::now();
     let mut timings = Timings::default();
     let project = project_from_args(args)?;
-    if let Some(id) = project.add_effects.first() {
-        bail!("--add-effect {id}: effects are not available in this version yet");
+    for id in &project.add_effects {
+        crate::core::effects::check_id(id).with_context(|| format!("--add-effect {id}"))?;
     }
     let runs = timings.time("load_runs", || load_runs(&project))?;
     let outputs = outputs_to_model(&project, &runs.ident)?;
@@ -296,7 +298,16 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             .time(&format!("identify_{output}"), || identify(&project, &runs, output))
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
         let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
+        let (extended, history, notes) = timings
+            .time(&format!("effects_{output}"), || apply_effects(&project, &runs, &identified, output))?;
+        report.diagnostics.extend(notes);
         model_file.push(&identified.model, &unit);
+        if let Some(last) = model_file.outputs.last_mut() {
+            // Effects are fitted together with the gain and static map they sit beside.
+            last.wiener = extended.wiener.clone();
+            last.static_map_beta = extended.wiener.map.beta();
+            last.effects = extended.records();
+        }
         let mut out = OutputReport {
             unit,
             models: BTreeMap::new(),
@@ -307,9 +318,21 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             error_boxes: BTreeMap::new(),
             cutoff_rad_s: BTreeMap::new(),
         };
-        let models = timings.time(&format!("baselines_{output}"), || {
+        let mut models = timings.time(&format!("baselines_{output}"), || {
             crate::batch_compare::fit_baselines(&identified, &runs.ident, output, &mut report.diagnostics)
         });
+        if !extended.effects.is_empty() {
+            models.extended = Some(extended.clone());
+        }
+        out.effects_applied = extended.effect_ids().iter().map(|s| (*s).to_owned()).collect();
+        out.error_history = history;
+        let diagnosis = timings.time(&format!("diagnosis_{output}"), || {
+            diagnose_output(&project, &runs, &identified, &extended, output)
+        });
+        match diagnosis {
+            Ok(entries) => out.diagnosis = entries,
+            Err(e) => report.diagnostics.push(format!("diagnosis of '{output}': {e}")),
+        }
         timings.time("validate", || score_output(&models, &runs, output, &mut out, &mut report.diagnostics));
         let scored = scored_runs(&runs);
         out.error_boxes = crate::batch_compare::error_boxes(&models, &scored, output);
@@ -354,9 +377,6 @@ pub fn run(args: &BatchArgs) -> Result<()> {
         });
         report.figures.extend(figs);
         report.diagnostics.extend(notes);
-        if let Some(rmspe) = mean_validation_rmspe(&out, &runs, "gray_box") {
-            out.error_history.push(HistoryStep { step: "base".into(), rmspe_pct: rmspe });
-        }
         report.outputs.insert(output.clone(), out);
     }
     report.noise_fit = noise.map(serde_json::to_value).transpose().context("noise fit")?;
@@ -370,6 +390,62 @@ pub fn run(args: &BatchArgs) -> Result<()> {
     write_report_md(&out_dir.join("report.md"), &report)?;
     print_summary(&report, out_dir);
     Ok(())
+}
+
+/// The project's effects (`--add-effect`, `add_effects`) added one after another to the gray-box
+/// model, each refitted on the identification data, with the validation error after each step.
+fn apply_effects(
+    project: &Project,
+    runs: &Runs,
+    identified: &Identified,
+    output: &str,
+) -> Result<(ExtendedModel, Vec<HistoryStep>, Vec<String>)> {
+    let settings = project.settings_for(output);
+    let validation: Vec<&Run> = runs.validate.iter().filter(|r| r.output(output).is_some()).collect();
+    let mut notes = Vec::new();
+    let mut model = ExtendedModel::from_gray_box(&identified.model);
+    let mut history = Vec::new();
+    let mut record = |step: String, model: &ExtendedModel, history: &mut Vec<HistoryStep>| {
+        if validation.is_empty() {
+            return;
+        }
+        match diagnose::validation_rmspe(model, &validation) {
+            Ok(rmspe_pct) => history.push(HistoryStep { step, rmspe_pct }),
+            Err(e) => notes.push(format!("'{output}' {step}: {e}")),
+        }
+    };
+    record("base".into(), &model, &mut history);
+    for id in &project.add_effects {
+        model = diagnose::apply(&model, id, &runs.ident, &identified.fits, &settings)
+            .with_context(|| format!("adding the effect '{id}' to '{output}'"))?;
+        record(format!("+{id}"), &model, &mut history);
+    }
+    Ok((model, history, notes))
+}
+
+/// Which missing effect would help most (report.json `diagnosis`, best first).
+fn diagnose_output(
+    project: &Project,
+    runs: &Runs,
+    identified: &Identified,
+    current: &ExtendedModel,
+    output: &str,
+) -> Result<Vec<DiagnosisEntry>> {
+    let validation: Vec<&Run> = runs.validate.iter().filter(|r| r.output(output).is_some()).collect();
+    let settings = project.settings_for(output);
+    let report = diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &settings)?;
+    Ok(report
+        .entries
+        .iter()
+        .map(|d| DiagnosisEntry {
+            effect: d.effect.clone(),
+            significant: d.significant,
+            rmspe_before_pct: d.rmspe_before_pct,
+            rmspe_after_pct: d.rmspe_after_pct,
+            evidence: d.evidence.clone(),
+            p_value: Some(d.test.p_value),
+        })
+        .collect())
 }
 
 /// Take the clusters of the project's saved model (`clusters_from` / `--clusters`) for every output

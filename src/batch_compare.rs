@@ -26,6 +26,10 @@ pub const NNARX: &str = "nnarx";
 /// Every model of one output that can be simulated from an input sequence.
 pub struct OutputModels {
     pub wiener: WienerModel,
+    /// The gray-box model with the applied effects, when there are any: it is what `gray_box` means
+    /// on a run (effects may need the run's auxiliary channels); input-only studies (chirp frequency
+    /// response, Monte Carlo) use the model without them.
+    pub extended: Option<crate::core::effects::ExtendedModel>,
     pub hw: Option<HwModel>,
     pub nnarx: Option<NnarxModel>,
 }
@@ -41,6 +45,23 @@ impl OutputModels {
             out.push((NNARX, nn.simulate(u)));
         }
         out
+    }
+
+    /// Every model on a run: like [`Self::simulate_all`] on its input, with the gray-box model's
+    /// effects applied (a gray-box simulation that fails, e.g. for a missing channel, is left out).
+    pub fn simulate_run(&self, run: &Run) -> Vec<(&'static str, Vec<f64>)> {
+        let mut all = self.simulate_all(&run.input.values);
+        if let Some(ext) = &self.extended {
+            match ext.simulate(run) {
+                Ok(y) => {
+                    if let Some(g) = all.iter_mut().find(|(n, _)| *n == GRAY_BOX) {
+                        g.1 = y;
+                    }
+                }
+                Err(_) => all.retain(|(n, _)| *n != GRAY_BOX),
+            }
+        }
+        all
     }
 
     /// One model's simulation.
@@ -81,7 +102,7 @@ pub fn fit_baselines(
     let nnarx = fit_nnarx(u, y, &NnarxOptions::default(), &mut |_| true)
         .map_err(|e| notes.push(format!("NNARX baseline for '{output}': {e}")))
         .ok();
-    OutputModels { wiener: identified.model.wiener.clone(), hw, nnarx }
+    OutputModels { wiener: identified.model.wiener.clone(), extended: None, hw, nnarx }
 }
 
 /// A model's frequency response as the chirp shows it: the same Welch estimate applied to the
@@ -134,7 +155,7 @@ pub fn error_boxes(
     let mut out: BTreeMap<String, BTreeMap<String, BoxStats>> = BTreeMap::new();
     for run in runs {
         let Some(y) = run.output(output) else { continue };
-        for (name, y_hat) in models.simulate_all(&run.input.values) {
+        for (name, y_hat) in models.simulate_run(run) {
             if let Ok(b) = percentage_error_box(&y.values, &y_hat) {
                 out.entry(name.to_owned()).or_default().insert(run.name.clone(), b);
             }

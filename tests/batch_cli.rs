@@ -297,3 +297,94 @@ fn saved_clusters_from_another_sample_time_are_refused() {
         &["/nonexistent/model.json"],
     );
 }
+
+#[test]
+fn add_effect_lowers_the_error_and_predict_honours_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let project = Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/soak/project.toml");
+    let out = dir.path().join("out");
+    let o = jetid(&[
+        "--batch",
+        project.to_str().unwrap(),
+        "--output",
+        "shaft_speed_rpm",
+        "--add-effect",
+        "thermal_soak",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let speed = &report["outputs"]["shaft_speed_rpm"];
+    assert_eq!(speed["effects_applied"], serde_json::json!(["thermal_soak"]));
+    let history = speed["error_history"].as_array().unwrap();
+    assert_eq!(history.len(), 2, "{history:?}");
+    let (base, after) =
+        (history[0]["rmspe_pct"].as_f64().unwrap(), history[1]["rmspe_pct"].as_f64().unwrap());
+    assert!(after < base, "adding the soak must lower the validation error: {base} -> {after}");
+    assert!(!speed["diagnosis"].as_array().unwrap().is_empty());
+
+    // model.json records the effect and predict simulates it: same error as the batch reports.
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("model.json")).unwrap()).unwrap();
+    assert_eq!(model["outputs"][0]["effects"][0]["id"], "thermal_soak");
+    let val = project.parent().unwrap().join("validation.csv");
+    let pred = dir.path().join("pred.csv");
+    let o = jetid(&[
+        "predict",
+        "--model",
+        out.join("model.json").to_str().unwrap(),
+        "--input",
+        val.to_str().unwrap(),
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let y = load_run(&val, &LoadOptions::default()).unwrap();
+    let y_hat = load_run(&pred, &LoadOptions::default()).unwrap();
+    let m = jetid::core::metrics::metrics(
+        &y.output("shaft_speed_rpm").unwrap().values,
+        &y_hat.output("shaft_speed_rpm").unwrap().values,
+    )
+    .unwrap();
+    let batch = speed["models"]["gray_box"]["validation"]["rmspe_pct"].as_f64().unwrap();
+    assert!((m.rmspe_pct - batch).abs() < 1e-6 * batch, "predict {} vs batch {batch}", m.rmspe_pct);
+}
+
+#[test]
+fn effect_errors_name_what_is_wrong() {
+    let project = samples().join("project.toml");
+    expect_error(
+        &["--batch", project.to_str().unwrap(), "--add-effect", "warp_drive"],
+        &["warp_drive", "thermal_soak"],
+    );
+    // A model that needs the inlet channels cannot predict a run without them.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = jetid(&[
+        "--batch",
+        project.to_str().unwrap(),
+        "--output",
+        "thrust_n",
+        "--add-effect",
+        "ambient_correction",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: String = (0..40).map(|k| format!("{:.4},5,80\n", k as f64 / 8.85)).collect();
+    let bare = write(dir.path(), "bare.csv", &format!("time_s,fuel_flow_gph,thrust_n\n{rows}"));
+    expect_error(
+        &[
+            "predict",
+            "--model",
+            out.join("model.json").to_str().unwrap(),
+            "--input",
+            bare.to_str().unwrap(),
+            "--out",
+            dir.path().join("p.csv").to_str().unwrap(),
+        ],
+        &["ambient_correction", "ambient_temp_c"],
+    );
+}

@@ -43,17 +43,14 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     if model.outputs.is_empty() {
         bail!("{} holds no output model", args.model.display());
     }
-    let u = &run.input.values;
     let mut outputs = Vec::new();
     for out in &model.outputs {
-        if let Some(effect) = out.effects.first() {
-            bail!(
-                "output '{}' uses the effect '{}', which this version cannot simulate",
-                out.name,
-                effect.id
-            );
-        }
-        let (_, y) = out.wiener.simulate(u);
+        let extended =
+            crate::core::effects::ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects)
+                .with_context(|| format!("{}: output '{}'", args.model.display(), out.name))?;
+        let y = extended
+            .simulate(&run)
+            .with_context(|| format!("simulating output '{}' on {}", out.name, args.input.display()))?;
         outputs.push(Channel { name: out.name.clone(), unit: out.unit.clone(), values: y });
     }
     let prediction = Run {

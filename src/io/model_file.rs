@@ -25,11 +25,7 @@ pub struct SignalInfo {
 }
 
 /// An effect applied to a model, with its fitted parameters (see METHOD.md's catalog).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct EffectRecord {
-    pub id: String,
-    pub params: std::collections::BTreeMap<String, f64>,
-}
+pub use crate::core::effects::EffectRecord;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OutputModel {

@@ -72,6 +72,9 @@ pub struct DiagnosisEntry {
     pub rmspe_before_pct: f64,
     pub rmspe_after_pct: f64,
     pub evidence: String,
+    /// Diebold–Mariano p-value of "the effect does not reduce the validation error".
+    #[serde(default)]
+    pub p_value: Option<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

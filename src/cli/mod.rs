@@ -20,7 +20,7 @@ pub struct Cli {
     /// Open the app on the bundled sample runs, save a PNG of one view to this file, and exit.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
-    /// The view to capture with --screenshot (data, …).
+    /// The view to capture with --screenshot: data, zplane, bode, static or traces.
     #[arg(long, default_value = "data")]
     pub view: String,
     #[command(subcommand)]
@@ -82,7 +82,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Predict(args)) => predict::run(&args),
         None if cli.batch => crate::batch::run(&cli.batch_args),
         #[cfg(feature = "gui")]
-        None if let Some(out) = &cli.screenshot => crate::ui::screenshot(out, &cli.view),
+        None if let Some(out) = &cli.screenshot => {
+            // `--output NAME` picks the output the model views show (default: the first).
+            crate::ui::screenshot(out, &cli.view, cli.batch_args.outputs.first().map(String::as_str))
+        }
         None => run_app(),
     }
 }

@@ -97,7 +97,7 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
             plot = plot.x_axis_label("ω [rad/s]");
         } else {
             plot =
-                plot.legend(Legend::default().position(egui_plot::Corner::LeftBottom).background_alpha(0.85));
+                plot.legend(Legend::default().position(egui_plot::Corner::RightTop).background_alpha(0.85));
         }
         plot.show(ui, |plot_ui| {
             draw_curves(plot_ui, &view, state, part);

@@ -66,8 +66,9 @@ pub fn run_app() -> Result<()> {
         .map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))
 }
 
-/// `jetid --screenshot OUT [--view NAME]`: a picture of one view on the bundled sample runs.
-pub fn screenshot(out: &Path, view: &str) -> Result<()> {
+/// `jetid --screenshot OUT [--view NAME] [--output NAME]`: a picture of one view on the bundled
+/// sample runs (model views show `output`, else the first output).
+pub fn screenshot(out: &Path, view: &str, output: Option<&str>) -> Result<()> {
     let Some(tab) = Tab::from_cli_name(view) else {
         bail!("unknown view `{view}`; the views are: {}", Tab::cli_names());
     };
@@ -79,10 +80,12 @@ pub fn screenshot(out: &Path, view: &str) -> Result<()> {
     options.viewport = options.viewport.with_resizable(false);
     let (tx, rx) = mpsc::channel();
     let out = out.to_owned();
+    let mut app = App::startup(None);
+    app.view.output = output.map(ToOwned::to_owned);
     let result = eframe::run_native(
         "jetid",
         options,
-        Box::new(move |_cc| Ok(Box::new(screenshot::ScreenshotApp::new(App::startup(None), tab, out, tx)))),
+        Box::new(move |_cc| Ok(Box::new(screenshot::ScreenshotApp::new(app, tab, out, tx)))),
     );
     let _ = std::fs::remove_file(&storage);
     result.map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))?;

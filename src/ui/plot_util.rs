@@ -26,6 +26,25 @@ pub fn grid_125_x(input: GridInput) -> Vec<GridMark> {
     (uniform_grid_spacer(|i| steps_125(i, 9.0)))(input)
 }
 
+/// A 1–2–5 grid spacer for both axes of an equal-aspect plot (the z-plane): same steps on x and y.
+pub fn grid_125_equal(input: GridInput) -> Vec<GridMark> {
+    (uniform_grid_spacer(|i| steps_125(i, 9.0)))(input)
+}
+
+/// About eight tick labels on a 1–2–5 step over the visible range, with the decimals that step
+/// needs (egui_plot's default labels every line it has room for and takes the decimals from each
+/// line's own step, which prints 0.5 as "0" on a heavy 0.5 line).
+pub fn range_label(mark: GridMark, range: &std::ops::RangeInclusive<f64>) -> String {
+    let span = (range.end() - range.start()).abs();
+    let step = nice_125(span / 8.0);
+    let nearest = (mark.value / step).round() * step;
+    if (nearest - mark.value).abs() > 1e-6 * step {
+        return String::new();
+    }
+    let decimals = (-step.log10()).ceil().clamp(0.0, 6.0) as usize;
+    format!("{:.*}", decimals, nearest)
+}
+
 /// The smallest of 1, 2, 5 × 10ⁿ that is at least `value` (positive, finite).
 pub fn nice_125(value: f64) -> f64 {
     if !(value.is_finite() && value > 0.0) {

@@ -13,6 +13,7 @@ use num_complex::Complex64;
 
 use super::command::Command;
 use super::derived::LiveView;
+use super::plot_util;
 use super::theme;
 use super::zplane_ui::{ClusterDrag, Handle, ZPlaneViewState, ZoomView};
 use crate::core::cluster::{Cluster, RootKind};
@@ -255,6 +256,10 @@ pub fn main_plot_ui(
         .show_crosshair(false)
         .x_axis_label("Re z")
         .y_axis_label("Im z")
+        .x_grid_spacer(plot_util::grid_125_equal)
+        .y_grid_spacer(plot_util::grid_125_equal)
+        .x_axis_formatter(plot_util::range_label)
+        .y_axis_formatter(plot_util::range_label)
         .coordinates_formatter(
             Corner::RightBottom,
             CoordinatesFormatter::new(move |p, _| {

@@ -379,3 +379,28 @@ fn a_broken_project_shows_an_error_and_keeps_the_session() {
     assert_eq!(app.session.runs.len(), runs);
     assert_eq!(app.view.errors.len(), 1);
 }
+
+#[test]
+fn escape_cancels_a_cluster_drag() {
+    let mut harness = sample_harness(Tab::ZPlane);
+    let clusters = clusters_of(harness.state(), SPEED);
+    let revision = harness.state().session.revision;
+    let t = transform(&harness);
+    let from = screen(&t, clusters[0].centre);
+    let to = from + egui::vec2(40.0, -30.0);
+    harness.hover_at(from);
+    harness.step();
+    harness.drag_at(from);
+    harness.step();
+    harness.hover_at(to);
+    harness.step();
+    assert!(harness.state().view.views.zplane.drag.is_some());
+    harness.key_press(Key::Escape);
+    harness.step();
+    harness.drop_at(to);
+    harness.run();
+    let app = harness.state();
+    assert_eq!(app.session.revision, revision);
+    assert_eq!(clusters_of(app, SPEED), clusters);
+    assert!(app.cache.preview.is_none());
+}

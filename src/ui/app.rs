@@ -160,7 +160,11 @@ impl App {
                     self.view.errors.remove(index);
                 }
             }
-            Command::SelectOutput(name) => self.view.output = Some(name),
+            Command::SelectOutput(name) => {
+                // Cluster indices belong to one output.
+                self.view.views.zplane.selected = None;
+                self.view.output = Some(name);
+            }
             Command::MapColumnsOfRun(index) => {
                 if let Some(run) = self.session.runs.get(index) {
                     let target = MappingTarget::Existing { index, path: run.path.clone() };

@@ -357,6 +357,10 @@ fn interact(
         let p = transform.value_from_position(pos);
         zoom.zoom_about([p.x, p.y], (-f64::from(scroll) * 0.002).exp());
     }
+    // Escape drops the drag: nothing is committed.
+    if state.drag.is_some() && plot_ui.ctx().input(|i| i.key_pressed(egui::Key::Escape)) {
+        state.drag = None;
+    }
     if let Some(drag) = &mut state.drag
         && (response.dragged() || response.drag_stopped())
         && let Some(pos) = response.interact_pointer_pos()

@@ -250,7 +250,7 @@ fn toolbar_ui(
         model_ui::hint(
             ui,
             "× pole, o zero of each segment's ARX model · drag a circle's centre to move it, its rim to \
-             resize it · drag empty space to pan, wheel to zoom",
+             resize it (Esc cancels) · drag empty space to pan, wheel to zoom",
         );
     });
     commands

@@ -350,7 +350,7 @@ fn a_saved_project_reads_back_with_io_project_and_opens_in_the_app() {
     assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
 
     let project = jetid::io::project::load_project(&path).unwrap();
-    assert_eq!(project.ident.as_ref().unwrap().path, app.session.runs[0].path);
+    assert_eq!(project.ident[0].path, app.session.runs[0].path);
     assert_eq!(project.validate.len(), 1);
     assert!(project.chirp.is_some() && project.steady.is_some());
     assert_eq!(project.clusters[THRUST], clusters);

@@ -330,7 +330,10 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             diagnose_output(&project, &runs, &identified, &extended, output)
         });
         match diagnosis {
-            Ok(entries) => out.diagnosis = entries,
+            Ok((entries, skipped)) => {
+                out.diagnosis = entries;
+                report.diagnostics.extend(skipped);
+            }
             Err(e) => report.diagnostics.push(format!("diagnosis of '{output}': {e}")),
         }
         timings.time("validate", || score_output(&models, &runs, output, &mut out, &mut report.diagnostics));
@@ -430,11 +433,16 @@ fn diagnose_output(
     identified: &Identified,
     current: &ExtendedModel,
     output: &str,
-) -> Result<Vec<DiagnosisEntry>> {
+) -> Result<(Vec<DiagnosisEntry>, Vec<String>)> {
     let validation: Vec<&Run> = runs.validate.iter().filter(|r| r.output(output).is_some()).collect();
     let settings = project.settings_for(output);
     let report = diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &settings)?;
-    Ok(report
+    let skipped = report
+        .skipped
+        .iter()
+        .map(|s| format!("diagnosis of '{output}': {} not tried: {}", s.effect, s.reason))
+        .collect();
+    let entries = report
         .entries
         .iter()
         .map(|d| DiagnosisEntry {
@@ -445,7 +453,8 @@ fn diagnose_output(
             evidence: d.evidence.clone(),
             p_value: Some(d.test.p_value),
         })
-        .collect())
+        .collect();
+    Ok((entries, skipped))
 }
 
 /// Take the clusters of the project's saved model (`clusters_from` / `--clusters`) for every output

@@ -202,6 +202,10 @@ fn fit_gain_offset(w: &[f64], y: &[f64]) -> Option<(f64, f64)> {
 
 /// Move roots and continuous effect parameters together from `start`.
 fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
+    refine_with(start, data, &LmSettings::default())
+}
+
+fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Option<Assembled> {
     let (pole_params, theta_p) = RootParams::from_roots(&start.poles);
     let (zero_params, theta_z) = RootParams::from_roots(&start.zeros);
     let mut theta0: Vec<f64> = theta_p.iter().chain(&theta_z).copied().collect();
@@ -223,7 +227,7 @@ fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
         Some(Structure { poles, zeros, effects, map_order: start.map_order })
     };
     let residual = |theta: &[f64]| unpack(theta).and_then(|s| assemble(&s, data)).map(|a| a.residual);
-    let (theta, _) = minimise(&theta0, residual, &LmSettings::default())?;
+    let (theta, _) = minimise(&theta0, residual, settings)?;
     assemble(&unpack(&theta)?, data)
 }
 
@@ -281,45 +285,70 @@ pub fn apply_effect(model: &ExtendedModel, id: &str, data: &FitData) -> Result<E
     if let Some(first) = guesses.first() {
         check_channels(&base.with(first.clone()), data)?;
     }
-    let screen = |around: &Structure| -> Vec<Structure> {
-        let mut scored: Vec<(f64, Structure)> = guesses
+    let search = Search { id, guesses: &guesses, data };
+    let mut starts: Vec<Structure> = search.screen(&base, &[]);
+    starts.extend(neutral_block(id, data).map(|b| base.with(b)));
+    let discrete = matches!(id, TransportDelay::ID | StaticMapOrder::ID);
+    let rounds = if discrete { MAX_SCREENING_ROUNDS } else { 1 };
+    let best = search.improve(None, starts, rounds);
+    best.map(|b| b.model).ok_or_else(|| failed("no admissible starting point"))
+}
+
+/// Screening and refinement of one block's starting points.
+struct Search<'a> {
+    id: &'a str,
+    guesses: &'a [EffectBlock],
+    data: &'a FitData,
+}
+
+impl Search<'_> {
+    /// The best [`REFINED_STARTS`] untried starting points around `around` (its roots and other
+    /// effects), by identification error.
+    fn screen(&self, around: &Structure, tried: &[EffectBlock]) -> Vec<Structure> {
+        let around = Structure {
+            effects: around.effects.iter().filter(|e| e.id() != self.id).cloned().collect(),
+            ..around.clone()
+        };
+        let mut scored: Vec<(f64, Structure)> = self
+            .guesses
             .iter()
+            .filter(|g| !tried.contains(g))
             .filter_map(|g| {
                 let s = around.with(g.clone());
-                assemble(&s, data).map(|a| (a.cost, s))
+                assemble(&s, self.data).map(|a| (a.cost, s))
             })
             .collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-        scored.into_iter().map(|(_, s)| s).collect()
-    };
-    let mut starts: Vec<Structure> = screen(&base).into_iter().take(REFINED_STARTS).collect();
-    starts.extend(neutral_block(id, data).map(|b| base.with(b)));
-    let mut tried: Vec<EffectBlock> = Vec::new();
-    let mut best: Option<Assembled> = None;
-    let rounds = if matches!(id, TransportDelay::ID | StaticMapOrder::ID) { MAX_SCREENING_ROUNDS } else { 1 };
-    for _ in 0..rounds {
-        let mut improved = false;
-        for start in starts {
-            tried.extend(start.effects.iter().filter(|e| e.id() == id).cloned());
-            let Some(fitted) = refine(&start, data).or_else(|| assemble(&start, data)) else { continue };
-            if best.as_ref().is_none_or(|b| fitted.cost < b.cost) {
-                best = Some(fitted);
-                improved = true;
-            }
-        }
-        let Some(b) = best.as_ref().filter(|_| improved) else { break };
-        // Screen again around the refined roots and other effects, new starting points only.
-        let around = Structure {
-            effects: b.structure.effects.iter().filter(|e| e.id() != id).cloned().collect(),
-            ..b.structure.clone()
-        };
-        starts = screen(&around)
-            .into_iter()
-            .filter(|s| s.effects.iter().any(|e| e.id() == id && !tried.contains(e)))
-            .take(REFINED_STARTS)
-            .collect();
+        scored.into_iter().take(REFINED_STARTS).map(|(_, s)| s).collect()
     }
-    best.map(|b| b.model).ok_or_else(|| failed("no admissible starting point"))
+
+    /// Refine `starts`, keep the best, and screen again around it for up to `rounds` rounds while
+    /// that finds better fits.
+    fn improve(
+        &self,
+        mut best: Option<Assembled>,
+        mut starts: Vec<Structure>,
+        rounds: usize,
+    ) -> Option<Assembled> {
+        let mut tried: Vec<EffectBlock> = Vec::new();
+        for _ in 0..rounds {
+            let mut improved = false;
+            for start in starts {
+                tried.extend(start.effects.iter().filter(|e| e.id() == self.id).cloned());
+                let Some(fitted) = refine(&start, self.data).or_else(|| assemble(&start, self.data)) else {
+                    continue;
+                };
+
+                if best.as_ref().is_none_or(|b| fitted.cost < b.cost) {
+                    best = Some(fitted);
+                    improved = true;
+                }
+            }
+            let Some(b) = best.as_ref().filter(|_| improved) else { break };
+            starts = self.screen(&b.structure, &tried);
+        }
+        best
+    }
 }
 
 /// The block's setting that leaves the model unchanged, where there is one.

@@ -53,17 +53,11 @@ pub struct ParamSpec {
     pub name: &'static str,
     pub min: f64,
     pub max: f64,
-    /// Whether the value must be a whole number.
-    pub integer: bool,
 }
 
 impl ParamSpec {
     const fn real(name: &'static str, min: f64, max: f64) -> Self {
-        Self { name, min, max, integer: false }
-    }
-
-    const fn whole(name: &'static str, min: f64, max: f64) -> Self {
-        Self { name, min, max, integer: true }
+        Self { name, min, max }
     }
 }
 
@@ -78,8 +72,6 @@ pub enum EffectError {
     MissingParameter { effect: String, param: String },
     #[error("{effect}.{param} = {value} is outside its range [{min}, {max}]")]
     ParameterOutOfRange { effect: String, param: String, value: f64, min: f64, max: f64 },
-    #[error("{effect}.{param} = {value} must be a whole number")]
-    NotWhole { effect: String, param: String, value: f64 },
     #[error("effect '{effect}' needs the channel '{channel}', which run '{run}' does not have")]
     MissingChannel { effect: String, channel: String, run: String },
     #[error("channel '{channel}' of run '{run}' has {found} samples, the run has {expected}")]
@@ -201,9 +193,6 @@ fn check_value(id: &str, spec: &ParamSpec, value: Option<f64>) -> Result<f64, Ef
             max: spec.max,
         });
     }
-    if spec.integer && (value - value.round()).abs() > 1e-9 {
-        return Err(EffectError::NotWhole { effect: id.to_owned(), param: spec.name.to_owned(), value });
-    }
     Ok(value)
 }
 
@@ -233,7 +222,7 @@ impl EffectBlock {
     /// Parameter values in the order of [`param_specs`].
     fn values(&self) -> Vec<f64> {
         match self {
-            Self::TransportDelay(b) => vec![b.delay_samples as f64],
+            Self::TransportDelay(b) => vec![b.delay_samples],
             Self::ThermalSoak(b) => vec![b.gain, b.tau_s],
             Self::AmbientCorrection(b) => vec![b.output_theta_exp, b.output_delta_exp],
             Self::AsymmetricDynamics(b) => vec![b.decel_factor],
@@ -253,9 +242,7 @@ impl EffectBlock {
         let v = checked_values(id, params)?;
         let at = |i| value_at(&v, i);
         Ok(match check_id(id)? {
-            TransportDelay::ID => {
-                Self::TransportDelay(TransportDelay { delay_samples: at(0).round() as usize })
-            }
+            TransportDelay::ID => Self::TransportDelay(TransportDelay { delay_samples: at(0) }),
             ThermalSoak::ID => Self::ThermalSoak(ThermalSoak { gain: at(0), tau_s: at(1) }),
             AmbientCorrection::ID => Self::AmbientCorrection(AmbientCorrection {
                 output_theta_exp: at(0),
@@ -290,22 +277,24 @@ impl EffectBlock {
     /// Parameters the fit moves continuously, in an unconstrained form.
     fn free_params(&self) -> Vec<f64> {
         match self {
+            Self::TransportDelay(b) => b.free_params(),
             Self::ThermalSoak(b) => b.free_params(),
             Self::AsymmetricDynamics(b) => b.free_params(),
             Self::SensorDynamics(b) => b.free_params(),
             Self::StaticMapOrder(b) => b.free_params(),
-            Self::TransportDelay(_) | Self::AmbientCorrection(_) => Vec::new(),
+            Self::AmbientCorrection(_) => Vec::new(),
         }
     }
 
     /// The block with new free parameters, or `None` where they leave the admissible range.
     fn with_free_params(&self, theta: &[f64], dt_secs: f64) -> Option<Self> {
         Some(match self {
+            Self::TransportDelay(b) => Self::TransportDelay(b.with_free_params(theta)?),
             Self::ThermalSoak(b) => Self::ThermalSoak(b.with_free_params(theta)?),
             Self::AsymmetricDynamics(b) => Self::AsymmetricDynamics(b.with_free_params(theta)?),
             Self::SensorDynamics(b) => Self::SensorDynamics(b.with_free_params(theta, dt_secs)?),
             Self::StaticMapOrder(b) => Self::StaticMapOrder(b.with_free_params(theta)?),
-            Self::TransportDelay(_) | Self::AmbientCorrection(_) => self.clone(),
+            Self::AmbientCorrection(_) => self.clone(),
         })
     }
 }
@@ -318,7 +307,7 @@ mod tests {
     #[test]
     fn every_effect_round_trips_through_its_record() {
         let blocks = [
-            EffectBlock::TransportDelay(TransportDelay { delay_samples: 4 }),
+            EffectBlock::TransportDelay(TransportDelay { delay_samples: 4.0 }),
             EffectBlock::ThermalSoak(ThermalSoak { gain: 0.1, tau_s: 40.0 }),
             EffectBlock::AmbientCorrection(AmbientCorrection {
                 output_theta_exp: 0.5,

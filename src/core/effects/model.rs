@@ -242,7 +242,7 @@ mod tests {
         assert_eq!(plain, m.wiener.simulate(&r.input.values).1);
         let soaked = m.with_effect(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.2, tau_s: 5.0 })).unwrap();
         let both =
-            soaked.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 3 })).unwrap();
+            soaked.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 3.0 })).unwrap();
         assert_eq!(both.effect_ids(), vec![EFFECT_IDS[0], EFFECT_IDS[1]]);
         let y = both.simulate(&r).unwrap();
         assert!((y[22] - plain[0]).abs() < 1e-12, "the delay holds the start");
@@ -254,9 +254,9 @@ mod tests {
     #[test]
     fn misuse_is_an_error_with_data() {
         let m =
-            model().with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 1 })).unwrap();
+            model().with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 1.0 })).unwrap();
         assert_eq!(
-            m.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 2 })),
+            m.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 2.0 })),
             Err(EffectError::AlreadyApplied { effect: "transport_delay".into() })
         );
         assert_eq!(

@@ -100,8 +100,8 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
         points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
     let worst = points.iter().map(|p| p.1.abs() / p.2.max(f64::MIN_POSITIVE)).fold(0.0, f64::max);
     let (low_end, high_end) = (points.first().map_or(0.0, |p| p.1), points.last().map_or(0.0, |p| p.1));
-    let meaning = if worst > 10.0 {
-        "the steady states bend away from the map"
+    let meaning = if worst > 10.0 && hi - lo > 0.5 {
+        "steady states deviate from the map systematically across the operating range"
     } else if worst > 4.0 {
         "small systematic steady-state errors"
     } else {

@@ -144,39 +144,34 @@ pub fn plateaus(u: &[f64], dt_secs: f64, hold_secs: f64, tail_secs: f64) -> Vec<
 /// The Diebold–Mariano comparison of two models' per-sample losses.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DmTest {
-    /// Mean loss difference (before − after); positive when the new model is better.
+    /// Loss difference (before − after) averaged within each run, then over the runs; positive
+    /// when the new model is better.
     pub mean_diff: f64,
-    /// `mean_diff / sqrt(LRV / n)`, asymptotically standard normal when the models are equal.
+    /// `mean_diff` over its standard error, asymptotically standard normal when the models are
+    /// equally good.
     pub statistic: f64,
     /// One-sided p-value of "the new model is no better".
     pub p_value: f64,
-    /// Bartlett-kernel bandwidth (lags) of the long-run variance.
+    /// Largest Bartlett-kernel bandwidth (lags) used for a run's long-run variance.
     pub bandwidth: usize,
+    /// Samples over all runs.
     pub n: usize,
 }
 
-/// Diebold–Mariano test on loss differences `d` given per run (no lag crosses a run boundary).
+/// Mean and Newey–West long-run variance of one run's loss differences, with the bandwidth used.
 ///
-/// The long-run variance is the Newey–West estimate with Bartlett weights `1 − j/(L+1)`. The
-/// bandwidth is read from the data: `L = 2·k*`, where k* is the first lag at which the pooled
-/// autocorrelation of `d` falls inside the 99 % band of white noise (`2.576/√n`), and L is at most
-/// a third of the shortest run. Residuals of simulated models stay correlated over a transient (tens
-/// of samples) and then decorrelate, which a fixed rule like `4(n/100)^{2/9}` misses and an AR(1)
-/// plug-in (Andrews 1991) overstates by an order of magnitude.
-pub fn diebold_mariano(d_runs: &[Vec<f64>]) -> DmTest {
-    let n: usize = d_runs.iter().map(Vec::len).sum();
-    let all: Vec<f64> = d_runs.iter().flatten().copied().collect();
-    let m = mean(&all);
-    let autocov = |lag: usize| -> f64 {
-        let s: f64 = d_runs
-            .iter()
-            .map(|d| d.iter().skip(lag).zip(d).map(|(a, b)| (a - m) * (b - m)).sum::<f64>())
-            .sum();
-        s / n.max(1) as f64
-    };
+/// Bartlett weights `1 − j/(L+1)`; the bandwidth is read from the data: `L = 2·k*`, where k* is the
+/// first lag at which the autocorrelation of `d` falls inside the 99 % band of white noise
+/// (`2.576/√n`), and L is at most a third of the run. Residuals of simulated models stay correlated
+/// over a transient (tens of samples) and then decorrelate, which a fixed rule like `4(n/100)^{2/9}`
+/// misses and an AR(1) plug-in (Andrews 1991) overstates by an order of magnitude.
+fn long_run_variance(d: &[f64]) -> (f64, f64, usize) {
+    let n = d.len();
+    let m = mean(d);
+    let autocov =
+        |lag: usize| d.iter().skip(lag).zip(d).map(|(a, b)| (a - m) * (b - m)).sum::<f64>() / n.max(1) as f64;
     let gamma0 = autocov(0);
-    let shortest = d_runs.iter().map(Vec::len).min().unwrap_or(0);
-    let max_lag = shortest / 3;
+    let max_lag = n / 3;
     let band = 2.576 / (n.max(1) as f64).sqrt();
     let first_insignificant =
         (1..=max_lag).find(|&k| gamma0 <= 0.0 || autocov(k) / gamma0 <= band).unwrap_or(max_lag);
@@ -185,15 +180,38 @@ pub fn diebold_mariano(d_runs: &[Vec<f64>]) -> DmTest {
     for j in 1..=bandwidth {
         lrv += 2.0 * (1.0 - j as f64 / (bandwidth + 1) as f64) * autocov(j);
     }
-    let se = (lrv.max(0.0) / n.max(1) as f64).sqrt();
+    (m, lrv.max(0.0), bandwidth)
+}
+
+/// Diebold–Mariano test on loss differences `d` given per run. Every run counts equally (the
+/// statistic is the average of the runs' mean differences, matching a validation error that
+/// averages the runs' RMSPE); runs are independent and each has its own Newey–West long-run
+/// variance (see [`long_run_variance`]), so no lag crosses a run boundary.
+pub fn diebold_mariano(d_runs: &[Vec<f64>]) -> DmTest {
+    let runs: Vec<&Vec<f64>> = d_runs.iter().filter(|d| !d.is_empty()).collect();
+    let r = runs.len().max(1) as f64;
+    let (mut mean_diff, mut var, mut bandwidth) = (0.0, 0.0, 0);
+    for d in &runs {
+        let (m, lrv, l) = long_run_variance(d);
+        mean_diff += m / r;
+        var += lrv / d.len() as f64 / (r * r);
+        bandwidth = bandwidth.max(l);
+    }
+    let se = var.sqrt();
     let statistic = if se > 0.0 {
-        m / se
-    } else if m > 0.0 {
+        mean_diff / se
+    } else if mean_diff > 0.0 {
         f64::INFINITY
     } else {
         0.0
     };
-    DmTest { mean_diff: m, statistic, p_value: 1.0 - normal_cdf(statistic), bandwidth, n }
+    DmTest {
+        mean_diff,
+        statistic,
+        p_value: 1.0 - normal_cdf(statistic),
+        bandwidth,
+        n: runs.iter().map(|d| d.len()).sum(),
+    }
 }
 
 /// Standard normal cumulative distribution.

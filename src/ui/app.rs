@@ -81,7 +81,9 @@ impl App {
                 if app.view.failures.is_empty()
                     && let Some(dir) = super::bundled_sample_dir()
                 {
-                    app.view.status = Some(format!("Sample runs from {}", dir.display()));
+                    let parts: Vec<_> = dir.components().rev().take(2).collect();
+                    let short: std::path::PathBuf = parts.into_iter().rev().collect();
+                    app.view.status = Some(format!("Bundled sample runs ({})", short.display()));
                 }
                 app
             }

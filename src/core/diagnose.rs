@@ -38,16 +38,21 @@ pub const MIN_RELATIVE_REDUCTION: f64 = 0.10;
 /// Errors of a diagnosis that stop it as a whole (a single effect that cannot be tried is skipped).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DiagnoseError {
+    /// The effects need at least one validation run to be scored on.
     #[error("no validation run to score the effects on")]
     NoValidationRuns,
+    /// A run lacks the model's output.
     #[error("run '{run}' has no output column '{output}'")]
     MissingOutput { run: String, output: String },
+    /// Percentage errors need a non-zero measurement.
     #[error(
         "the measurement of '{output}' in run '{run}' is zero at sample {index}; percentage errors are undefined"
     )]
     ZeroMeasurement { run: String, output: String, index: usize },
+    /// The current model fails on a run (typically a channel its effects need).
     #[error("the current model cannot be simulated on run '{run}': {source}")]
     CurrentModel { run: String, source: EffectError },
+    /// An effect could not be built, applied, removed or fitted.
     #[error(transparent)]
     Effect(#[from] EffectError),
 }
@@ -55,9 +60,11 @@ pub enum DiagnoseError {
 /// One effect's trial: the fitted extension, its validation score and the evidence.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diagnosis {
+    /// Catalog id of the effect.
     pub effect: String,
     /// What the effect means physically.
     pub physics: String,
+    /// Beyond what noise gives and large enough to matter (see the module documentation).
     pub significant: bool,
     /// Validation error of the current model (RMSPE averaged over the validation runs), %.
     pub rmspe_before_pct: f64,
@@ -81,19 +88,24 @@ impl Diagnosis {
 /// An effect that was not tried, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkippedEffect {
+    /// Catalog id of the effect.
     pub effect: String,
+    /// Why it was not tried, in words.
     pub reason: String,
 }
 
 /// The diagnosis of one output: tried effects best first, and the ones that were skipped.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DiagnosisReport {
+    /// The output diagnosed.
     pub output: String,
     /// Validation error of the current model (RMSPE averaged over the runs), %.
     pub rmspe_current_pct: f64,
     /// Validation error of the current model refitted without a new block (the test's yardstick), %.
     pub rmspe_refit_pct: f64,
+    /// The effects tried, lowest validation error first.
     pub entries: Vec<Diagnosis>,
+    /// The effects not tried, with the reason.
     pub skipped: Vec<SkippedEffect>,
 }
 

@@ -16,18 +16,23 @@ const KELVIN_FROM_CELSIUS: f64 = 273.15;
 /// `ambient_temp_c` and `ambient_pressure_kpa` channels; no parameter is fitted.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmbientCorrection {
+    /// Exponent a of θ in the output's correction factor.
     pub output_theta_exp: f64,
+    /// Exponent b of δ in the output's correction factor.
     pub output_delta_exp: f64,
 }
 
 /// θ and δ through a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Conditions {
+    /// θ = T / 288.15 K per sample.
     pub theta: Vec<f64>,
+    /// δ = p / 101.325 kPa per sample.
     pub delta: Vec<f64>,
 }
 
 impl AmbientCorrection {
+    /// Catalog id.
     pub const ID: &'static str = "ambient_correction";
     pub(super) const PARAMS: &'static [ParamSpec] =
         &[ParamSpec::real("output_theta_exp", 0.0, 1.5), ParamSpec::real("output_delta_exp", 0.0, 1.5)];

@@ -13,18 +13,21 @@ use crate::core::wiener::unit_gain_tf;
 /// `p` while rising and `p^(1/decel_factor)` while falling, so steady states are unchanged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AsymmetricDynamics {
+    /// Falling time constant over rising time constant of the spool pole.
     pub decel_factor: f64,
 }
 
 /// The unit-gain linear block split into the spool pole and the rest.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplitShape {
+    /// The spool pole (real, in (0, 1)).
     pub pole: f64,
     /// Unit-gain remainder; `None` when the spool pole is the only root.
     pub rest: Option<DiscreteTf>,
 }
 
 impl AsymmetricDynamics {
+    /// Catalog id.
     pub const ID: &'static str = "asymmetric_dynamics";
     pub(super) const PARAMS: &'static [ParamSpec] = &[ParamSpec::real("decel_factor", 0.1, 10.0)];
 

@@ -35,10 +35,13 @@ const MAX_POLE_RADIUS: f64 = 0.999;
 /// steady-state windows inside it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitData {
+    /// The output fitted.
     pub output: String,
+    /// Sample time, s.
     pub dt_secs: f64,
     /// The identification run cut to the range of the segments.
     pub run: Run,
+    /// The output over `run`.
     pub y: Vec<f64>,
     /// Steady-state windows `(start, end)` in `run`.
     pub steady_windows: Vec<(usize, usize)>,

@@ -50,8 +50,11 @@ pub const EFFECT_IDS: [&str; 6] = [
 /// One parameter of an effect block: its name (with unit suffix) and admissible range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParamSpec {
+    /// Name, with a unit suffix where it has a unit.
     pub name: &'static str,
+    /// Smallest admissible value.
     pub min: f64,
+    /// Largest admissible value.
     pub max: f64,
 }
 
@@ -64,28 +67,40 @@ impl ParamSpec {
 /// Errors a user can cause with effects: bad ids or parameters, missing channels, misuse.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EffectError {
+    /// The id is not in the catalog.
     #[error("unknown effect '{id}' (known: {})", known.join(", "))]
     UnknownEffect { id: String, known: Vec<String> },
+    /// The effect has no such parameter.
     #[error("effect '{effect}' has no parameter '{param}' (its parameters: {})", known.join(", "))]
     UnknownParameter { effect: String, param: String, known: Vec<String> },
+    /// A parameter is missing from a record.
     #[error("effect '{effect}' needs the parameter '{param}'")]
     MissingParameter { effect: String, param: String },
+    /// A parameter is not finite or outside its range.
     #[error("{effect}.{param} = {value} is outside its range [{min}, {max}]")]
     ParameterOutOfRange { effect: String, param: String, value: f64, min: f64, max: f64 },
+    /// A run lacks a channel the effect reads.
     #[error("effect '{effect}' needs the channel '{channel}', which run '{run}' does not have")]
     MissingChannel { effect: String, channel: String, run: String },
+    /// A channel is not as long as its run.
     #[error("channel '{channel}' of run '{run}' has {found} samples, the run has {expected}")]
     ChannelLength { channel: String, run: String, found: usize, expected: usize },
+    /// A channel holds an unphysical value (absolute temperature or pressure not positive).
     #[error("channel '{channel}' of run '{run}' has the unphysical value {value} at sample {index}")]
     BadChannelValue { channel: String, run: String, index: usize, value: f64 },
+    /// Each effect can be in a model once.
     #[error("effect '{effect}' is already in the model")]
     AlreadyApplied { effect: String },
+    /// Only an applied effect can be removed.
     #[error("effect '{effect}' is not in the model")]
     NotApplied { effect: String },
+    /// The effect makes no sense for this model or output.
     #[error("effect '{effect}' does not apply to this model: {reason}")]
     NotApplicable { effect: String, reason: String },
+    /// The linear block's roots cannot be computed or used.
     #[error("the model's linear block is not usable: {reason}")]
     BadBaseModel { reason: String },
+    /// No admissible fit on the identification data.
     #[error("fitting the model on run '{run}' failed: {reason}")]
     FitFailed { run: String, reason: String },
 }
@@ -93,18 +108,26 @@ pub enum EffectError {
 /// The stable, serialisable form of an effect block: its catalog id and named parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EffectRecord {
+    /// Catalog id.
     pub id: String,
+    /// Parameters by name (see [`param_specs`]).
     pub params: BTreeMap<String, f64>,
 }
 
 /// One effect of the catalog with its fitted parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EffectBlock {
+    /// See [`TransportDelay`].
     TransportDelay(TransportDelay),
+    /// See [`ThermalSoak`].
     ThermalSoak(ThermalSoak),
+    /// See [`AmbientCorrection`].
     AmbientCorrection(AmbientCorrection),
+    /// See [`AsymmetricDynamics`].
     AsymmetricDynamics(AsymmetricDynamics),
+    /// See [`SensorDynamics`].
     SensorDynamics(SensorDynamics),
+    /// See [`StaticMapOrder`].
     StaticMapOrder(StaticMapOrder),
 }
 

@@ -17,8 +17,11 @@ use crate::core::wiener::{LinearBlock, WienerModel};
 /// order (see the module documentation), each id at most once.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExtendedModel {
+    /// The output modelled.
     pub output: String,
+    /// The base model: linear block (gain and offset included) and static map.
     pub wiener: WienerModel,
+    /// The effects, in signal-path order.
     pub effects: Vec<EffectBlock>,
 }
 

@@ -8,8 +8,11 @@ use super::stats::{ResidualTrace, median, welch_spectrum};
 /// unchanged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SensorDynamics {
+    /// Resonance, Hz.
     pub freq_hz: f64,
+    /// Damping ratio of the resonance.
     pub zeta: f64,
+    /// First-order lag, s.
     pub lag_s: f64,
 }
 
@@ -21,6 +24,7 @@ const MIN_FREQ_HZ: f64 = 0.05;
 const SPECTRUM_SEGMENT: usize = 128;
 
 impl SensorDynamics {
+    /// Catalog id.
     pub const ID: &'static str = "sensor_dynamics";
     pub(super) const PARAMS: &'static [ParamSpec] = &[
         ParamSpec::real("freq_hz", MIN_FREQ_HZ, 1000.0),

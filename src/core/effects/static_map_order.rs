@@ -10,7 +10,9 @@ use crate::core::static_map::StaticMap;
 /// squares on the steady-state points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StaticMapOrder {
+    /// Where the kink sits, in units of v.
     pub knot_v: f64,
+    /// Change of df/dv above the knot.
     pub slope_change: f64,
 }
 
@@ -18,6 +20,7 @@ pub struct StaticMapOrder {
 const KNOT_FRACTIONS: [f64; 3] = [0.25, 0.5, 0.75];
 
 impl StaticMapOrder {
+    /// Catalog id.
     pub const ID: &'static str = "static_map_order";
     pub(super) const PARAMS: &'static [ParamSpec] =
         &[ParamSpec::real("knot_v", -1e12, 1e12), ParamSpec::real("slope_change", -1e6, 1e6)];

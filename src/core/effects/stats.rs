@@ -5,10 +5,15 @@ use crate::core::run::Channel;
 /// A model's simulation of one run next to the measurement, with what the evidence reads.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResidualTrace {
+    /// Run name.
     pub run: String,
+    /// Sample time, s.
     pub dt_secs: f64,
+    /// Input.
     pub u: Vec<f64>,
+    /// Measured output.
     pub y: Vec<f64>,
+    /// Simulated output.
     pub y_hat: Vec<f64>,
     /// Auxiliary channels of the run (sliced like `u` and `y`).
     pub aux: Vec<Channel>,
@@ -30,6 +35,7 @@ impl ResidualTrace {
     }
 }
 
+/// Arithmetic mean; 0 when empty.
 pub fn mean(x: &[f64]) -> f64 {
     if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }

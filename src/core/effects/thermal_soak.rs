@@ -9,7 +9,9 @@ use super::stats::{ResidualTrace, correlation, low_pass};
 /// unchanged and every step ends in a creeping tail.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ThermalSoak {
+    /// Share g of a power change that arrives slowly.
     pub gain: f64,
+    /// Soak time constant τ, s.
     pub tau_s: f64,
 }
 
@@ -17,6 +19,7 @@ pub struct ThermalSoak {
 const TAU_GRID_S: [f64; 6] = [5.0, 10.0, 20.0, 40.0, 80.0, 160.0];
 
 impl ThermalSoak {
+    /// Catalog id.
     pub const ID: &'static str = "thermal_soak";
     pub(super) const PARAMS: &'static [ParamSpec] =
         &[ParamSpec::real("gain", -0.9, 0.9), ParamSpec::real("tau_s", 0.1, 5000.0)];

@@ -9,6 +9,7 @@ use super::stats::{ResidualTrace, mean, median};
 /// for each), then the best are refined continuously.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransportDelay {
+    /// Dead time, samples (may be fractional).
     pub delay_samples: f64,
 }
 
@@ -18,6 +19,7 @@ const MAX_DELAY_SECS: f64 = 2.5;
 const MAX_DELAY_SAMPLES: f64 = 1000.0;
 
 impl TransportDelay {
+    /// Catalog id.
     pub const ID: &'static str = "transport_delay";
     pub(super) const PARAMS: &'static [ParamSpec] =
         &[ParamSpec::real("delay_samples", 0.0, MAX_DELAY_SAMPLES)];

@@ -1,0 +1,333 @@
+//! The missing-physics diagnosis on simulated runs with a hidden effect. The code under test gets
+//! the runs and the pipeline's model of one output, never the name of the hidden effect.
+//!
+//! Every case identifies on an identification run, ranks on a validation run and a chirp (noise
+//! seeds differ), and checks the error on a third run that took part in neither: another chirp (or
+//! validation run), scored against the simulator's noiseless truth so the sensor noise does not hide
+//! the model error.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use jetid::core::arx::ArxOrders;
+use jetid::core::diagnose::{DiagnoseError, DiagnosisReport, apply, diagnose, remove};
+use jetid::core::effects::{
+    AmbientCorrection, EFFECT_IDS, EffectBlock, EffectError, ExtendedModel, FitData, refit,
+};
+use jetid::core::metrics::metrics;
+use jetid::core::pipeline::{OutputSettings, SegmentFits, fit_segments, identify_output, segments_for};
+use jetid::core::run::Run;
+use jetid::core::segment::SegmentSettings;
+use jetid::sim::{Effect, SimConfig, SimOutput, TestKind, simulate};
+use std::collections::BTreeMap;
+
+const SPEED: &str = "shaft_speed_rpm";
+const THRUST: &str = "thrust_n";
+
+/// The runs of one bench session on a simulated engine.
+struct Bench {
+    ident: Run,
+    validation: Run,
+    chirp: Run,
+    /// Used by neither the fit nor the ranking: a validation run and a chirp.
+    third_validation: SimOutput,
+    third_chirp: SimOutput,
+}
+
+fn bench(effects: &[&str], seed: u64) -> Bench {
+    let effects: Vec<Effect> = effects.iter().map(|e| e.parse().unwrap()).collect();
+    let run = |kind: TestKind, seed: u64| {
+        simulate(&SimConfig::for_test(kind.name(), kind, seed).unwrap().with_effects(effects.clone()))
+            .unwrap()
+    };
+    Bench {
+        ident: run(TestKind::Ident, seed).measured,
+        validation: run(TestKind::Validation, seed + 100).measured,
+        chirp: run(TestKind::Chirp, seed + 200).measured,
+        third_validation: run(TestKind::Validation, seed + 300),
+        third_chirp: run(TestKind::Chirp, seed + 300),
+    }
+}
+
+/// A model of one output with what the diagnosis needs besides the runs.
+struct Current {
+    model: ExtendedModel,
+    fits: SegmentFits,
+    settings: OutputSettings,
+}
+
+/// The pipeline's model of `output`, automatic segments and clusters.
+fn pipeline_model(b: &Bench, output: &str, settings: OutputSettings) -> Current {
+    let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
+    let identified = identify_output(&b.ident, output, &settings, &segments, None).unwrap();
+    Current { model: ExtendedModel::from_gray_box(&identified.model), fits: identified.fits, settings }
+}
+
+/// The thrust model on the spool's dynamics: the speed model's linear block, refitted on thrust.
+/// Thrust is a static function of spool speed, so this is the physically right structure; the
+/// pipeline's own thrust model is often first order and then really lacks the fuel-system lag.
+fn thrust_model_from_speed(b: &Bench) -> Current {
+    let speed = pipeline_model(b, SPEED, OutputSettings::for_output(SPEED));
+    let settings = OutputSettings::for_output(THRUST);
+    let fits = fit_segments(&b.ident, THRUST, &speed.fits.segments, settings.orders).unwrap();
+    let data = FitData::new(&b.ident, &fits, &settings).unwrap();
+    let model = refit(&ExtendedModel::new(THRUST, speed.model.wiener.clone()), &data).unwrap();
+    Current { model, fits, settings }
+}
+
+fn run_diagnosis(b: &Bench, c: &Current) -> DiagnosisReport {
+    diagnose(&c.model, &b.ident, &c.fits, &[&b.validation, &b.chirp], &c.settings).unwrap()
+}
+
+/// RMSPE of a model on a third run (validation or chirp) against the noiseless truth, %.
+fn third_run_error(model: &ExtendedModel, b: &Bench, kind: TestKind) -> f64 {
+    let third = if kind == TestKind::Chirp { &b.third_chirp } else { &b.third_validation };
+    let truth = &third.truth.output(&model.output).unwrap().values;
+    metrics(truth, &model.simulate(&third.measured).unwrap()).unwrap().rmspe_pct
+}
+
+fn summary(report: &DiagnosisReport) -> String {
+    report
+        .entries
+        .iter()
+        .map(|d| {
+            format!(
+                "{} {:.3}→{:.3} p={:.1e} sig={}",
+                d.effect, d.rmspe_before_pct, d.rmspe_after_pct, d.test.p_value, d.significant
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The hidden effect ranks first and is significant; on the third run its error falls to at most
+/// `max_ratio` of the current model's.
+fn assert_found(spec: &str, seed: u64, current: impl Fn(&Bench) -> Current, third: TestKind, max_ratio: f64) {
+    let id = spec.split(':').next().unwrap();
+    let b = bench(&[spec], seed);
+    let c = current(&b);
+    let report = run_diagnosis(&b, &c);
+    let best = report.best().unwrap();
+    assert_eq!(best.effect, id, "{spec} seed {seed}: {}", summary(&report));
+    assert!(best.significant, "{spec} seed {seed}: {}", summary(&report));
+    assert!(!best.evidence.is_empty());
+    let (before, after) = (third_run_error(&c.model, &b, third), third_run_error(&best.model, &b, third));
+    assert!(after <= max_ratio * before, "{spec} seed {seed}: third-run error {before:.3} % → {after:.3} %");
+}
+
+fn speed_default(b: &Bench) -> Current {
+    pipeline_model(b, SPEED, OutputSettings::for_output(SPEED))
+}
+
+#[test]
+fn no_effect_is_significant_on_effect_free_runs() {
+    for seed in [1, 2, 3] {
+        let b = bench(&[], seed);
+        for c in [speed_default(&b), thrust_model_from_speed(&b)] {
+            let report = run_diagnosis(&b, &c);
+            assert!(
+                report.entries.iter().all(|d| !d.significant),
+                "seed {seed} {}: {}",
+                c.model.output,
+                summary(&report)
+            );
+            assert_eq!(report.entries.len(), 6, "every effect applies: {:?}", report.skipped);
+        }
+    }
+}
+
+#[test]
+fn thermal_soak_is_found() {
+    for spec in ["thermal_soak", "thermal_soak:gain=0.15,tau_s=60"] {
+        for seed in [2, 3] {
+            assert_found(spec, seed, speed_default, TestKind::Chirp, 0.5);
+        }
+    }
+}
+
+#[test]
+fn asymmetric_dynamics_is_found() {
+    for spec in ["asymmetric_dynamics", "asymmetric_dynamics:decel_factor=1.4"] {
+        for seed in [2, 3] {
+            assert_found(spec, seed, speed_default, TestKind::Chirp, 0.5);
+        }
+    }
+}
+
+#[test]
+fn ambient_correction_is_found() {
+    for spec in ["ambient_correction", "ambient_correction:t_start_c=5,t_end_c=30"] {
+        for seed in [2, 3] {
+            assert_found(spec, seed, speed_default, TestKind::Chirp, 0.5);
+        }
+    }
+}
+
+/// A dead time of a second needs segment ARX models whose B polynomial can hold it (nb = 12); with
+/// the default nb = 3 the pipeline finds no valid pole cluster on some seeds.
+fn speed_long_b(b: &Bench) -> Current {
+    let settings = OutputSettings { orders: ArxOrders::new(19, 12), ..OutputSettings::for_output(SPEED) };
+    pipeline_model(b, SPEED, settings)
+}
+
+#[test]
+fn transport_delay_is_found() {
+    for spec in ["transport_delay:delay_s=1.0", "transport_delay:delay_s=1.2"] {
+        for seed in [2, 3] {
+            assert_found(spec, seed, speed_long_b, TestKind::Chirp, 0.5);
+        }
+    }
+}
+
+/// The kink sits above 80,000 rpm, which the chirp never reaches, so the third run is a validation
+/// run; there the base model's own error (the spool's speed-dependent time constant, which no
+/// catalog effect models) stays, so the error falls by a fifth to a quarter, not by half.
+#[test]
+fn static_map_order_is_found() {
+    for spec in ["static_map_order:gain=4", "static_map_order:gain=8"] {
+        for seed in [2, 3] {
+            assert_found(spec, seed, speed_default, TestKind::Validation, 0.85);
+        }
+    }
+}
+
+/// With the simulator's stand buffeting the resonance is excited at random, which no simulation
+/// model can predict, and its sensor lag is absorbed by the linear block's poles; the evidence
+/// still names the resonance.
+#[test]
+fn sensor_resonance_shows_in_the_evidence() {
+    for seed in [2, 3] {
+        let b = bench(&["sensor_dynamics"], seed);
+        let report = run_diagnosis(&b, &thrust_model_from_speed(&b));
+        let sensor = report.entries.iter().find(|d| d.effect == "sensor_dynamics").unwrap();
+        assert!(sensor.evidence.contains("rings at a fixed frequency"), "{}", sensor.evidence);
+        let freq_hz: f64 =
+            sensor.evidence.split(" Hz").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
+        assert!((freq_hz - 1.4).abs() < 0.1, "{}", sensor.evidence);
+    }
+}
+
+/// Diagnose, add the best effect, diagnose again, add the next: the error history of each step, as
+/// the third runs' RMSPE averaged over the validation run and the chirp.
+fn two_step_history(
+    spec: &[&str],
+    seed: u64,
+    current: impl Fn(&Bench) -> Current,
+) -> (Vec<String>, Vec<f64>) {
+    let b = bench(spec, seed);
+    let mut c = current(&b);
+    let error = |m: &ExtendedModel| {
+        0.5 * (third_run_error(m, &b, TestKind::Validation) + third_run_error(m, &b, TestKind::Chirp))
+    };
+    let mut added = Vec::new();
+    let mut history = vec![error(&c.model)];
+    for _ in 0..2 {
+        let report = run_diagnosis(&b, &c);
+        let best = report.best().unwrap();
+        assert!(best.significant, "after {added:?}: {}", summary(&report));
+        added.push(best.effect.clone());
+        c.model = apply(&c.model, &best.effect, &b.ident, &c.fits, &c.settings).unwrap();
+        history.push(error(&c.model));
+    }
+    (added, history)
+}
+
+#[test]
+fn two_hidden_effects_are_found_one_after_the_other() {
+    for seed in [2, 3] {
+        let (added, history) =
+            two_step_history(&["transport_delay:delay_s=1.2", "thermal_soak"], seed, speed_long_b);
+        let mut sorted = added.clone();
+        sorted.sort();
+        assert_eq!(sorted, ["thermal_soak", "transport_delay"], "seed {seed}: added {added:?}");
+        assert!(history[1] < 0.8 * history[0] && history[2] < 0.8 * history[1], "seed {seed}: {history:?}");
+        eprintln!("seed {seed}: {added:?} third-run error history {history:?}");
+    }
+}
+
+#[test]
+fn effect_records_are_checked() {
+    let params =
+        |pairs: &[(&str, f64)]| pairs.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect::<BTreeMap<_, _>>();
+    assert!(matches!(
+        EffectBlock::from_params("warp_drive", &params(&[])),
+        Err(EffectError::UnknownEffect { id, known }) if id == "warp_drive" && known.len() == EFFECT_IDS.len()
+    ));
+    assert!(matches!(
+        EffectBlock::from_params("thermal_soak", &params(&[("gain", 0.1), ("tau", 40.0)])),
+        Err(EffectError::UnknownParameter { param, known, .. }) if param == "tau" && known == ["gain", "tau_s"]
+    ));
+    assert!(matches!(
+        EffectBlock::from_params("thermal_soak", &params(&[("gain", 0.1)])),
+        Err(EffectError::MissingParameter { param, .. }) if param == "tau_s"
+    ));
+    assert!(matches!(
+        EffectBlock::from_params("thermal_soak", &params(&[("gain", 1.5), ("tau_s", 40.0)])),
+        Err(EffectError::ParameterOutOfRange { param, max, .. }) if param == "gain" && (max - 0.9).abs() < 1e-12
+    ));
+    assert!(matches!(
+        EffectBlock::from_params("transport_delay", &params(&[("delay_samples", f64::NAN)])),
+        Err(EffectError::ParameterOutOfRange { .. })
+    ));
+    let soak = EffectBlock::from_params("thermal_soak", &params(&[("gain", 0.1), ("tau_s", 40.0)])).unwrap();
+    assert_eq!(EffectBlock::from_record(&soak.record()).unwrap(), soak);
+}
+
+#[test]
+fn misuse_is_a_typed_error_and_effects_can_be_removed() {
+    let b = bench(&[], 1);
+    let c = speed_default(&b);
+    let delayed = apply(&c.model, "transport_delay", &b.ident, &c.fits, &c.settings).unwrap();
+    assert_eq!(delayed.effect_ids(), ["transport_delay"]);
+    assert!(matches!(
+        apply(&delayed, "transport_delay", &b.ident, &c.fits, &c.settings),
+        Err(DiagnoseError::Effect(EffectError::AlreadyApplied { effect })) if effect == "transport_delay"
+    ));
+    assert!(matches!(
+        remove(&delayed, "thermal_soak", &b.ident, &c.fits, &c.settings),
+        Err(DiagnoseError::Effect(EffectError::NotApplied { effect })) if effect == "thermal_soak"
+    ));
+    assert!(matches!(
+        apply(&c.model, "warp_drive", &b.ident, &c.fits, &c.settings),
+        Err(DiagnoseError::Effect(EffectError::UnknownEffect { .. }))
+    ));
+    let back = remove(&delayed, "transport_delay", &b.ident, &c.fits, &c.settings).unwrap();
+    assert!(back.effects.is_empty());
+    let (base_error, back_error) =
+        (third_run_error(&c.model, &b, TestKind::Chirp), third_run_error(&back, &b, TestKind::Chirp));
+    assert!((back_error - base_error).abs() < 0.05 * base_error, "{base_error} vs {back_error}");
+
+    // A run without the ambient channels: the model that needs them says which, and for which run.
+    let mut bare = b.validation.clone();
+    bare.name = "bare".into();
+    bare.aux.clear();
+    let corrected = delayed
+        .with_effect(EffectBlock::AmbientCorrection(AmbientCorrection::for_output(SPEED).unwrap()))
+        .unwrap();
+    assert_eq!(corrected.required_channels(), ["ambient_temp_c", "ambient_pressure_kpa"]);
+    assert_eq!(
+        corrected.simulate(&bare),
+        Err(EffectError::MissingChannel {
+            effect: "ambient_correction".into(),
+            channel: "ambient_temp_c".into(),
+            run: "bare".into()
+        })
+    );
+    // The diagnosis skips the effect that cannot be tried on these runs and says why.
+    let report = diagnose(&c.model, &b.ident, &c.fits, &[&bare], &c.settings).unwrap();
+    let skipped = report.skipped.iter().find(|s| s.effect == "ambient_correction").unwrap();
+    assert!(
+        skipped.reason.contains("ambient_temp_c") && skipped.reason.contains("bare"),
+        "{}",
+        skipped.reason
+    );
+    assert_eq!(report.entries.len(), 5);
+    assert!(matches!(
+        diagnose(&c.model, &b.ident, &c.fits, &[], &c.settings),
+        Err(DiagnoseError::NoValidationRuns)
+    ));
+    let mut no_output = b.validation.clone();
+    no_output.outputs.clear();
+    assert!(matches!(
+        diagnose(&c.model, &b.ident, &c.fits, &[&no_output], &c.settings),
+        Err(DiagnoseError::MissingOutput { output, .. }) if output == SPEED
+    ));
+}

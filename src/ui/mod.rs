@@ -17,6 +17,7 @@ pub mod derived;
 mod edit;
 pub mod file_dialog;
 mod files;
+pub mod jobs;
 pub mod mapping_ui;
 pub mod model_cache;
 pub mod model_ui;

@@ -29,7 +29,8 @@ fn run(kind: TestKind, seed: u64, effects: &[Effect]) -> SimOutput {
 fn model(ident: &Run) -> (ExtendedModel, jetid::core::pipeline::SegmentFits, OutputSettings) {
     let settings = OutputSettings::for_output(SPEED);
     let segments = segments_for(ident, None, &SegmentSettings::default()).unwrap_or_else(|e| panic!("{e}"));
-    let identified = identify_output(ident, SPEED, &settings, &segments, None).unwrap_or_else(|e| panic!("{e}"));
+    let identified =
+        identify_output(ident, SPEED, &settings, &segments, None).unwrap_or_else(|e| panic!("{e}"));
     (ExtendedModel::from_gray_box(&identified.model), identified.fits, settings)
 }
 

@@ -53,7 +53,7 @@ fn frame_while_dragging(bencher: divan::Bencher, output: &str) {
     bencher.bench_local(|| {
         // Alternate between two radii so every frame computes a new preview.
         k += 1;
-        let f = if k % 2 == 0 { 0.5 } else { 1.0 };
+        let f = if k.is_multiple_of(2) { 0.5 } else { 1.0 };
         harness.hover_at(rim + (out - rim) * f);
         harness.step();
     });

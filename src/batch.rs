@@ -317,6 +317,7 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             error_history: Vec::new(),
             error_boxes: BTreeMap::new(),
             cutoff_rad_s: BTreeMap::new(),
+            residuals: Vec::new(),
         };
         let mut models = timings.time(&format!("baselines_{output}"), || {
             crate::batch_compare::fit_baselines(&identified, &runs.ident, output, &mut report.diagnostics)
@@ -339,6 +340,19 @@ pub fn run(args: &BatchArgs) -> Result<()> {
         timings.time("validate", || score_output(&models, &runs, output, &mut out, &mut report.diagnostics));
         let scored = scored_runs(&runs);
         out.error_boxes = crate::batch_compare::error_boxes(&models, &scored, output);
+        let sigma = crate::batch_residuals::noise_sigma(noise.as_ref(), output);
+        let (residuals, figs) = timings.time("residuals", || {
+            crate::batch_residuals::residual_reports(
+                out_dir,
+                output,
+                &models,
+                &scored,
+                sigma,
+                &mut report.diagnostics,
+            )
+        });
+        out.residuals = residuals;
+        report.figures.extend(figs);
         let freq = timings.time("frequency", || {
             runs.chirp.as_ref().and_then(|chirp| {
                 crate::batch_compare::frequency_comparison(&models, chirp, output, &mut report.diagnostics)

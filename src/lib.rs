@@ -5,6 +5,7 @@
 pub mod batch;
 pub mod batch_compare;
 pub mod batch_figures;
+pub mod batch_residuals;
 pub mod cli;
 pub mod core;
 pub mod io;

@@ -59,6 +59,19 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
             assert!(std.is_finite() && std > 0.0, "{output}/{model}: {std}");
         }
         assert!(report["outputs"][output]["cutoff_rad_s"]["measured"].as_f64().is_some());
+        // The noise band of the residual analysis is the steady run's normal fit.
+        let normal = report["noise_fit"][output]["fits"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["distribution"]["family"] == "normal")
+            .unwrap();
+        let residuals = report["outputs"][output]["residuals"].as_array().unwrap();
+        assert_eq!(residuals.len(), 2, "validation and chirp");
+        for r in residuals {
+            assert_eq!(r["noise_sigma"], normal["distribution"]["std"], "{output}");
+            assert_eq!(r["regimes"].as_array().unwrap().len(), 8);
+        }
     }
     assert!(report["timings_ms"]["total"].as_f64().unwrap() > 0.0);
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
@@ -324,6 +337,22 @@ fn add_effect_lowers_the_error_and_predict_honours_it() {
         (history[0]["rmspe_pct"].as_f64().unwrap(), history[1]["rmspe_pct"].as_f64().unwrap());
     assert!(after < base, "adding the soak must lower the validation error: {base} -> {after}");
     assert!(!speed["diagnosis"].as_array().unwrap().is_empty());
+
+    // Where it fails: the residuals are those of the final model, with its effect.
+    let residuals = speed["residuals"].as_array().unwrap();
+    let validation = residuals.iter().find(|r| r["run"] == "validation").expect("validation residuals");
+    let whole_run = &validation["regimes"][0];
+    assert_eq!(whole_run["regime"], "Run", "{whole_run}");
+    let (rmse, batch_rmse) = (
+        whole_run["rmse"].as_f64().unwrap(),
+        speed["models"]["gray_box"]["validation"]["rmse"].as_f64().unwrap(),
+    );
+    assert!((rmse - batch_rmse).abs() < 1e-9 * batch_rmse, "residual RMSE {rmse} vs model RMSE {batch_rmse}");
+    assert!(!validation["summary"].as_str().unwrap().is_empty());
+    let figure = validation["figure"].as_str().unwrap();
+    assert!(out.join(figure).is_file(), "{figure}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("Where it fails") && md.contains(figure));
 
     // model.json records the effect and predict simulates it: same error as the batch reports.
     let model: serde_json::Value =

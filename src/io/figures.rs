@@ -13,6 +13,7 @@
 mod bode;
 mod legend;
 pub mod palette;
+mod residuals;
 mod stats;
 mod xy;
 mod zplane;
@@ -27,6 +28,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 pub use bode::{BodeCurve, EmpiricalBode, bode_png};
+pub use residuals::residuals_png;
 pub use stats::{boxplot_png, histogram_png};
 pub use xy::{static_map_png, traces_png};
 pub use zplane::{ZPLANE_SIZE, zplane_png};

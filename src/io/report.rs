@@ -98,6 +98,38 @@ pub struct OutputReport {
     /// −3 dB cut-off on the chirp run (rad/s): "measured" and each model's, from the same estimator.
     #[serde(default)]
     pub cutoff_rad_s: BTreeMap<String, Option<f64>>,
+    /// Where the final model fails on each scored run.
+    #[serde(default)]
+    pub residuals: Vec<ResidualReport>,
+}
+
+/// The residual analysis of one output's final model on one run, as the report keeps it (the
+/// per-sample traces are in the figure).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ResidualReport {
+    pub run: String,
+    /// A few plain sentences on what the residual shows.
+    pub summary: String,
+    /// Measurement-noise σ the band is drawn with, output unit.
+    pub noise_sigma: f64,
+    /// Where σ comes from: the steady run's noise fit, or estimated from the run itself.
+    pub noise_sigma_source: String,
+    /// Share of samples outside the ±2σ band, % (about 4.6 % for a model as good as the sensor).
+    pub outside_band_pct: f64,
+    pub regimes: Vec<crate::core::residuals::RegimeRow>,
+    /// Residual autocorrelation lags beyond the 99 % bound, s.
+    pub acf_lags_beyond_99_secs: Vec<f64>,
+    /// Largest residual–input cross-correlation: lag (s, positive: input leads) and value, and
+    /// whether it lies beyond the 99 % bound.
+    pub input_xcorr_peak: Option<(f64, f64, bool)>,
+    /// Frequency of the residual spectrum's largest peak, Hz, and its prominence over the median.
+    pub spectrum_peak_hz: f64,
+    pub spectrum_peak_prominence: f64,
+    /// Recorded channels the model does not use, by correlation with the residual.
+    pub channels: Vec<crate::core::residuals::ChannelCorrelation>,
+    pub worst_stretches: Vec<crate::core::residuals::Stretch>,
+    /// The picture of this analysis, when it was written.
+    pub figure: Option<String>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -345,6 +377,50 @@ fn noise_and_monte_carlo_section(out: &mut String, report: &Report) {
     }
 }
 
+/// "Where it fails": per scored run the plain-words summary, the error by regime and the worst
+/// stretches.
+fn residuals_section(out: &mut String, residuals: &[ResidualReport], unit: &str) {
+    if residuals.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "\n### Where it fails (residual = measured − final model)");
+    for r in residuals {
+        let _ =
+            writeln!(out, "\n**{}**: {} (Noise σ from the {}.)\n", r.run, r.summary, r.noise_sigma_source);
+        let _ = writeln!(
+            out,
+            "| regime | share of samples % | RMSE {unit} | RMSPE % | bias {unit} | share of squared error % |\n|---|---|---|---|---|---|"
+        );
+        let opt = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.4}"));
+        for row in &r.regimes {
+            let _ = writeln!(
+                out,
+                "| {} | {:.1} | {} | {} | {} | {:.1} |",
+                row.regime.label(),
+                row.share_of_samples_pct,
+                opt(row.rmse),
+                opt(row.rmspe_pct),
+                opt(row.mean_error),
+                row.share_of_squared_error_pct
+            );
+        }
+        let stretches: Vec<String> = r
+            .worst_stretches
+            .iter()
+            .map(|s| {
+                let motion = format!("{:?}", s.motion).to_lowercase();
+                format!("{:.1}–{:.1} s (RMS {:.4}, mostly {motion})", s.start_secs, s.end_secs, s.rms)
+            })
+            .collect();
+        if !stretches.is_empty() {
+            let _ = writeln!(out, "\nWorst stretches: {}.", stretches.join("; "));
+        }
+        if let Some(f) = &r.figure {
+            let _ = writeln!(out, "\n![residuals of {}]({f})", r.run);
+        }
+    }
+}
+
 /// The Markdown report: the same numbers as report.json, as tables a person reads.
 pub fn render_markdown(report: &Report) -> String {
     let mut out = String::new();
@@ -382,6 +458,7 @@ pub fn render_markdown(report: &Report) -> String {
                 );
             }
         }
+        residuals_section(&mut out, &o.residuals, &o.unit);
     }
     table1_section(&mut out, report);
     noise_and_monte_carlo_section(&mut out, report);

@@ -369,6 +369,7 @@ fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
         .include_x(-0.6)
         .include_x(history.len() as f64 - 0.4)
         .y_axis_label("RMSPE [%]")
+        .show_grid([false, true])
         .x_axis_formatter(move |mark, _| {
             let i = mark.value.round();
             if (mark.value - i).abs() > 1e-6 || i < 0.0 {
@@ -380,9 +381,12 @@ fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
             plot_ui.bar_chart(BarChart::new("validation RMSPE", bars).color(theme::MODEL));
             for (i, step) in history.iter().enumerate() {
                 let at = egui_plot::PlotPoint::new(i as f64, step.rmspe_pct + top * 0.04);
-                let label =
-                    Text::new("value", at, RichText::new(format!("{:.3} %", step.rmspe_pct)).strong())
-                        .anchor(egui::Align2::CENTER_BOTTOM);
+                let label = Text::new(
+                    "value",
+                    at,
+                    RichText::new(format!("{:.3} %", step.rmspe_pct)).size(14.0).strong(),
+                )
+                .anchor(egui::Align2::CENTER_BOTTOM);
                 plot_ui.text(label);
             }
         });

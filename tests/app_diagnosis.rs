@@ -158,3 +158,48 @@ fn a_run_without_the_channels_an_effect_needs_is_a_shown_error() {
     assert_eq!(effects_in_setup(harness.state()), vec!["ambient_correction".to_owned()]);
     assert!(harness.state().view.errors.iter().any(|e| e.contains("warp_drive")));
 }
+
+#[test]
+fn a_clicked_worst_stretch_shows_that_window_in_the_traces_view() {
+    let mut harness = open_sample("soak/project.toml");
+    harness.get_by_label("Where it fails").click();
+    harness.run();
+    let (index, first) = {
+        let state = &harness.state().view.views.diagnosis.residuals;
+        let analyses = state.current().expect("the residuals are analysed");
+        let run = analyses.runs.first().expect("a scored run");
+        let stretch = run.analysis.as_ref().unwrap().worst_stretches.first().cloned().expect("stretches");
+        (run.index, stretch)
+    };
+    let label = format!("1. {:.1}–{:.1} s", first.start_secs, first.end_secs);
+    harness.get_by_label(&label).click();
+    harness.run();
+    let app = harness.state();
+    assert_eq!(app.view.tab, Tab::Traces);
+    let traces = &app.view.views.traces;
+    assert_eq!(traces.run, Some(index));
+    assert_eq!(traces.focus_window, Some((first.start_secs, first.end_secs)));
+    harness.get_by_label("Reset zoom").click();
+    harness.run();
+    assert_eq!(harness.state().view.views.traces.focus_window, None);
+}
+
+#[test]
+fn soak_speed_ranks_thermal_soak_first_and_a_screenshot_app_can_apply_it() {
+    let harness = open_sample("soak/project.toml");
+    let report =
+        harness.state().view.views.diagnosis.result(SPEED).unwrap().outcome.as_ref().unwrap().clone();
+    assert_eq!(report.best().unwrap().effect, "thermal_soak");
+    let before = live_rmspe(harness.state());
+
+    // What `jetid --screenshot OUT --view diagnosis PROJECT --add-effect ID` shows.
+    let app = jetid::ui::screenshot::screenshot_app(
+        Some(&sample("soak/project.toml")),
+        &["thermal_soak".to_owned()],
+    )
+    .unwrap();
+    assert_eq!(effects_in_setup(&app), vec!["thermal_soak".to_owned()]);
+    let after = live_rmspe(&app);
+    assert!(after < before, "{before} -> {after}");
+    assert!(jetid::ui::screenshot::screenshot_app(None, &["warp_drive".to_owned()]).is_err());
+}

@@ -16,7 +16,7 @@ use super::session::{Role, Session};
 use super::theme;
 use super::traces_ui::run_label;
 use crate::core::residuals::{
-    Regime, ResidualAnalysis, ResidualSettings, analyse_residuals, summary_sentences,
+    ChannelCorrelation, Regime, ResidualAnalysis, ResidualSettings, analyse_residuals, summary_sentences,
 };
 use crate::core::run::Run;
 
@@ -73,6 +73,11 @@ pub struct ResidualsState {
 }
 
 impl ResidualsState {
+    /// The analyses last computed (for the model they name).
+    pub fn current(&self) -> Option<&Analyses> {
+        self.analyses.as_ref()
+    }
+
     /// The analyses of `live`, computed now if they are for another model.
     pub fn analyses(&mut self, output: &str, session: &Session, live: &LiveModel) -> &Analyses {
         let stale = self.analyses.as_ref().is_none_or(|a| a.model_id != live.id);
@@ -299,7 +304,10 @@ fn regimes_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, all: &Analyses) {
                 }
             });
         });
-        let labels: Vec<&'static str> = rows.iter().map(|r| r.regime.label()).collect();
+        let labels: Vec<&'static str> = rows.iter().map(|r| short_label(r.regime)).collect();
+        let values: Vec<(f64, f64)> =
+            rows.iter().enumerate().filter_map(|(i, r)| Some((i as f64, r.rmspe_pct?))).collect();
+        let top = values.iter().map(|(_, v)| *v).fold(0.0, f64::max);
         let bars: Vec<Bar> = rows
             .iter()
             .enumerate()
@@ -312,18 +320,46 @@ fn regimes_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, all: &Analyses) {
             .allow_zoom(false)
             .allow_scroll(false)
             .include_y(0.0)
+            .include_y(top * 1.15)
+            .show_grid([false, true])
             .y_axis_label("RMSPE [%]")
+            .x_grid_spacer(|input| {
+                let (lo, hi) = input.bounds;
+                let first = lo.ceil().max(0.0) as usize;
+                let last = hi.floor().max(0.0) as usize;
+                (first..=last).map(|i| egui_plot::GridMark { value: i as f64, step_size: 1.0 }).collect()
+            })
             .x_axis_formatter(move |mark, _| {
                 let i = mark.value.round();
                 if (mark.value - i).abs() > 1e-6 || i < 0.0 {
                     return String::new();
                 }
-                labels.get(i as usize).map(|l| l.replace(" operating point", "")).unwrap_or_default()
+                labels.get(i as usize).map(|l| (*l).to_owned()).unwrap_or_default()
             })
             .show(ui, |plot_ui| {
                 plot_ui.bar_chart(BarChart::new("RMSPE by regime", bars).color(theme::MODEL));
+                for (x, v) in values {
+                    let at = egui_plot::PlotPoint::new(x, v + 0.02 * top);
+                    let text = egui_plot::Text::new("value", at, RichText::new(format!("{v:.2}")).strong())
+                        .anchor(egui::Align2::CENTER_BOTTOM);
+                    plot_ui.text(text);
+                }
             });
     });
+}
+
+/// A regime in a word, for the bar picture's axis.
+fn short_label(regime: Regime) -> &'static str {
+    match regime {
+        Regime::Run => "run",
+        Regime::Steady => "steady",
+        Regime::Transient => "transient",
+        Regime::Accelerating => "accel.",
+        Regime::Decelerating => "decel.",
+        Regime::Low => "low",
+        Regime::Mid => "mid",
+        Regime::High => "high",
+    }
 }
 
 /// A correlogram as stems with its ±99 % bounds.
@@ -434,33 +470,47 @@ fn channels_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run) {
         hint(ui, &format!("{} left out: {:?}", excluded.channel, excluded.reason));
     }
     let step = (a.residual.len() / MAX_SCATTER_POINTS).max(1);
+    let per_row = ((ui.available_width() / 340.0).floor() as usize).max(1);
     egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-        ui.horizontal_wrapped(|ui| {
-            for c in &scan.channels {
-                let Some(channel) = run.channel(&c.channel) else { continue };
-                ui.vertical(|ui| {
-                    ui.set_width(330.0);
-                    let verdict = if c.significant { "significant" } else { "not significant" };
-                    let colour = if c.significant { theme::WARNING } else { theme::HINT };
-                    ui.label(RichText::new(&c.channel).strong());
-                    ui.label(
-                        RichText::new(format!("r = {:+.3}, slow r = {:+.3}, {verdict}", c.r, c.r_slow))
-                            .color(colour),
-                    );
-                    let points: PlotPoints =
-                        channel.values.iter().zip(&a.residual).step_by(step).map(|(x, r)| [*x, *r]).collect();
-                    let unit = if c.unit.is_empty() { String::new() } else { format!(" [{}]", c.unit) };
-                    Plot::new(("diagnosis_channel", &c.channel))
-                        .width(320.0)
-                        .height(220.0)
-                        .x_axis_label(format!("{}{unit}", c.channel))
-                        .y_axis_label(format!("residual [{}]", a.unit))
-                        .show(ui, |plot_ui| {
-                            plot_ui
-                                .points(Points::new(&c.channel, points).radius(1.2).color(theme::MEASURED));
-                        });
-                });
-            }
-        });
+        for row in scan.channels.chunks(per_row) {
+            ui.horizontal_top(|ui| {
+                for c in row {
+                    channel_scatter_ui(ui, a, run, c, step);
+                }
+            });
+        }
+    });
+}
+
+/// The residual against one channel, with its correlation.
+fn channel_scatter_ui(
+    ui: &mut egui::Ui,
+    a: &ResidualAnalysis,
+    run: &Run,
+    c: &ChannelCorrelation,
+    step: usize,
+) {
+    let Some(channel) = run.channel(&c.channel) else { return };
+    ui.vertical(|ui| {
+        ui.set_width(330.0);
+        let verdict = if c.significant { "significant" } else { "not significant" };
+        let colour = if c.significant { theme::WARNING } else { theme::HINT };
+        ui.label(RichText::new(&c.channel).strong());
+        ui.label(
+            RichText::new(format!("r = {:+.3}, slow r = {:+.3}, {verdict}", c.r, c.r_slow)).color(colour),
+        );
+        let points: PlotPoints =
+            channel.values.iter().zip(&a.residual).step_by(step).map(|(x, r)| [*x, *r]).collect();
+        let unit = if c.unit.is_empty() { String::new() } else { format!(" [{}]", c.unit) };
+        Plot::new(("diagnosis_channel", &c.channel))
+            .width(320.0)
+            .height(220.0)
+            .x_grid_spacer(plot_util::grid_125_x)
+            .y_grid_spacer(plot_util::grid_125_y)
+            .x_axis_label(format!("{}{unit}", c.channel))
+            .y_axis_label(format!("residual [{}]", a.unit))
+            .show(ui, |plot_ui| {
+                plot_ui.points(Points::new(&c.channel, points).radius(1.2).color(theme::MEASURED));
+            });
     });
 }

@@ -203,3 +203,30 @@ fn soak_speed_ranks_thermal_soak_first_and_a_screenshot_app_can_apply_it() {
     assert!(after < before, "{before} -> {after}");
     assert!(jetid::ui::screenshot::screenshot_app(None, &["warp_drive".to_owned()]).is_err());
 }
+
+#[test]
+fn effects_are_saved_in_the_project_file_and_opened_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = App::new(Session::default());
+    app.apply(Command::load(sample("hot_day/ident.csv"), Role::Identification));
+    app.apply(Command::load(sample("hot_day/validation.csv"), Role::Validation));
+    for output in [SPEED, "thrust_n"] {
+        app.apply(Command::ApplyEffect { output: output.into(), effect: "ambient_correction".into() });
+    }
+    let project = dir.path().join("hot.toml");
+    app.apply(Command::SaveProject(project.clone()));
+    assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
+    let text = std::fs::read_to_string(&project).unwrap();
+    assert!(text.contains("add_effects = [\"ambient_correction\"]"), "{text}");
+
+    let mut reopened = App::new(Session::default());
+    reopened.apply(Command::OpenProject(project));
+    assert_eq!(effects_in_setup(&reopened), vec!["ambient_correction".to_owned()]);
+    assert_eq!(reopened.session.setup.output("thrust_n").effects, vec!["ambient_correction".to_owned()]);
+
+    // Effects that differ between the outputs cannot all be written: the status says which.
+    app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "thermal_soak".into() });
+    app.apply(Command::SaveProject(dir.path().join("mixed.toml")));
+    let status = app.view.status.clone().unwrap_or_default();
+    assert!(status.contains("thermal_soak was not saved"), "{status}");
+}

@@ -17,10 +17,11 @@ pub struct Cli {
     pub batch: bool,
     #[command(flatten)]
     pub batch_args: BatchArgs,
-    /// Open the app on the bundled sample runs, save a PNG of one view to this file, and exit.
+    /// Open the app on the bundled sample runs (or on PROJECT, with --add-effect applied), save a
+    /// PNG of one view to this file, and exit.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
-    /// The view to capture with --screenshot: data, zplane, bode, static or traces.
+    /// The view to capture with --screenshot: data, zplane, bode, static, traces or diagnosis.
     #[arg(long, default_value = "data")]
     pub view: String,
     #[command(subcommand)]
@@ -84,7 +85,10 @@ pub fn run(cli: Cli) -> Result<()> {
         #[cfg(feature = "gui")]
         None if let Some(out) = &cli.screenshot => {
             // `--output NAME` picks the output the model views show (default: the first).
-            crate::ui::screenshot(out, &cli.view, cli.batch_args.outputs.first().map(String::as_str))
+            // PROJECT and `--add-effect ID` picture a project's runs with effects applied.
+            let args = &cli.batch_args;
+            let output = args.outputs.first().map(String::as_str);
+            crate::ui::screenshot(out, &cli.view, output, args.project.as_deref(), &args.add_effects)
         }
         None => run_app(),
     }

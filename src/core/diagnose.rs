@@ -52,6 +52,9 @@ pub enum DiagnoseError {
     /// The current model fails on a run (typically a channel its effects need).
     #[error("the current model cannot be simulated on run '{run}': {source}")]
     CurrentModel { run: String, source: EffectError },
+    /// The caller's progress callback asked to stop.
+    #[error("the diagnosis was cancelled")]
+    Cancelled,
     /// An effect could not be built, applied, removed or fitted.
     #[error(transparent)]
     Effect(#[from] EffectError),
@@ -205,6 +208,23 @@ pub fn diagnose(
     validation: &[&Run],
     settings: &OutputSettings,
 ) -> Result<DiagnosisReport, DiagnoseError> {
+    diagnose_with_progress(current, ident, fits, validation, settings, &mut |_| true)
+}
+
+/// [`diagnose`] that reports the fraction done (0..=1) before every trial; when `progress`
+/// returns false the diagnosis stops with [`DiagnoseError::Cancelled`] (the app's background job).
+pub fn diagnose_with_progress(
+    current: &ExtendedModel,
+    ident: &Run,
+    fits: &SegmentFits,
+    validation: &[&Run],
+    settings: &OutputSettings,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<DiagnosisReport, DiagnoseError> {
+    let steps = EFFECT_IDS.len() as f64 + 1.0;
+    if !progress(0.0) {
+        return Err(DiagnoseError::Cancelled);
+    }
     if validation.is_empty() {
         return Err(DiagnoseError::NoValidationRuns);
     }
@@ -218,7 +238,10 @@ pub fn diagnose(
     let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
     let mut entries = Vec::new();
     let mut skipped = Vec::new();
-    for id in EFFECT_IDS {
+    for (done, id) in EFFECT_IDS.into_iter().enumerate() {
+        if !progress((done as f64 + 1.0) / steps) {
+            return Err(DiagnoseError::Cancelled);
+        }
         if let Some(reason) = not_applicable(id, current, &all_runs) {
             skipped.push(SkippedEffect { effect: id.to_owned(), reason });
             continue;
@@ -257,6 +280,7 @@ pub fn diagnose(
         });
     }
     entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
+    progress(1.0);
     Ok(DiagnosisReport {
         output: current.output.clone(),
         rmspe_current_pct: rmspe_before_pct,

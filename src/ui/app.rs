@@ -149,6 +149,11 @@ impl App {
                 let status = format!("{output}: settings changed");
                 self.edit_setup(&status, |setup| setup.output_mut(&output).settings = settings);
             }
+            Command::ApplyEffect { output, effect } => self.apply_effect(&output, &effect),
+            Command::RemoveEffect { output, effect } => {
+                let status = format!("{output}: effect {effect} removed");
+                self.edit_setup(&status, |setup| setup.output_mut(&output).effects.retain(|e| *e != effect));
+            }
             Command::Undo => self.undo(),
             Command::Redo => self.redo(),
             Command::ExportModel(path) => self.export_model(&path),
@@ -197,8 +202,27 @@ impl App {
                 }
             }
             Command::ShowTab(tab) => self.view.tab = tab,
+            Command::FocusTraces { run, t0_secs, t1_secs } => {
+                self.view.views.traces.focus(run, t0_secs, t1_secs);
+                self.view.tab = Tab::Traces;
+            }
             Command::Quit => self.view.quit_requested = true,
         }
+    }
+
+    /// Add a catalog effect to an output's setup (undoable); an unknown id is an error shown.
+    fn apply_effect(&mut self, output: &str, effect: &str) {
+        if let Err(err) = crate::core::effects::check_id(effect) {
+            return self
+                .push_error(&anyhow::Error::new(err).context(format!("adding an effect to {output}")));
+        }
+        let status = format!("{output}: effect {effect} applied");
+        self.edit_setup(&status, |setup| {
+            let effects = &mut setup.output_mut(output).effects;
+            if !effects.iter().any(|e| e == effect) {
+                effects.push(effect.to_owned());
+            }
+        });
     }
 
     fn reload_run(&mut self, index: usize, options: crate::io::csv_run::LoadOptions) {

@@ -41,6 +41,16 @@ pub enum Command {
         output: String,
         settings: OutputSettings,
     },
+    /// Add an effect of the catalog to an output's model (fitted on the identification data).
+    ApplyEffect {
+        output: String,
+        effect: String,
+    },
+    /// Take an effect out of an output's model (the others are fitted again).
+    RemoveEffect {
+        output: String,
+        effect: String,
+    },
     Undo,
     Redo,
 
@@ -73,6 +83,12 @@ pub enum Command {
     /// The output the model views show.
     SelectOutput(String),
     ShowTab(Tab),
+    /// Show the Traces view on session run `run`, zoomed to `t0_secs..=t1_secs`.
+    FocusTraces {
+        run: usize,
+        t0_secs: f64,
+        t1_secs: f64,
+    },
     Quit,
 }
 

@@ -49,9 +49,24 @@ impl App {
         let mut file = ModelFile::new(ident.run.dt_secs, input);
         let mut skipped = Vec::new();
         for output in &ident.outputs {
-            match &output.live {
-                Ok(live) => file.push(&live.model, &output.unit),
-                Err(_) => skipped.push(output.name.clone()),
+            let Ok(live) = &output.live else {
+                skipped.push(output.name.clone());
+                continue;
+            };
+            if live.effects.model.is_none() && !live.effects.requested.is_empty() {
+                // Exporting it without the effects the user asked for would be a different model.
+                skipped.push(format!("{} (its effects could not be added)", output.name));
+                continue;
+            }
+            file.push(&live.model, &output.unit);
+            if let (Some(extended), Some(last)) = (&live.effects.model, file.outputs.last_mut()) {
+                // The effects are fitted together with the gain, roots and static map beside them.
+                let tf = &extended.wiener.linear.tf;
+                last.poles = tf.poles().unwrap_or_default();
+                last.zeros = tf.zeros().unwrap_or_default();
+                last.static_map_beta = extended.wiener.map.beta();
+                last.wiener = extended.wiener.clone();
+                last.effects = extended.records();
             }
         }
         if file.outputs.is_empty() {

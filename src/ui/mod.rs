@@ -14,6 +14,9 @@ pub mod bode_ui;
 pub mod command;
 pub mod data_ui;
 pub mod derived;
+pub mod diagnosis_model;
+pub mod diagnosis_residuals_ui;
+pub mod diagnosis_ui;
 mod edit;
 pub mod file_dialog;
 mod files;
@@ -67,9 +70,16 @@ pub fn run_app() -> Result<()> {
         .map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))
 }
 
-/// `jetid --screenshot OUT [--view NAME] [--output NAME]`: a picture of one view on the bundled
-/// sample runs (model views show `output`, else the first output).
-pub fn screenshot(out: &Path, view: &str, output: Option<&str>) -> Result<()> {
+/// `jetid --screenshot OUT [--view NAME] [--output NAME] [PROJECT] [--add-effect ID]…`: a picture of
+/// one view on the bundled sample runs or on `project` (model views show `output`, else the first
+/// output), with `add_effects` applied to every output.
+pub fn screenshot(
+    out: &Path,
+    view: &str,
+    output: Option<&str>,
+    project: Option<&Path>,
+    add_effects: &[String],
+) -> Result<()> {
     let Some(tab) = Tab::from_cli_name(view) else {
         bail!("unknown view `{view}`; the views are: {}", Tab::cli_names());
     };
@@ -81,7 +91,7 @@ pub fn screenshot(out: &Path, view: &str, output: Option<&str>) -> Result<()> {
     options.viewport = options.viewport.with_resizable(false);
     let (tx, rx) = mpsc::channel();
     let out = out.to_owned();
-    let mut app = App::startup(None);
+    let mut app = screenshot::screenshot_app(project, add_effects)?;
     app.view.output = output.map(ToOwned::to_owned);
     let result = eframe::run_native(
         "jetid",

@@ -5,6 +5,9 @@
 //!
 //! While a cluster is dragged, [`Preview`] runs the live path on the dragged clusters every frame
 //! without polishing the centroids (`refine = false`); the committed clusters are polished.
+//!
+//! The committed model then gets the output's effects (see
+//! [`diagnosis_model`](super::diagnosis_model)); a preview shows it without them.
 use std::sync::Arc;
 
 use crate::core::cluster::{self, Cluster, ClusterEval};
@@ -16,6 +19,7 @@ use crate::core::run::Run;
 use crate::core::segment::{Segment, SegmentSettings};
 use crate::core::tf::{BodePoint, log_space};
 
+use super::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
 use super::session::{Role, Session};
 use super::setup::OutputSetup;
 
@@ -124,7 +128,13 @@ pub struct ScoredRun {
     pub index: usize,
     pub name: String,
     pub role: Role,
+    /// The model's simulation: the gray-box model with its effects, when it has any.
     pub gray_box: RunPrediction,
+    /// The gray-box model without its effects (only when effects are in the model).
+    pub without_effects: Option<RunPrediction>,
+    /// Why the model with effects could not be simulated on this run (`gray_box` is then the
+    /// model without effects).
+    pub effects_error: Option<String>,
     /// The linear block alone (the "linear" baseline).
     pub linear: Result<RunPrediction, String>,
 }
@@ -132,7 +142,11 @@ pub struct ScoredRun {
 /// The live path's result for one set of clusters.
 #[derive(Clone, Debug)]
 pub struct LiveModel {
+    /// Tells this model from every other one (see [`diagnosis_model::next_model_id`]).
+    pub id: u64,
     pub model: GrayBoxModel,
+    /// The effects added to the model, the model with them and the error history.
+    pub effects: EffectsOutcome,
     /// Bode of the reduced linear block at [`OutputCache::omegas_rad_s`].
     pub bode: Vec<BodePoint>,
     pub runs: Vec<ScoredRun>,
@@ -142,7 +156,8 @@ pub struct LiveModel {
 }
 
 impl LiveModel {
-    /// Mean gray-box RMSPE over the validation runs (the figure of merit shown while dragging).
+    /// Mean gray-box RMSPE over the validation runs (the figure of merit shown while dragging);
+    /// the model's effects included.
     pub fn mean_validation_rmspe(&self) -> Option<f64> {
         let values: Vec<f64> = self
             .runs
@@ -151,6 +166,14 @@ impl LiveModel {
             .map(|r| r.gray_box.metrics.rmspe_pct)
             .collect();
         (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+    }
+
+    /// The model as the views show it: with its effects when they could be added.
+    pub fn current_model(&self) -> crate::core::effects::ExtendedModel {
+        self.effects
+            .model
+            .clone()
+            .unwrap_or_else(|| crate::core::effects::ExtendedModel::from_gray_box(&self.model))
     }
 }
 
@@ -258,9 +281,38 @@ impl OutputCache {
         self.fits_key = key;
         self.scored = scored;
         self.setup = setup;
-        let (evals, live) = self.evaluate(run, &self.clusters, &self.setup.settings);
+        let (evals, mut live) = self.evaluate(run, &self.clusters, &self.setup.settings);
+        if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
+            let runs: Vec<Arc<Run>> = self.scored.iter().map(|s| Arc::clone(&s.run)).collect();
+            diagnosis_model::apply_effects(live, &self.setup.effects, run, fits, &self.setup.settings, &runs);
+        }
         self.evals = evals;
         self.live = live;
+    }
+
+    /// What a diagnosis of the committed model needs; an error when there is no model or no
+    /// validation run.
+    pub fn diagnosis_input(&self) -> Result<DiagnosisInput, String> {
+        let live = self.live.as_ref().map_err(|e| format!("no model: {e}"))?;
+        let fits = self.fits.as_ref().map_err(|e| format!("no segment fits: {e}"))?;
+        let ident = self.source.as_ref().ok_or("no identification run")?;
+        if let Some(problem) = live.effects.problems.first().filter(|_| live.effects.model.is_none()) {
+            return Err(format!("the model's effects could not be added: {problem}"));
+        }
+        let validation: Vec<Arc<Run>> =
+            self.scored.iter().filter(|s| s.role == Role::Validation).map(|s| Arc::clone(&s.run)).collect();
+        if validation.is_empty() {
+            return Err("give a run the role validation: the effects are scored on validation runs".into());
+        }
+        Ok(DiagnosisInput {
+            model_id: live.id,
+            output: self.name.clone(),
+            current: live.current_model(),
+            ident: Arc::clone(ident),
+            fits: Arc::clone(fits),
+            validation,
+            settings: self.setup.settings.clone(),
+        })
     }
 
     /// Cluster evaluations and the live path for `clusters` with `settings`.
@@ -307,9 +359,13 @@ impl OutputCache {
                 linear: pipeline::predict_linear(&result.model.wiener.linear, &source.run, &self.name)
                     .map_err(|e| e.to_string()),
                 gray_box,
+                without_effects: None,
+                effects_error: None,
             })
             .collect();
         Ok(LiveModel {
+            id: diagnosis_model::next_model_id(),
+            effects: EffectsOutcome { requested: self.setup.effects.clone(), ..EffectsOutcome::default() },
             model: result.model,
             bode: result.bode,
             runs: scored,
@@ -331,7 +387,10 @@ impl Preview {
     pub fn compute(ident: &IdentCache, output: &str, clusters: Vec<Cluster>) -> Option<Self> {
         let cache = ident.output(output)?;
         let settings = OutputSettings { refine: false, ..cache.setup.settings.clone() };
-        let (evals, live) = cache.evaluate(&ident.run, &clusters, &settings);
+        let (evals, mut live) = cache.evaluate(&ident.run, &clusters, &settings);
+        if let Ok(live) = &mut live {
+            live.effects.left_out_for_preview = !live.effects.requested.is_empty();
+        }
         Some(Self { output: output.to_owned(), clusters, evals, live })
     }
 }

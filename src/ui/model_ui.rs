@@ -41,14 +41,23 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
             error_ui(ui, &format!("No model for {}: {err}", view.output.name));
             false
         }
-        Ok(_) if view.is_preview => {
-            ui.label(
-                RichText::new("Preview while a cluster is dragged (centroids not polished)")
-                    .color(theme::WARNING),
-            );
+        Ok(live) if view.is_preview => {
+            let mut text = "Preview while a cluster is dragged (centroids not polished".to_owned();
+            if live.effects.left_out_for_preview {
+                text += &format!(
+                    "; without the effects {}, fitted again on release",
+                    live.effects.requested.join(", ")
+                );
+            }
+            ui.label(RichText::new(text + ")").color(theme::WARNING));
             true
         }
-        Ok(_) => true,
+        Ok(live) => {
+            for problem in &live.effects.problems {
+                error_ui(ui, &format!("Effects: {problem}"));
+            }
+            true
+        }
     }
 }
 
@@ -130,10 +139,9 @@ pub fn metrics_table_ui(ui: &mut egui::Ui, id: &str, runs: &[ScoredRun]) {
         }
         ui.end_row();
         for run in runs {
-            let rows = [
-                ("gray-box", Ok(&run.gray_box), theme::MODEL),
-                ("linear", run.linear.as_ref(), theme::LINEAR),
-            ];
+            let model = if run.without_effects.is_some() { "gray-box + effects" } else { "gray-box" };
+            let rows =
+                [(model, Ok(&run.gray_box), theme::MODEL), ("linear", run.linear.as_ref(), theme::LINEAR)];
             for (model, prediction, colour) in rows {
                 ui.label(super::traces_ui::run_label(run));
                 ui.label(RichText::new(model).color(colour));

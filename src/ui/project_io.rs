@@ -1,6 +1,7 @@
 //! The session as a project file and back. `io::project` reads project files; this writes one
-//! from the session (runs with roles and load options, per-output settings, segments, clusters)
-//! in the same format, so `jetid --batch PROJECT` and File > Open project read it.
+//! from the session (runs with roles and load options, per-output settings, segments, clusters,
+//! effects as `add_effects`) in the same format, so `jetid --batch PROJECT` and File > Open
+//! project read it.
 use std::collections::BTreeSet;
 use std::path::Path;
 
@@ -37,6 +38,7 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         .ident_run()
         .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
         .unwrap_or_default();
+    let add_effects = shared_effects(&session.setup, &outputs, &mut notes);
     let names: BTreeSet<&String> = outputs.iter().chain(session.setup.outputs.keys()).collect();
     let output = names.into_iter().map(|name| (name.clone(), output_spec(&session.setup, name))).collect();
     let file = ProjectFile {
@@ -46,7 +48,7 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         chirp,
         steady,
         outputs,
-        add_effects: Vec::new(),
+        add_effects,
         clusters_from: None,
         steps_from: None,
         load: LoadSpec::default(),
@@ -54,6 +56,26 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
     };
     let text = toml::to_string_pretty(&file).context("writing the project as TOML")?;
     Ok((text, notes))
+}
+
+/// The effects to write as the project's `add_effects`. That list applies to every output (the
+/// project format has no per-output effects), so only the effects every output has are written, in
+/// the order of the first output; the notes name what could not be saved.
+fn shared_effects(setup: &ModelSetup, outputs: &[String], notes: &mut Vec<String>) -> Vec<String> {
+    let lists: Vec<(&String, Vec<String>)> = outputs.iter().map(|o| (o, setup.output(o).effects)).collect();
+    let Some((_, first)) = lists.first() else { return Vec::new() };
+    let shared: Vec<String> =
+        first.iter().filter(|id| lists.iter().all(|(_, list)| list.contains(id))).cloned().collect();
+    for (output, list) in &lists {
+        let lost: Vec<&str> = list.iter().filter(|id| !shared.contains(id)).map(String::as_str).collect();
+        if !lost.is_empty() {
+            notes.push(format!(
+                "a project's add_effects applies to every output: {output}'s {} was not saved",
+                lost.join(", ")
+            ));
+        }
+    }
+    shared
 }
 
 fn run_entry(run: &SessionRun, base: &Path) -> RunEntry {
@@ -75,7 +97,7 @@ fn load_spec(options: &LoadOptions) -> LoadSpec {
 }
 
 fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
-    let OutputSetup { settings, clusters } = setup.output(name);
+    let OutputSetup { settings, clusters, effects: _ } = setup.output(name);
     OutputSpec {
         na: Some(settings.orders.na),
         nb: Some(settings.orders.nb),
@@ -114,8 +136,24 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
             OutputSetup {
                 settings: project.settings_for(name),
                 clusters: project.clusters.get(name).cloned(),
+                effects: Vec::new(),
             },
         );
+    }
+    // `add_effects` applies to every output the batch models: the project's list, else every
+    // output of the identification run.
+    if !project.add_effects.is_empty() {
+        let outputs: Vec<String> = if project.outputs.is_empty() {
+            session
+                .ident_run()
+                .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
+                .unwrap_or_default()
+        } else {
+            project.outputs.clone()
+        };
+        for output in outputs {
+            session.setup.output_mut(&output).effects = project.add_effects.clone();
+        }
     }
     (session, failures)
 }

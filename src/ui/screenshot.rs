@@ -1,5 +1,7 @@
-//! `jetid --screenshot OUT.png [--view NAME]`: open the app on the bundled sample runs at a fixed
-//! size, let it settle, grab the rendered frame, write it as PNG and close.
+//! `jetid --screenshot OUT.png [--view NAME] [PROJECT] [--add-effect ID]…`: open the app on the
+//! bundled sample runs (or on a project file, with effects added to every output) at a fixed size,
+//! let it settle (a diagnosis the view starts is waited for), grab the rendered frame, write it as
+//! PNG and close.
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, Sender};
@@ -8,13 +10,41 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, Result, anyhow};
 
 use super::app::App;
+use super::command::Command;
+use super::session::Session;
 use super::views::Tab;
 
 /// Frames drawn (and time waited) before the picture is taken, so layout and plot bounds settle.
 const WARMUP_FRAMES: u32 = 10;
 const WARMUP: Duration = Duration::from_millis(600);
 /// Give up when no picture arrived by then.
-const TIMEOUT: Duration = Duration::from_secs(30);
+const TIMEOUT: Duration = Duration::from_secs(60);
+
+/// The app a screenshot shows: the bundled sample runs, or `project` opened as File > Open
+/// project does; then `add_effects` applied to every identified output, as the Apply button does.
+/// Errors (a project that cannot be opened, an unknown effect) are returned, not drawn.
+pub fn screenshot_app(project: Option<&Path>, add_effects: &[String]) -> Result<App> {
+    let mut app = match project {
+        None => App::startup(None),
+        Some(path) => {
+            let mut app = App::new(Session::default());
+            app.apply(Command::OpenProject(path.to_owned()));
+            app
+        }
+    };
+    app.refresh();
+    let outputs: Vec<String> = app.cache.output_names().into_iter().map(ToOwned::to_owned).collect();
+    for effect in add_effects {
+        for output in &outputs {
+            app.apply(Command::ApplyEffect { output: output.clone(), effect: effect.clone() });
+        }
+    }
+    if let Some(error) = app.view.errors.first() {
+        return Err(anyhow!("{error}"));
+    }
+    app.refresh();
+    Ok(app)
+}
 
 pub struct ScreenshotApp {
     app: App,
@@ -59,6 +89,13 @@ impl eframe::App for ScreenshotApp {
         self.app.ui(ui);
         let ctx = ui.ctx().clone();
         if self.done {
+            return;
+        }
+        if self.app.view.views.diagnosis.is_running() {
+            // Picture the finished diagnosis: wait for it, then let the frame settle again.
+            self.app.view.views.diagnosis.wait();
+            self.frames = 0;
+            ctx.request_repaint();
             return;
         }
         self.frames += 1;

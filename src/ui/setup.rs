@@ -1,5 +1,6 @@
 //! The user's identification decisions: the segments of the identification run and, per output,
-//! its settings and clusters. This is the part of the session that undo and redo step through.
+//! its settings, clusters and applied effects. This is the part of the session that undo and redo
+//! step through.
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
@@ -8,7 +9,7 @@ use crate::core::cluster::Cluster;
 use crate::core::pipeline::OutputSettings;
 use crate::core::segment::Segment;
 
-/// Segments, and per output its settings and clusters.
+/// Segments, and per output its settings, clusters and effects.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ModelSetup {
@@ -26,12 +27,16 @@ pub struct OutputSetup {
     /// segments or orders change); `Some`: the user's clusters, kept as they are.
     #[serde(default)]
     pub clusters: Option<Vec<Cluster>>,
+    /// Effects of the missing-physics catalog added to the model, by id, in the order the user
+    /// applied them (each refitted on the identification data in turn).
+    #[serde(default)]
+    pub effects: Vec<String>,
 }
 
 impl OutputSetup {
     /// The defaults for an output of this name (the paper's ARX orders, automatic clusters).
     pub fn for_output(name: &str) -> Self {
-        Self { settings: OutputSettings::for_output(name), clusters: None }
+        Self { settings: OutputSettings::for_output(name), clusters: None, effects: Vec::new() }
     }
 }
 

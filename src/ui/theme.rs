@@ -91,3 +91,6 @@ pub const MEASURED: Color32 = Color32::from_rgb(70, 150, 230);
 /// Static-map steady-state points and the chirp's empirical frequency response.
 pub const STEADY_POINT: Color32 = Color32::from_rgb(240, 180, 60);
 pub const EMPIRICAL: Color32 = Color32::from_rgb(240, 180, 60);
+
+/// The gray-box model without its effects, drawn beside the model with them.
+pub const WITHOUT_EFFECTS: Color32 = Color32::from_rgb(200, 150, 230);

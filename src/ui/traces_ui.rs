@@ -1,6 +1,7 @@
 //! The Traces view: each validation (and chirp) run's measured output with the gray-box model
-//! (and optionally the linear block alone) simulated from the input, the residual below, and the
-//! metrics of every run.
+//! (with its effects, when it has any; optionally the model without them and the linear block
+//! alone) simulated from the input, the residual below, and the metrics of every run. The
+//! Diagnosis view can send it to a time window (a worst stretch); "Reset zoom" shows the whole run.
 use egui::RichText;
 use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints};
 
@@ -17,6 +18,48 @@ pub struct TracesViewState {
     /// The scored run shown (its index in the session).
     pub run: Option<usize>,
     pub show_linear: bool,
+    /// Also draw the gray-box model without its effects.
+    pub show_without_effects: bool,
+    /// The time window asked for (`t0, t1` in s), e.g. a worst stretch from the Diagnosis view.
+    pub focus_window: Option<(f64, f64)>,
+    /// The focus window still has to be set on the plots.
+    focus_pending: bool,
+    /// The plots go back to showing the whole run on the next frame.
+    reset_pending: bool,
+}
+
+impl TracesViewState {
+    /// Show session run `run` zoomed to `t0_secs..=t1_secs`.
+    pub fn focus(&mut self, run: usize, t0_secs: f64, t1_secs: f64) {
+        self.run = Some(run);
+        self.focus_window = Some((t0_secs.min(t1_secs), t0_secs.max(t1_secs)));
+        self.focus_pending = true;
+    }
+
+    /// Forget the focus window and show the whole run again.
+    pub fn reset_zoom(&mut self) {
+        self.focus_window = None;
+        self.focus_pending = false;
+        self.reset_pending = true;
+    }
+}
+
+/// The range of `values` over the samples whose time lies in `window`, padded by 5 %.
+fn range_in_window(
+    t_secs: &[f64],
+    values: impl Iterator<Item = f64>,
+    window: (f64, f64),
+) -> Option<(f64, f64)> {
+    let (lo, hi) = t_secs
+        .iter()
+        .zip(values)
+        .filter(|(t, v)| **t >= window.0 && **t <= window.1 && v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, v)| (lo.min(v), hi.max(v)));
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let pad = 0.05 * (hi - lo).max(1e-9 * hi.abs().max(1.0));
+    Some((lo - pad, hi + pad))
 }
 
 /// The run's name, and its role when the name does not say it.
@@ -70,11 +113,31 @@ pub fn traces_ui(
             .response
             .labelled_by(label.id);
         ui.checkbox(&mut state.show_linear, "Show the linear block alone");
+        if scored.without_effects.is_some() {
+            ui.checkbox(&mut state.show_without_effects, "Show the model without its effects");
+        }
+        if let Some((t0, t1)) = state.focus_window {
+            ui.label(RichText::new(format!("Showing {t0:.1}–{t1:.1} s")).color(theme::WARNING));
+            if ui.button("Reset zoom").clicked() {
+                state.reset_zoom();
+            }
+        }
     });
+    if let Some(err) = &scored.effects_error {
+        model_ui::error_ui(ui, &format!("The model's effects cannot be simulated on this run: {err}"));
+    }
     let Some(entry) = session.runs.get(scored.index) else { return };
     let Some(measured) = entry.run.output(output) else { return };
     let t = &entry.run.t_secs;
     let linear = scored.linear.as_ref().ok().filter(|_| state.show_linear);
+    let without = scored.without_effects.as_ref().filter(|_| state.show_without_effects);
+    let model_name = if scored.without_effects.is_some() { "gray-box + effects" } else { "gray-box model" };
+    let focus = state.focus_window.filter(|_| state.focus_pending);
+    let reset = std::mem::take(&mut state.reset_pending);
+    state.focus_pending = false;
+    let residual_of =
+        |y_hat: &[f64]| -> Vec<f64> { measured.values.iter().zip(y_hat).map(|(y, yh)| y - yh).collect() };
+    let model_residual = residual_of(&scored.gray_box.y_hat);
     let spacing = ui.spacing().item_spacing.y;
     let available = ui.available_height() - spacing;
     let group = egui::Id::unique(("traces_time_axis", output, scored.index));
@@ -88,7 +151,16 @@ pub fn traces_ui(
         .y_grid_spacer(plot_util::grid_125_y)
         .show_axes([false, true])
         .legend(Legend::default().position(egui_plot::Corner::LeftTop).follow_insertion_order(true))
+        .reset_if(reset)
         .show(ui, |plot_ui| {
+            if let Some(window) = focus {
+                plot_ui.set_plot_bounds_x(window.0..=window.1);
+                let both = measured.values.iter().chain(&scored.gray_box.y_hat).copied();
+                let t_twice: Vec<f64> = t.iter().chain(t).copied().collect();
+                if let Some((lo, hi)) = range_in_window(&t_twice, both, window) {
+                    plot_ui.set_plot_bounds_y(lo..=hi);
+                }
+            }
             plot_ui.line(
                 Line::new("measured", series(t, measured.values.iter().copied()))
                     .color(theme::MEASURED)
@@ -98,7 +170,13 @@ pub fn traces_ui(
                 let line = Line::new("linear block", series(t, linear.y_hat.iter().copied()));
                 plot_ui.line(line.color(theme::LINEAR).width(1.2).style(LineStyle::Dashed { length: 8.0 }));
             }
-            let gray = Line::new("gray-box model", series(t, scored.gray_box.y_hat.iter().copied()));
+            if let Some(without) = without {
+                let line = Line::new("without effects", series(t, without.y_hat.iter().copied()));
+                plot_ui.line(
+                    line.color(theme::WITHOUT_EFFECTS).width(1.2).style(LineStyle::Dashed { length: 6.0 }),
+                );
+            }
+            let gray = Line::new(model_name, series(t, scored.gray_box.y_hat.iter().copied()));
             plot_ui.line(gray.color(theme::MODEL).width(1.5));
         });
     Plot::new(("traces_residual", output, scored.index))
@@ -110,14 +188,40 @@ pub fn traces_ui(
         .y_axis_min_width(Y_AXIS_WIDTH)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
+        .reset_if(reset)
         .show(ui, |plot_ui| {
-            let residual = |y_hat: &[f64]| series(t, measured.values.iter().zip(y_hat).map(|(y, yh)| y - yh));
+            if let Some(window) = focus {
+                plot_ui.set_plot_bounds_x(window.0..=window.1);
+                if let Some((lo, hi)) = range_in_window(t, model_residual.iter().copied(), window) {
+                    plot_ui.set_plot_bounds_y(lo..=hi);
+                }
+            }
+            let residual = |y_hat: &[f64]| series(t, residual_of(y_hat).into_iter());
+            if let Some(without) = without {
+                let line = Line::new("without effects", residual(&without.y_hat));
+                plot_ui.line(
+                    line.color(theme::WITHOUT_EFFECTS).width(1.0).style(LineStyle::Dashed { length: 6.0 }),
+                );
+            }
             if let Some(linear) = linear {
                 let line = Line::new("linear block", residual(&linear.y_hat));
                 plot_ui.line(line.color(theme::LINEAR).width(1.0).style(LineStyle::Dashed { length: 8.0 }));
             }
             plot_ui.line(
-                Line::new("gray-box model", residual(&scored.gray_box.y_hat)).color(theme::MODEL).width(1.2),
+                Line::new(model_name, series(t, model_residual.iter().copied()))
+                    .color(theme::MODEL)
+                    .width(1.2),
             );
         });
+}
+
+/// `Plot::reset` when `reset` is true (egui_plot has no conditional form).
+trait ResetIf {
+    fn reset_if(self, reset: bool) -> Self;
+}
+
+impl ResetIf for Plot<'_> {
+    fn reset_if(self, reset: bool) -> Self {
+        if reset { self.reset() } else { self }
+    }
 }

@@ -11,6 +11,7 @@ use super::bode_ui::{self, BodeViewState};
 use super::command::Command;
 use super::data_ui::{self, DataViewState};
 use super::derived::Derived;
+use super::diagnosis_ui::{self, DiagnosisViewState};
 use super::model_ui;
 use super::session::Session;
 use super::static_map_ui;
@@ -25,11 +26,13 @@ pub enum Tab {
     Bode,
     StaticMap,
     Traces,
+    Diagnosis,
 }
 
 impl Tab {
     /// In the order of the tab bar.
-    pub const ALL: [Self; 5] = [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces];
+    pub const ALL: [Self; 6] =
+        [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces, Self::Diagnosis];
 
     pub fn label(self) -> &'static str {
         match self {
@@ -38,6 +41,7 @@ impl Tab {
             Self::Bode => "Bode",
             Self::StaticMap => "Static map",
             Self::Traces => "Traces",
+            Self::Diagnosis => "Diagnosis",
         }
     }
 
@@ -49,6 +53,7 @@ impl Tab {
             Self::Bode => "bode",
             Self::StaticMap => "static",
             Self::Traces => "traces",
+            Self::Diagnosis => "diagnosis",
         }
     }
 
@@ -69,6 +74,7 @@ pub struct ViewStates {
     pub zplane: ZPlaneViewState,
     pub bode: BodeViewState,
     pub traces: TracesViewState,
+    pub diagnosis: DiagnosisViewState,
 }
 
 /// The output the model views show: the chosen one if it is identified, else the first.
@@ -98,6 +104,9 @@ pub fn tab_ui(ui: &mut egui::Ui, session: &Session, view: &mut ViewState, cache:
         Tab::Bode => bode_ui::bode_ui(ui, &output, &mut states.bode, cache),
         Tab::StaticMap => commands.extend(static_map_ui::static_map_ui(ui, &output, cache)),
         Tab::Traces => traces_ui::traces_ui(ui, &output, &mut states.traces, session, cache),
+        Tab::Diagnosis => {
+            commands.extend(diagnosis_ui::diagnosis_ui(ui, &output, &mut states.diagnosis, session, cache))
+        }
     }
     commands
 }

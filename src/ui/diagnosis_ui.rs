@@ -1,0 +1,393 @@
+//! The Diagnosis view: which physical effect the model of the selected output is missing, the
+//! error history of the effects applied, and where the model fails (residual pictures, see
+//! [`diagnosis_residuals_ui`](super::diagnosis_residuals_ui)).
+//!
+//! The diagnosis ([`crate::core::diagnose`]) runs in a background [`Job`] for the committed model
+//! it was started on; when the model changes (an effect applied, a cluster moved) the result is
+//! kept but marked stale, with a button to run it again.
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use egui::RichText;
+use egui_plot::{Bar, BarChart, Plot, Text};
+
+use super::command::Command;
+use super::derived::Derived;
+use super::diagnosis_model::DiagnosisInput;
+use super::diagnosis_residuals_ui::{self, ResidualsState};
+use super::jobs::Job;
+use super::model_ui::{self, error_ui, hint};
+use super::session::Session;
+use super::theme;
+use crate::core::diagnose::{self, DiagnosisReport};
+use crate::io::report::HistoryStep;
+
+/// The two halves of the view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Section {
+    #[default]
+    WhichEffect,
+    WhereItFails,
+}
+
+/// A diagnosis that has ended, for the model it was started on.
+pub struct FinishedDiagnosis {
+    /// The live model diagnosed (see [`super::model_cache::LiveModel::id`]).
+    pub model_id: u64,
+    pub outcome: Result<DiagnosisReport, String>,
+    /// How long the diagnosis took on its worker thread.
+    pub duration: Duration,
+}
+
+struct RunningDiagnosis {
+    output: String,
+    model_id: u64,
+    job: Job<(DiagnosisReport, Duration)>,
+}
+
+#[derive(Default)]
+pub struct DiagnosisViewState {
+    pub section: Section,
+    running: Option<RunningDiagnosis>,
+    /// The latest diagnosis of each output.
+    results: BTreeMap<String, FinishedDiagnosis>,
+    pub residuals: ResidualsState,
+}
+
+impl DiagnosisViewState {
+    /// The latest diagnosis of `output`, if one has ended.
+    pub fn result(&self, output: &str) -> Option<&FinishedDiagnosis> {
+        self.results.get(output)
+    }
+
+    pub fn is_running(&self) -> bool {
+        self.running.is_some()
+    }
+
+    /// Start diagnosing (a diagnosis still running is cancelled).
+    pub fn start(&mut self, input: DiagnosisInput, repaint: impl Fn() + Send + 'static) {
+        if let Some(old) = self.running.take() {
+            old.job.cancel();
+        }
+        let (output, model_id) = (input.output.clone(), input.model_id);
+        let job = Job::spawn(format!("Diagnosing {output}"), repaint, move |progress| {
+            let started = Instant::now();
+            input.run(progress).map(|report| (report, started.elapsed())).map_err(|e| e.to_string())
+        });
+        self.running = Some(RunningDiagnosis { output, model_id, job });
+    }
+
+    /// Take the result of the running diagnosis when it has ended (call every frame).
+    pub fn poll(&mut self) {
+        let Some(running) = &self.running else { return };
+        let Some(outcome) = running.job.poll() else { return };
+        let duration = running.job.elapsed();
+        self.finish(outcome, duration);
+    }
+
+    /// Block until the running diagnosis ends (tests and screenshots, never in a frame).
+    pub fn wait(&mut self) {
+        let Some(running) = self.running.take() else { return };
+        let (output, model_id) = (running.output, running.model_id);
+        let outcome = running.job.wait();
+        self.running = None;
+        self.store(output, model_id, outcome, Duration::ZERO);
+    }
+
+    fn finish(&mut self, outcome: Result<(DiagnosisReport, Duration), String>, elapsed: Duration) {
+        let Some(running) = self.running.take() else { return };
+        self.store(running.output, running.model_id, outcome, elapsed);
+    }
+
+    fn store(
+        &mut self,
+        output: String,
+        model_id: u64,
+        outcome: Result<(DiagnosisReport, Duration), String>,
+        elapsed: Duration,
+    ) {
+        if outcome.as_ref().err().is_some_and(|e| e == super::jobs::CANCELLED) {
+            return;
+        }
+        let duration = outcome.as_ref().map_or(elapsed, |(_, d)| *d);
+        let outcome = outcome.map(|(report, _)| report);
+        self.results.insert(output, FinishedDiagnosis { model_id, outcome, duration });
+    }
+
+    fn cancel(&mut self) {
+        if let Some(running) = self.running.take() {
+            running.job.cancel();
+        }
+    }
+}
+
+pub fn diagnosis_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    state: &mut DiagnosisViewState,
+    session: &Session,
+    cache: &Derived,
+) -> Vec<Command> {
+    state.poll();
+    let Some(view) = cache.live_view(output) else { return Vec::new() };
+    if !model_ui::model_state_ui(ui, &view) {
+        return Vec::new();
+    }
+    let Ok(live) = &view.output.live else { return Vec::new() };
+    ui.horizontal(|ui| {
+        for (section, label) in
+            [(Section::WhichEffect, "Which effect"), (Section::WhereItFails, "Where it fails")]
+        {
+            if ui.selectable_label(state.section == section, RichText::new(label).strong()).clicked() {
+                state.section = section;
+            }
+        }
+    });
+    ui.separator();
+    match state.section {
+        Section::WhichEffect => which_effect_ui(ui, output, state, view.output, live, view.is_preview),
+        Section::WhereItFails => {
+            diagnosis_residuals_ui::where_it_fails_ui(ui, output, &mut state.residuals, session, live)
+        }
+    }
+}
+
+fn which_effect_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    state: &mut DiagnosisViewState,
+    cache: &super::model_cache::OutputCache,
+    live: &super::model_cache::LiveModel,
+    is_preview: bool,
+) -> Vec<Command> {
+    let mut commands = Vec::new();
+    ui.horizontal_top(|ui| {
+        ui.vertical(|ui| {
+            ui.set_width(460.0);
+            ui.label(RichText::new("Error history (mean validation RMSPE)").strong());
+            history_chart_ui(ui, output, &live.effects.history);
+        });
+        ui.vertical(|ui| {
+            ui.label(RichText::new("Effects in the model").strong());
+            if live.effects.requested.is_empty() {
+                hint(ui, "None yet: the model is the paper's gray-box Wiener model.");
+            }
+            for id in &live.effects.requested {
+                ui.horizontal(|ui| {
+                    ui.label(RichText::new(id).monospace());
+                    if ui.button("Remove").on_hover_text("Take the effect out (undo: Ctrl+Z)").clicked() {
+                        commands
+                            .push(Command::RemoveEffect { output: output.to_owned(), effect: id.clone() });
+                    }
+                });
+            }
+            if let Some(model) = &live.effects.model {
+                for effect in &model.effects {
+                    let params: Vec<String> =
+                        effect.params().iter().map(|(name, value)| format!("{name} = {value:.4}")).collect();
+                    hint(ui, &format!("{}: {}", effect.id(), params.join(", ")));
+                }
+            }
+        });
+    });
+    ui.separator();
+    job_status_ui(ui, output, state, cache, live.id, is_preview);
+    let applied = &live.effects.requested;
+    let Some(finished) = state.result(output) else { return commands };
+    let report = match &finished.outcome {
+        Ok(report) => report,
+        Err(err) => {
+            error_ui(ui, &format!("The diagnosis failed: {err}"));
+            return commands;
+        }
+    };
+    egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+        for (rank, entry) in report.entries.iter().enumerate() {
+            if let Some(command) = entry_ui(ui, output, rank, entry, applied) {
+                commands.push(command);
+            }
+        }
+        if !report.skipped.is_empty() {
+            ui.add_space(4.0);
+            ui.label(RichText::new("Not tried").strong());
+            for skipped in &report.skipped {
+                hint(ui, &format!("{}: {}", skipped.effect, skipped.reason));
+            }
+        }
+    });
+    commands
+}
+
+/// Progress and Cancel while the diagnosis runs; Re-run when the model changed; the first run
+/// starts by itself.
+fn job_status_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    state: &mut DiagnosisViewState,
+    cache: &super::model_cache::OutputCache,
+    model_id: u64,
+    is_preview: bool,
+) {
+    let start = |state: &mut DiagnosisViewState, ui: &egui::Ui| match cache.diagnosis_input() {
+        Ok(input) => {
+            let ctx = ui.ctx().clone();
+            state.start(input, move || ctx.request_repaint());
+        }
+        Err(err) => {
+            let outcome = Err(err);
+            state
+                .results
+                .insert(output.to_owned(), FinishedDiagnosis { model_id, outcome, duration: Duration::ZERO });
+        }
+    };
+    if let Some(running) = &state.running {
+        let mut cancel = false;
+        ui.horizontal(|ui| {
+            let bar = egui::ProgressBar::new(running.job.progress() as f32)
+                .desired_width(260.0)
+                .text(format!("{} … {:.1} s", running.job.label(), running.job.elapsed().as_secs_f64()));
+            ui.add(bar);
+            cancel = ui.button("Cancel").clicked();
+        });
+        if cancel {
+            state.cancel();
+        }
+        return;
+    }
+    if is_preview {
+        hint(ui, "A cluster is being dragged; the diagnosis waits for the committed model.");
+        return;
+    }
+    let finished = state.result(output).map(|f| (f.model_id, f.duration, f.outcome.is_ok()));
+    match finished {
+        None => start(state, ui),
+        Some((id, duration, ok)) => {
+            ui.horizontal_wrapped(|ui| {
+                let stale = id != model_id;
+                if stale {
+                    ui.label(
+                        RichText::new("The model changed since this diagnosis: the ranking below is stale.")
+                            .color(theme::WARNING),
+                    );
+                } else if ok && duration > Duration::ZERO {
+                    hint(ui, &format!("Diagnosed in {:.2} s.", duration.as_secs_f64()));
+                }
+                if ui.button(if stale { "Re-run diagnosis" } else { "Run again" }).clicked() {
+                    start(state, ui);
+                }
+            });
+            hint(
+                ui,
+                &format!(
+                    "Each effect is added to the current model, refitted on the identification run and \
+                     scored on the validation runs. Significant: a one-sided Diebold–Mariano test on \
+                     |% error| against the refitted current model gives p < {} and the validation RMSPE \
+                     falls by at least {:.0} %.",
+                    diagnose::SIGNIFICANCE_LEVEL,
+                    100.0 * diagnose::MIN_RELATIVE_REDUCTION
+                ),
+            );
+        }
+    }
+}
+
+/// One ranked effect: numbers, verdict, Apply; its physics and evidence below.
+fn entry_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    rank: usize,
+    entry: &diagnose::Diagnosis,
+    applied: &[String],
+) -> Option<Command> {
+    let mut command = None;
+    egui::Frame::group(ui.style()).show(ui, |ui| {
+        ui.set_width(ui.available_width());
+        ui.horizontal(|ui| {
+            ui.label(RichText::new(format!("{}. {}", rank + 1, entry.effect)).strong().monospace());
+            ui.label(
+                RichText::new(format!(
+                    "RMSPE {:.3} % → {:.3} %  ({:+.1} %)",
+                    entry.rmspe_before_pct,
+                    entry.rmspe_after_pct,
+                    -100.0 * entry.relative_reduction()
+                ))
+                .monospace(),
+            );
+            ui.label(RichText::new(format!("p = {}", p_text(entry.test.p_value))).monospace());
+            if entry.significant {
+                ui.label(RichText::new("significant").color(theme::OK).strong());
+            } else {
+                ui.label(RichText::new("not significant").color(theme::HINT));
+            }
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                if applied.contains(&entry.effect) {
+                    ui.label(RichText::new("in the model").color(theme::OK));
+                } else if ui
+                    .button("Apply")
+                    .on_hover_text(format!("Add {} to the model of {output} (undo: Ctrl+Z)", entry.effect))
+                    .clicked()
+                {
+                    command = Some(Command::ApplyEffect {
+                        output: output.to_owned(),
+                        effect: entry.effect.clone(),
+                    });
+                }
+            });
+        });
+        ui.label(RichText::new(&entry.physics).italics());
+        hint(ui, &entry.evidence);
+    });
+    command
+}
+
+fn p_text(p: f64) -> String {
+    if p < 1e-4 { format!("{p:.1e}") } else { format!("{p:.4}") }
+}
+
+/// Bars of the validation RMSPE after each step, each labelled with its value.
+fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
+    if history.is_empty() {
+        hint(ui, "No validation run: give a run the role validation to see the error.");
+        return;
+    }
+    let names: Vec<String> = history.iter().map(|s| s.step.clone()).collect();
+    let top = history.iter().map(|s| s.rmspe_pct).fold(0.0, f64::max);
+    let bars: Vec<Bar> = history
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Bar::new(i as f64, s.rmspe_pct).width(0.6).name(&s.step))
+        .collect();
+    Plot::new(("diagnosis_history", output))
+        .height(170.0)
+        .allow_drag(false)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .allow_boxed_zoom(false)
+        .show_x(false)
+        .include_y(0.0)
+        .include_y(top * 1.25)
+        .include_x(-0.6)
+        .include_x(history.len() as f64 - 0.4)
+        .y_axis_label("RMSPE [%]")
+        .show_grid([false, true])
+        .x_axis_formatter(move |mark, _| {
+            let i = mark.value.round();
+            if (mark.value - i).abs() > 1e-6 || i < 0.0 {
+                return String::new();
+            }
+            names.get(i as usize).cloned().unwrap_or_default()
+        })
+        .show(ui, |plot_ui| {
+            plot_ui.bar_chart(BarChart::new("validation RMSPE", bars).color(theme::MODEL));
+            for (i, step) in history.iter().enumerate() {
+                let at = egui_plot::PlotPoint::new(i as f64, step.rmspe_pct + top * 0.04);
+                let label = Text::new(
+                    "value",
+                    at,
+                    RichText::new(format!("{:.3} %", step.rmspe_pct)).size(14.0).strong(),
+                )
+                .anchor(egui::Align2::CENTER_BOTTOM);
+                plot_ui.text(label);
+            }
+        });
+}

@@ -15,6 +15,7 @@ pub mod command;
 pub mod data_ui;
 pub mod derived;
 mod edit;
+pub mod empirical_bode;
 pub mod file_dialog;
 mod files;
 pub mod jobs;

@@ -20,7 +20,7 @@ pub struct Cli {
     /// Open the app on the bundled sample runs, save a PNG of one view to this file, and exit.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
-    /// The view to capture with --screenshot: data, zplane, bode, static or traces.
+    /// The view to capture with --screenshot: data, zplane, bode, static, traces or compare.
     #[arg(long, default_value = "data")]
     pub view: String,
     #[command(subcommand)]

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::app::{ViewState, hint};
 use super::bode_ui::{self, BodeViewState};
 use super::command::Command;
+use super::compare_ui::{self, CompareViewState};
 use super::data_ui::{self, DataViewState};
 use super::derived::Derived;
 use super::model_ui;
@@ -25,11 +26,13 @@ pub enum Tab {
     Bode,
     StaticMap,
     Traces,
+    Compare,
 }
 
 impl Tab {
     /// In the order of the tab bar.
-    pub const ALL: [Self; 5] = [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces];
+    pub const ALL: [Self; 6] =
+        [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces, Self::Compare];
 
     pub fn label(self) -> &'static str {
         match self {
@@ -38,6 +41,7 @@ impl Tab {
             Self::Bode => "Bode",
             Self::StaticMap => "Static map",
             Self::Traces => "Traces",
+            Self::Compare => "Compare",
         }
     }
 
@@ -49,6 +53,7 @@ impl Tab {
             Self::Bode => "bode",
             Self::StaticMap => "static",
             Self::Traces => "traces",
+            Self::Compare => "compare",
         }
     }
 
@@ -69,6 +74,7 @@ pub struct ViewStates {
     pub zplane: ZPlaneViewState,
     pub bode: BodeViewState,
     pub traces: TracesViewState,
+    pub compare: CompareViewState,
 }
 
 /// The output the model views show: the chosen one if it is identified, else the first.
@@ -98,6 +104,7 @@ pub fn tab_ui(ui: &mut egui::Ui, session: &Session, view: &mut ViewState, cache:
         Tab::Bode => bode_ui::bode_ui(ui, &output, &mut states.bode, cache),
         Tab::StaticMap => commands.extend(static_map_ui::static_map_ui(ui, &output, cache)),
         Tab::Traces => traces_ui::traces_ui(ui, &output, &mut states.traces, session, cache),
+        Tab::Compare => compare_ui::compare_ui(ui, &output, &mut states.compare, session, cache),
     }
     commands
 }

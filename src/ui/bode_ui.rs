@@ -71,9 +71,8 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
         ui.checkbox(&mut state.hide_segments, "Hide segment models");
         model_ui::hint(
             ui,
-            "Thin: each segment's high-order ARX model. Thick: the reduced linear block G(z) (its gain is \
-             fitted so that v is in output units). Diamonds: the chirp run's Welch estimate, faint where \
-             the coherence is low. ω in rad/s.",
+            "Thin: each segment's ARX model. Thick: the reduced block G(z) (gain fitted so that v is in \
+             output units). Diamonds: the chirp, faint where the coherence is low.",
         );
     });
     if !model_ui::model_state_ui(ui, &view) && view.output.segment_bode.is_empty() {

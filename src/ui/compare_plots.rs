@@ -5,7 +5,7 @@ use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, MarkerShape, Plot, PlotP
 
 use super::bode_ui::{log_grid, log_label};
 use super::compare_table::{
-    MODELS, model_colour, model_title, paper_monte_carlo_std, run_title, significant,
+    MODELS, model_colour, model_title, paper_monte_carlo_std, run_title, significant_digits,
 };
 use super::plot_util;
 use super::theme;
@@ -134,8 +134,9 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
                     );
                 }
             }
-            for model in MODELS {
-                let Some(response) = freq.responses.get(model) else { continue };
+            // The gray-box model last, on top.
+            for model in MODELS.iter().rev() {
+                let Some(response) = freq.responses.get(*model) else { continue };
                 let values = if phase { &response.phase_deg } else { &response.mag_db };
                 let points: PlotPoints<'_> =
                     response.omega_rad_s.iter().zip(values).map(|(w, y)| [w.log10(), *y]).collect();
@@ -174,9 +175,9 @@ pub fn monte_carlo_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &s
 
 fn histogram_ui(ui: &mut egui::Ui, output: &str, model: &str, result: &MonteCarloResult) {
     let colour = model_colour(model);
-    let paper = paper_monte_carlo_std(output, model)
-        .map_or(String::new(), |s| format!(" (paper {})", significant(s)));
-    let title = format!("{}: std {}{paper}", model_title(model), significant(result.std_difference));
+    let paper = paper_monte_carlo_std(output, model).map_or(String::new(), |s| format!(" (paper {s})"));
+    let std = significant_digits(result.std_difference, 4);
+    let title = format!("{}: std {std}{paper}", model_title(model));
     ui.add(egui::Label::new(egui::RichText::new(title).color(colour)).truncate());
     let histogram = &result.histogram;
     let total = histogram.counts.iter().sum::<usize>().max(1) as f64;

@@ -105,12 +105,17 @@ pub fn run_title(run: &crate::batch_compare::RunComparison) -> String {
 
 /// Five significant digits, as the paper prints them.
 pub fn significant(value: f64) -> String {
-    let digits = if !value.is_finite() || value.abs() < f64::MIN_POSITIVE {
+    significant_digits(value, 5)
+}
+
+/// `value` with `n` significant digits (at most six decimals).
+pub fn significant_digits(value: f64, n: i32) -> String {
+    let magnitude = if !value.is_finite() || value.abs() < f64::MIN_POSITIVE {
         0
     } else {
         value.abs().log10().floor() as i32
     };
-    let decimals = (4 - digits).clamp(0, 6) as usize;
+    let decimals = (n - 1 - magnitude).clamp(0, 6) as usize;
     format!("{value:.decimals$}")
 }
 

@@ -146,7 +146,11 @@ pub fn fit_baselines_with_progress(
 
 /// `progress` for a part of the work that spans `lo..=hi` of the whole.
 pub fn scaled(progress: &mut dyn FnMut(f64) -> bool, lo: f64, hi: f64) -> impl FnMut(f64) -> bool + '_ {
-    move |fraction| progress(lo + (hi - lo) * fraction.clamp(0.0, 1.0))
+    // Exactly `lo` at 0 and `hi` at 1, so consecutive parts never step back by a rounding error.
+    move |fraction| {
+        let f = fraction.clamp(0.0, 1.0);
+        progress(lo * (1.0 - f) + hi * f)
+    }
 }
 
 /// A model's frequency response as the chirp shows it: the same Welch estimate applied to the
@@ -417,8 +421,8 @@ pub fn compare_output(
         let names = [GRAY_BOX, LINEAR, HAMMERSTEIN_WIENER, NNARX];
         let share = (1.0 - NNARX_END) / names.len() as f64;
         for (k, name) in names.into_iter().enumerate() {
-            let lo = NNARX_END + share * k as f64;
-            let mut part = scaled(progress, lo, lo + share);
+            let (lo, hi) = (NNARX_END + share * k as f64, NNARX_END + share * (k + 1) as f64);
+            let mut part = scaled(progress, lo, hi);
             match monte_carlo_with_progress(&models, name, u0, steady.dt_secs, &noise, &mut part) {
                 Some(Ok(r)) => {
                     monte_carlo.insert(name.to_owned(), r);

@@ -4,11 +4,14 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::time::Duration;
-
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use jetid::batch_compare::{GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX};
+use std::sync::Arc;
+use std::time::Duration;
+
+use jetid::batch_compare::{
+    Cancelled, CompareInput, GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, compare_output, compare_stage,
+};
 use jetid::core::metrics::metrics;
 use jetid::ui::compare_table::{MODELS, table1_columns};
 use jetid::ui::compare_ui::CompareStatus;
@@ -189,4 +192,54 @@ fn removing_the_chirp_run_clears_the_measured_points() {
     harness.state_mut().apply(Command::RemoveRun(chirp));
     harness.step();
     assert!(harness.state().cache.output(SPEED).unwrap().empirical_bode.is_empty());
+}
+
+/// The comparison's input for the speed output of the bundled samples, built from the app's cache.
+fn speed_input() -> CompareInput {
+    let mut app = App::startup(None);
+    app.refresh();
+    let ident = app.cache.ident.as_ref().unwrap();
+    let output = ident.output(SPEED).unwrap();
+    let live = output.live.as_ref().unwrap();
+    let scored = live
+        .runs
+        .iter()
+        .map(|r| (Arc::clone(&app.session.runs[r.index].run), r.role == Role::Chirp))
+        .collect();
+    let steady = app.session.first_with_role(Role::Steady).map(|i| Arc::clone(&app.session.runs[i].run));
+    CompareInput {
+        output: SPEED.into(),
+        ident: Arc::clone(&ident.run),
+        fits: Arc::clone(output.fits.as_ref().unwrap()),
+        wiener: live.model.wiener.clone(),
+        scored,
+        steady,
+    }
+}
+
+#[test]
+fn the_comparison_reports_rising_progress_through_every_stage_and_stops_when_told() {
+    let input = speed_input();
+    let mut seen = Vec::new();
+    let comparison = compare_output(&input, &mut |fraction| {
+        seen.push(fraction);
+        true
+    })
+    .unwrap();
+    assert_eq!(comparison.monte_carlo.len(), 4);
+    let back: Vec<_> = seen.windows(2).filter(|w| w[0] > w[1]).collect();
+    assert!(back.is_empty(), "progress never goes back: {back:?}");
+    assert!(seen.iter().all(|f| (0.0..=1.0).contains(f)));
+    assert_eq!(seen.last().copied(), Some(1.0));
+    let stages: std::collections::BTreeSet<&str> = seen.iter().map(|f| compare_stage(*f)).collect();
+    assert_eq!(stages.len(), 3, "the baselines and the Monte Carlo study each report: {stages:?}");
+
+    // Told to stop during the NNARX training, it stops there.
+    let mut last = 0.0;
+    let stopped = compare_output(&input, &mut |fraction| {
+        last = fraction;
+        fraction < 0.5
+    });
+    assert_eq!(stopped.err(), Some(Cancelled));
+    assert!(last < 0.8, "stopped before the Monte Carlo study, at {last}");
 }

@@ -256,7 +256,7 @@ fn role_mean(
     (!vals.is_empty()).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
 }
 
-fn paper_output_name(output: &str) -> Option<&'static str> {
+pub fn paper_output_name(output: &str) -> Option<&'static str> {
     if output.contains("speed") || output.contains("rpm") {
         Some("shaft speed")
     } else if output.contains("thrust") {

@@ -291,6 +291,7 @@ impl App {
         let started = Instant::now();
         self.poll_picker();
         self.refresh();
+        self.view.views.compare.poll();
 
         let mut commands = shortcut_commands(ui);
         egui::Panel::top("menu_bar").show(ui, |ui| {

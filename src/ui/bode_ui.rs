@@ -11,6 +11,8 @@ use super::theme;
 use crate::core::tf::BodePoint;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
+/// The legend entry of the chirp's measured points.
+const EMPIRICAL_NAME: &str = "chirp (measured)";
 
 #[derive(Default)]
 pub struct BodeViewState {
@@ -19,7 +21,7 @@ pub struct BodeViewState {
 }
 
 /// Log-ω grid (x is log10 ω): decades labelled, 2…9 thin.
-fn log_grid(input: GridInput) -> Vec<GridMark> {
+pub(super) fn log_grid(input: GridInput) -> Vec<GridMark> {
     let (lo, hi) = input.bounds;
     let mut marks = Vec::new();
     let (first, last) = (lo.floor() as i32 - 1, hi.ceil() as i32 + 1);
@@ -35,7 +37,7 @@ fn log_grid(input: GridInput) -> Vec<GridMark> {
 }
 
 /// Labels at decades only: 0.1, 1, 10 …
-fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+pub(super) fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     if (mark.value - mark.value.round()).abs() > 1e-6 {
         return String::new();
     }
@@ -69,8 +71,8 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
         ui.checkbox(&mut state.hide_segments, "Hide segment models");
         model_ui::hint(
             ui,
-            "Thin: each segment's high-order ARX model. Thick: the reduced linear block G(z) (its gain is \
-             fitted so that v is in output units). ω in rad/s.",
+            "Thin: each segment's ARX model. Thick: the reduced block G(z) (gain fitted so that v is in \
+             output units). Diamonds: the chirp, faint where the coherence is low.",
         );
     });
     if !model_ui::model_state_ui(ui, &view) && view.output.segment_bode.is_empty() {
@@ -124,20 +126,19 @@ fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: 
     }
 }
 
-/// The hook for the chirp's empirical points: (ω, |G| dB, ∠G deg, coherence). Points with low
-/// coherence are drawn faint.
+/// The chirp's measured points: (ω, |G| dB, ∠G deg, coherence). Points with low coherence are drawn
+/// smaller and fainter; the best-measured point comes first so the legend shows it.
 fn draw_empirical(plot_ui: &mut egui_plot::PlotUi<'_>, points: &[EmpiricalPoint], part: Part) {
-    if points.is_empty() {
-        return;
-    }
-    for (omega, mag_db, phase_deg, coherence) in points {
+    let mut sorted: Vec<&EmpiricalPoint> = points.iter().collect();
+    sorted.sort_by(|a, b| b.3.total_cmp(&a.3));
+    for (omega, mag_db, phase_deg, coherence) in sorted {
         let y = if part == Part::Magnitude { *mag_db } else { *phase_deg };
-        let colour = theme::EMPIRICAL.gamma_multiply(coherence.clamp(0.2, 1.0) as f32);
+        let weight = coherence.clamp(0.15, 1.0) as f32;
         plot_ui.points(
-            Points::new("chirp (empirical)", vec![[omega.log10(), y]])
+            Points::new(EMPIRICAL_NAME, vec![[omega.log10(), y]])
                 .shape(MarkerShape::Diamond)
-                .radius(3.5)
-                .color(colour),
+                .radius(2.0 + 2.5 * weight)
+                .color(theme::EMPIRICAL.gamma_multiply(weight)),
         );
     }
 }

@@ -27,7 +27,7 @@ use super::setup::OutputSetup;
 const LOWEST_OMEGA_RAD_S: f64 = 0.05;
 const BODE_POINTS: usize = 400;
 /// Runs sampled more than this fraction off the identification run are not scored.
-const DT_TOLERANCE: f64 = 0.02;
+pub(super) const DT_TOLERANCE: f64 = 0.02;
 
 /// A point of an empirical frequency response (e.g. from the chirp run): ω [rad/s], |G| [dB],
 /// ∠G [deg], coherence in 0..=1.
@@ -69,6 +69,7 @@ impl IdentCache {
                 };
                 let scored = scored_runs(session, &run, &channel.name, &mut cache.notes);
                 cache.update(&run, &segments, session.setup.output(&channel.name), scored);
+                super::empirical_bode::refresh_empirical_bode(&mut cache, session, &run);
                 cache
             })
             .collect();
@@ -204,6 +205,7 @@ pub struct OutputCache {
     pub live: Result<LiveModel, String>,
     /// The chirp run's empirical frequency response; drawn on the Bode view when not empty.
     pub empirical_bode: Vec<EmpiricalPoint>,
+    pub(super) empirical_source: Option<super::empirical_bode::EmpiricalSource>,
     /// Runs that were not scored, and why.
     pub notes: Vec<String>,
 }
@@ -225,6 +227,7 @@ impl OutputCache {
             scored: Vec::new(),
             live: Err("not computed yet".into()),
             empirical_bode: Vec::new(),
+            empirical_source: None,
             notes: Vec::new(),
         }
     }

@@ -1,7 +1,7 @@
 //! `jetid --screenshot OUT.png [--view NAME] [PROJECT] [--add-effect ID]…`: open the app on the
 //! bundled sample runs (or on a project file, with effects added to every output) at a fixed size,
-//! let it settle (a diagnosis the view starts is waited for), grab the rendered frame, write it as
-//! PNG and close.
+//! let it settle (background jobs the view starts — a diagnosis, the comparison — are waited for),
+//! grab the rendered frame, write it as PNG and close.
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, Sender};
@@ -17,8 +17,9 @@ use super::views::Tab;
 /// Frames drawn (and time waited) before the picture is taken, so layout and plot bounds settle.
 const WARMUP_FRAMES: u32 = 10;
 const WARMUP: Duration = Duration::from_millis(600);
-/// Give up when no picture arrived by then.
-const TIMEOUT: Duration = Duration::from_secs(60);
+/// Give up when no picture arrived by then (background jobs, e.g. the Compare view's baseline
+/// training, are waited for; unoptimised builds take minutes).
+const TIMEOUT: Duration = Duration::from_secs(600);
 
 /// The app a screenshot shows: the bundled sample runs, or `project` opened as File > Open
 /// project does; then `add_effects` applied to every identified output, as the Apply button does.
@@ -51,6 +52,8 @@ pub struct ScreenshotApp {
     out: PathBuf,
     started: Instant,
     frames: u32,
+    /// Frames drawn since the last one with a background job running.
+    idle_frames: u32,
     requested: bool,
     image_tx: Sender<Arc<egui::ColorImage>>,
     image_rx: Receiver<Arc<egui::ColorImage>>,
@@ -68,6 +71,7 @@ impl ScreenshotApp {
             out,
             started: Instant::now(),
             frames: 0,
+            idle_frames: 0,
             requested: false,
             image_tx,
             image_rx,
@@ -99,6 +103,7 @@ impl eframe::App for ScreenshotApp {
             return;
         }
         self.frames += 1;
+        self.idle_frames = if self.app.view.views.compare.any_running() { 0 } else { self.idle_frames + 1 };
         if let Ok(image) = self.image_rx.try_recv() {
             let outcome = write_png(&self.out, &image);
             self.finish(&ctx, outcome);
@@ -108,7 +113,7 @@ impl eframe::App for ScreenshotApp {
             self.finish(&ctx, Err(anyhow!("no screenshot arrived within {} s", TIMEOUT.as_secs())));
             return;
         }
-        if !self.requested && self.frames >= WARMUP_FRAMES && self.started.elapsed() >= WARMUP {
+        if !self.requested && self.idle_frames >= WARMUP_FRAMES && self.started.elapsed() >= WARMUP {
             let tx = self.image_tx.clone();
             let repaint = ctx.clone();
             ctx.request_screenshot(move |image| {

@@ -86,6 +86,9 @@ pub const REDUCED: Color32 = Color32::from_rgb(255, 255, 255);
 pub const MODEL: Color32 = Color32::from_rgb(240, 90, 80);
 /// The linear block alone (the "linear" baseline model).
 pub const LINEAR: Color32 = Color32::from_rgb(180, 180, 90);
+/// The black-box baselines of the Compare view.
+pub const HAMMERSTEIN_WIENER: Color32 = Color32::from_rgb(170, 130, 230);
+pub const NNARX: Color32 = Color32::from_rgb(90, 200, 190);
 /// Measurements drawn under a model.
 pub const MEASURED: Color32 = Color32::from_rgb(70, 150, 230);
 /// Static-map steady-state points and the chirp's empirical frequency response.

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::app::{ViewState, hint};
 use super::bode_ui::{self, BodeViewState};
 use super::command::Command;
+use super::compare_ui::{self, CompareViewState};
 use super::data_ui::{self, DataViewState};
 use super::derived::Derived;
 use super::diagnosis_ui::{self, DiagnosisViewState};
@@ -26,13 +27,14 @@ pub enum Tab {
     Bode,
     StaticMap,
     Traces,
+    Compare,
     Diagnosis,
 }
 
 impl Tab {
     /// In the order of the tab bar.
-    pub const ALL: [Self; 6] =
-        [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces, Self::Diagnosis];
+    pub const ALL: [Self; 7] =
+        [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces, Self::Compare, Self::Diagnosis];
 
     pub fn label(self) -> &'static str {
         match self {
@@ -41,6 +43,7 @@ impl Tab {
             Self::Bode => "Bode",
             Self::StaticMap => "Static map",
             Self::Traces => "Traces",
+            Self::Compare => "Compare",
             Self::Diagnosis => "Diagnosis",
         }
     }
@@ -53,6 +56,7 @@ impl Tab {
             Self::Bode => "bode",
             Self::StaticMap => "static",
             Self::Traces => "traces",
+            Self::Compare => "compare",
             Self::Diagnosis => "diagnosis",
         }
     }
@@ -74,6 +78,7 @@ pub struct ViewStates {
     pub zplane: ZPlaneViewState,
     pub bode: BodeViewState,
     pub traces: TracesViewState,
+    pub compare: CompareViewState,
     pub diagnosis: DiagnosisViewState,
 }
 
@@ -104,6 +109,7 @@ pub fn tab_ui(ui: &mut egui::Ui, session: &Session, view: &mut ViewState, cache:
         Tab::Bode => bode_ui::bode_ui(ui, &output, &mut states.bode, cache),
         Tab::StaticMap => commands.extend(static_map_ui::static_map_ui(ui, &output, cache)),
         Tab::Traces => traces_ui::traces_ui(ui, &output, &mut states.traces, session, cache),
+        Tab::Compare => compare_ui::compare_ui(ui, &output, &mut states.compare, session, cache),
         Tab::Diagnosis => {
             commands.extend(diagnosis_ui::diagnosis_ui(ui, &output, &mut states.diagnosis, session, cache))
         }

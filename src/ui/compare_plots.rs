@@ -1,0 +1,210 @@
+//! The Compare view's plots: every model over the measurement of one scored run, the chirp's
+//! frequency response (measured points and each model's, all by the same Welch estimate) and the
+//! Monte Carlo histograms with their normal fits.
+use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, MarkerShape, Plot, PlotPoints, Points};
+
+use super::bode_ui::{log_grid, log_label};
+use super::compare_table::{
+    MODELS, model_colour, model_title, paper_monte_carlo_std, run_title, significant_digits,
+};
+use super::plot_util;
+use super::theme;
+use crate::batch_compare::{FrequencyComparison, OutputComparison};
+use crate::core::monte_carlo::MonteCarloResult;
+
+const Y_AXIS_WIDTH: f32 = 64.0;
+const PLOT_HEIGHT: f32 = 320.0;
+const HISTOGRAM_HEIGHT: f32 = 165.0;
+
+/// The traces (left) and the chirp's frequency response (right); returns the run the user picked.
+pub fn traces_and_frequency_ui(
+    ui: &mut egui::Ui,
+    comparison: &OutputComparison,
+    shown_run: Option<&str>,
+    output_label: &str,
+) -> Option<String> {
+    let mut picked = None;
+    ui.columns(2, |columns| {
+        if let [left, right] = columns {
+            picked = traces_ui(left, comparison, shown_run, output_label);
+            match &comparison.frequency {
+                Some(freq) => frequency_ui(right, comparison, freq),
+                None => {
+                    super::model_ui::hint(right, "No chirp run, so no frequency-domain comparison.");
+                }
+            }
+        }
+    });
+    picked
+}
+
+fn traces_ui(
+    ui: &mut egui::Ui,
+    comparison: &OutputComparison,
+    shown_run: Option<&str>,
+    output_label: &str,
+) -> Option<String> {
+    let runs = &comparison.runs;
+    let shown = shown_run.and_then(|name| runs.iter().find(|r| r.run.name == name)).or(runs.first());
+    let Some(shown) = shown else {
+        super::model_ui::hint(ui, "No validation or chirp run to simulate the models on.");
+        return None;
+    };
+    let mut picked = None;
+    ui.horizontal(|ui| {
+        let label = ui.label("Traces on run:");
+        egui::ComboBox::from_id_salt(("compare_run", &comparison.output))
+            .selected_text(run_title(shown))
+            .show_ui(ui, |ui| {
+                for run in runs {
+                    if ui.selectable_label(run.run.name == shown.run.name, run_title(run)).clicked() {
+                        picked = Some(run.run.name.clone());
+                    }
+                }
+            })
+            .response
+            .labelled_by(label.id);
+    });
+    let Some(measured) = shown.run.output(&comparison.output) else { return picked };
+    let t = &shown.run.t_secs;
+    let series =
+        |values: &[f64]| -> PlotPoints<'static> { t.iter().zip(values).map(|(t, v)| [*t, *v]).collect() };
+    Plot::new(("compare_traces", &comparison.output, &shown.run.name))
+        .height(PLOT_HEIGHT - ui.spacing().interact_size.y)
+        .x_axis_label("time [s]")
+        .y_axis_label(output_label)
+        .y_axis_min_width(Y_AXIS_WIDTH)
+        .x_grid_spacer(plot_util::grid_125_x)
+        .y_grid_spacer(plot_util::grid_125_y)
+        .legend(Legend::default().position(egui_plot::Corner::LeftTop).follow_insertion_order(true))
+        .show(ui, |plot_ui| {
+            plot_ui.line(Line::new("measured", series(&measured.values)).color(theme::MEASURED).width(2.0));
+            for model in MODELS.iter().rev() {
+                let Some(run) = shown.models.iter().find(|m| m.model == *model) else { continue };
+                let mut line =
+                    Line::new(model_title(model), series(&run.y_hat)).color(model_colour(model)).width(1.3);
+                if *model == crate::batch_compare::LINEAR {
+                    line = line.style(LineStyle::Dashed { length: 8.0 });
+                }
+                plot_ui.line(line);
+            }
+        });
+    picked
+}
+
+fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &FrequencyComparison) {
+    ui.label(format!("Frequency response on '{}' (one Welch estimate for all)", freq.run)).on_hover_text(
+        "Each model's simulation of the chirp input goes through the same Welch estimate as the measurement.",
+    );
+    let group = egui::Id::unique(("compare_freq_axis", &comparison.output));
+    let height = (PLOT_HEIGHT - ui.spacing().interact_size.y - ui.spacing().item_spacing.y) / 2.0;
+    for phase in [false, true] {
+        let mut plot = Plot::new(("compare_freq", phase, &comparison.output))
+            .height(height)
+            .link_axis(group, [true, false])
+            .link_cursor(group, [true, false])
+            .x_grid_spacer(log_grid)
+            .x_axis_formatter(log_label)
+            .y_grid_spacer(plot_util::grid_125_y)
+            .y_axis_label(if phase { "phase [deg]" } else { "magnitude [dB]" })
+            .y_axis_min_width(Y_AXIS_WIDTH)
+            .show_axes([phase, true]);
+        if phase {
+            plot = plot.x_axis_label("ω [rad/s]");
+        } else {
+            plot = plot.legend(
+                Legend::default()
+                    .position(egui_plot::Corner::LeftBottom)
+                    .follow_insertion_order(true)
+                    .background_alpha(0.85),
+            );
+        }
+        plot.show(ui, |plot_ui| {
+            if let Some(measured) = freq.responses.get("measured") {
+                let values = if phase { &measured.phase_deg } else { &measured.mag_db };
+                for ((omega, y), coherence) in
+                    measured.omega_rad_s.iter().zip(values).zip(&measured.coherence)
+                {
+                    let weight = coherence.clamp(0.15, 1.0) as f32;
+                    plot_ui.points(
+                        Points::new("measured (chirp)", vec![[omega.log10(), *y]])
+                            .shape(MarkerShape::Diamond)
+                            .radius(1.5 + 2.5 * weight)
+                            .color(theme::EMPIRICAL.gamma_multiply(weight)),
+                    );
+                }
+            }
+            // The gray-box model last, on top.
+            for model in MODELS.iter().rev() {
+                let Some(response) = freq.responses.get(*model) else { continue };
+                let values = if phase { &response.phase_deg } else { &response.mag_db };
+                let points: PlotPoints<'_> =
+                    response.omega_rad_s.iter().zip(values).map(|(w, y)| [w.log10(), *y]).collect();
+                plot_ui.line(Line::new(model_title(model), points).color(model_colour(model)).width(1.5));
+            }
+        });
+    }
+}
+
+/// One histogram per model with its normal fit, side by side.
+pub fn monte_carlo_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
+    if comparison.monte_carlo.is_empty() {
+        let why = if comparison.noise.is_none() {
+            "Monte Carlo skipped: there is no steady run to fit the input noise on."
+        } else {
+            "Monte Carlo skipped: no model could be studied (see the notes above)."
+        };
+        ui.label(egui::RichText::new(why).color(theme::WARNING));
+        return;
+    }
+    let unit = if unit.is_empty() { String::new() } else { format!(" [{unit}]") };
+    ui.label(
+        egui::RichText::new(format!(
+            "Monte Carlo error propagation: noisy − nominal output{unit}, 100 runs of 20 s at the steady input level"
+        ))
+        .strong(),
+    );
+    let shown: Vec<(&str, &MonteCarloResult)> =
+        MODELS.iter().filter_map(|m| comparison.monte_carlo.get(*m).map(|r| (*m, r))).collect();
+    ui.columns(shown.len(), |columns| {
+        for (ui, (model, result)) in columns.iter_mut().zip(&shown) {
+            histogram_ui(ui, &comparison.output, model, result);
+        }
+    });
+}
+
+fn histogram_ui(ui: &mut egui::Ui, output: &str, model: &str, result: &MonteCarloResult) {
+    let colour = model_colour(model);
+    let paper = paper_monte_carlo_std(output, model).map_or(String::new(), |s| format!(" (paper {s})"));
+    let std = significant_digits(result.std_difference, 4);
+    let title = format!("{}: std {std}{paper}", model_title(model));
+    ui.add(egui::Label::new(egui::RichText::new(title).color(colour)).truncate());
+    let histogram = &result.histogram;
+    let total = histogram.counts.iter().sum::<usize>().max(1) as f64;
+    let width = histogram.edges.windows(2).next().map_or(1.0, |e| e[1] - e[0]);
+    // Densities, so that the fitted normal's pdf sits on the bars.
+    let bars: Vec<Bar> = histogram
+        .centres()
+        .iter()
+        .zip(&histogram.counts)
+        .map(|(x, count)| Bar::new(*x, *count as f64 / (total * width)).width(width))
+        .collect();
+    let (lo, hi) =
+        (histogram.edges.first().copied().unwrap_or(-1.0), histogram.edges.last().copied().unwrap_or(1.0));
+    let pdf: PlotPoints<'_> = (0..=120)
+        .map(|k| {
+            let x = lo + (hi - lo) * f64::from(k) / 120.0;
+            [x, result.normal_fit.pdf(x)]
+        })
+        .collect();
+    Plot::new(("compare_mc", output, model))
+        .height(HISTOGRAM_HEIGHT)
+        .x_grid_spacer(plot_util::grid_125_x)
+        .y_grid_spacer(plot_util::grid_125_y)
+        .show_axes([true, false])
+        .allow_scroll(false)
+        .show(ui, |plot_ui| {
+            plot_ui.bar_chart(BarChart::new(model_title(model), bars).color(colour.gamma_multiply(0.6)));
+            plot_ui.line(Line::new("normal fit", pdf).color(theme::REDUCED).width(1.5));
+        });
+}

@@ -417,3 +417,15 @@ fn effect_errors_name_what_is_wrong() {
         &["ambient_correction", "ambient_temp_c"],
     );
 }
+
+#[cfg(feature = "gui")]
+#[test]
+fn an_unknown_screenshot_view_lists_the_views() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    expect_error(
+        &["--screenshot", png.to_str().unwrap(), "--view", "nonsense"],
+        &["unknown view `nonsense`", "compare", "diagnosis", "failures"],
+    );
+    assert!(!png.exists());
+}

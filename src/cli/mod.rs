@@ -21,7 +21,8 @@ pub struct Cli {
     /// PNG of one view to this file, and exit.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
-    /// The view to capture with --screenshot: data, zplane, bode, static, traces, compare or diagnosis.
+    /// The view to capture with --screenshot: data, zplane, bode, static, traces, compare, diagnosis
+    /// or failures (the Diagnosis view's "Where it fails" section).
     #[arg(long, default_value = "data")]
     pub view: String,
     #[command(subcommand)]

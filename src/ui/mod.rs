@@ -48,6 +48,8 @@ pub use derived::Derived;
 pub use session::{Role, SavedSession, Session};
 pub use views::Tab;
 
+/// The `--screenshot --view` name of the Diagnosis view's "Where it fails" section.
+const FAILURES_VIEW: &str = "failures";
 /// The key of the saved session in eframe's storage.
 const STORAGE_KEY: &str = "jetid_session";
 const APP_ID: &str = "jetid";
@@ -84,8 +86,11 @@ pub fn screenshot(
     project: Option<&Path>,
     add_effects: &[String],
 ) -> Result<()> {
-    let Some(tab) = Tab::from_cli_name(view) else {
-        bail!("unknown view `{view}`; the views are: {}", Tab::cli_names());
+    // `failures`: the Diagnosis view's "Where it fails" section.
+    let failures = view.eq_ignore_ascii_case(FAILURES_VIEW);
+    let tab = if failures { Some(Tab::Diagnosis) } else { Tab::from_cli_name(view) };
+    let Some(tab) = tab else {
+        bail!("unknown view `{view}`; the views are: {}, {FAILURES_VIEW}", Tab::cli_names());
     };
     check_display()?;
     // A private storage file, so a screenshot neither reads nor changes the user's saved session.
@@ -97,6 +102,9 @@ pub fn screenshot(
     let out = out.to_owned();
     let mut app = screenshot::screenshot_app(project, add_effects)?;
     app.view.output = output.map(ToOwned::to_owned);
+    if failures {
+        app.view.views.diagnosis.section = diagnosis_ui::Section::WhereItFails;
+    }
     let result = eframe::run_native(
         "jetid",
         options,

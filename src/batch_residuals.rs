@@ -2,7 +2,7 @@
 //! scored run (report.json `residuals`, report.md "Where it fails") and one picture per run.
 use std::path::Path;
 
-use crate::batch_compare::{GRAY_BOX, OutputModels};
+use crate::batch_compare::OutputModels;
 use crate::core::noise_fit::{Distribution, Family, NoiseFitReport};
 use crate::core::residuals::{ResidualSettings, SigmaSource, analyse_residuals, summary};
 use crate::core::run::Run;
@@ -41,13 +41,20 @@ pub fn residual_reports(
     let mut reports = Vec::new();
     let mut figures = Vec::new();
     for run in runs.iter().filter(|r| r.output(output).is_some()) {
-        let Some((_, y_hat)) = models.simulate_run(run).into_iter().find(|(name, _)| *name == GRAY_BOX)
-        else {
-            notes.push(format!(
-                "residuals of '{output}' on '{}': the model cannot simulate this run",
-                run.name
-            ));
-            continue;
+        // The gray-box model as `OutputModels::simulate_run` has it, without simulating the others.
+        let y_hat = match &models.extended {
+            Some(model) => model.simulate(run).map_err(|e| e.to_string()),
+            None => Ok(models.wiener.simulate(&run.input.values).1),
+        };
+        let y_hat = match y_hat {
+            Ok(y) => y,
+            Err(e) => {
+                notes.push(format!(
+                    "residuals of '{output}' on '{}': the model cannot simulate it: {e}",
+                    run.name
+                ));
+                continue;
+            }
         };
         let analysis = match analyse_residuals(run, output, &y_hat, sigma, &settings) {
             Ok(a) => a,

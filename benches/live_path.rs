@@ -4,7 +4,7 @@
 //! Run: `cargo bench --bench live_path --no-default-features`.
 use std::path::Path;
 
-use jetid::core::pipeline::{OutputSettings, auto_clusters, fit_segments, live_update, segments_for};
+use jetid::core::pipeline::{OutputSettings, fit_segments, live_update, propose, segments_for};
 use jetid::core::run::Run;
 use jetid::core::segment::SegmentSettings;
 use jetid::core::tf::log_space;
@@ -39,7 +39,7 @@ fn live(bencher: divan::Bencher, output: &str, refine: bool) {
     let settings = OutputSettings { refine, ..OutputSettings::for_output(output) };
     let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap_or_default();
     let Ok(fits) = fit_segments(&ident, output, &segments, settings.orders) else { panic!("fits failed") };
-    let Ok(mut clusters) = auto_clusters(&fits, &settings) else { panic!("no clusters") };
+    let Ok(mut clusters) = propose(&fits, &ident, &settings).map(|p| p.clusters) else { panic!("no clusters") };
     let omegas = log_space(0.05, std::f64::consts::PI / ident.dt_secs, 512);
     let mut k = 0u32;
     bencher.bench_local(|| {

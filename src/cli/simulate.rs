@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 
 use crate::io::csv_run::write_run;
-use crate::sim::{Effect, SimConfig, TestKind, simulate};
+use crate::sim::{Effect, EngineFamily, SimConfig, TestKind, simulate};
 
 /// The test designs of METHOD.md.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -44,6 +44,11 @@ pub struct SimulateArgs {
     /// Seed of the noise generator.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Simulate the engine of the small-turbojet family named by this seed (fuel system, spool
+    /// time-constant law, steady maps, stand and sensor noise all drawn) instead of the bundled
+    /// SR-30 calibration.
+    #[arg(long, value_name = "SEED")]
+    pub engine: Option<u64>,
     /// Run file to write (CSV).
     #[arg(long)]
     pub out: PathBuf,
@@ -64,6 +69,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let cfg = SimConfig::for_test(&name, kind, args.seed)
         .context("setting up the simulation")?
         .with_effects(effects);
+    let cfg = match args.engine {
+        Some(seed) => cfg.on_engine(&EngineFamily::small_turbojets().draw(seed)),
+        None => cfg,
+    };
     let output = simulate(&cfg).with_context(|| format!("simulating the {} test", kind.name()))?;
     write_run(&args.out, &output.measured).with_context(|| format!("writing {}", args.out.display()))?;
     if let Some(truth_path) = &args.truth_out {

@@ -86,12 +86,30 @@ pub struct Cluster {
     #[serde(with = "complex_serde")]
     pub centre: Complex64,
     pub radius: f64,
+    /// This cluster's own aggregation condition (segments it must hold a root from), when it was
+    /// accepted with fewer than the output's setting asks for (the automatic proposal relaxes the
+    /// condition step by step); `None` follows [`ClusterSettings::min_segments`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_segments: Option<usize>,
 }
 
 impl Cluster {
     /// The cluster with its centre folded into the upper half-plane.
     pub fn new(kind: RootKind, centre: Complex64, radius: f64) -> Self {
-        Self { kind, centre: fold(centre), radius }
+        Self { kind, centre: fold(centre), radius, min_segments: None }
+    }
+
+    /// The same circle with its own aggregation condition.
+    pub fn with_min_segments(mut self, min_segments: Option<usize>) -> Self {
+        self.min_segments = min_segments;
+        self
+    }
+
+    /// Segments this cluster must hold a root from, out of `segments`, under `settings`: the
+    /// output's aggregation condition, or the cluster's own where that is the looser one.
+    pub fn segments_needed(&self, settings: &ClusterSettings, segments: usize) -> usize {
+        let global = settings.segments_needed(segments);
+        self.min_segments.map_or(global, |own| own.min(global)).max(1)
     }
 
     /// True when the centre lies within [`REAL_AXIS_FRACTION`] of a radius of the real axis.
@@ -262,7 +280,7 @@ pub fn evaluate_cluster(
     check_inputs(settings, dt_secs)?;
     check_cluster(0, cluster)?;
     let folded = folded_roots(roots, cluster.kind);
-    Ok(evaluate_folded(cluster, &folded, settings.segments_needed(roots.len()), settings, dt_secs))
+    Ok(evaluate_folded(cluster, &folded, cluster.segments_needed(settings, roots.len()), settings, dt_secs))
 }
 
 /// Evaluates clusters; the result is in the order of `clusters`.
@@ -278,7 +296,6 @@ pub fn evaluate_clusters(
     }
     let poles = folded_roots(roots, RootKind::Pole);
     let zeros = folded_roots(roots, RootKind::Zero);
-    let needed = settings.segments_needed(roots.len());
     Ok(clusters
         .iter()
         .map(|c| {
@@ -286,7 +303,7 @@ pub fn evaluate_clusters(
                 RootKind::Pole => &poles,
                 RootKind::Zero => &zeros,
             };
-            evaluate_folded(c, folded, needed, settings, dt_secs)
+            evaluate_folded(c, folded, c.segments_needed(settings, roots.len()), settings, dt_secs)
         })
         .collect())
 }
@@ -391,7 +408,7 @@ pub(crate) fn evaluate_folded(
     settings: &ClusterSettings,
     dt_secs: f64,
 ) -> ClusterEval {
-    let cluster = Cluster::new(cluster.kind, cluster.centre, cluster.radius);
+    let cluster = Cluster::new(cluster.kind, cluster.centre, cluster.radius).with_min_segments(cluster.min_segments);
     let real_axis = cluster.is_real_axis();
     let chosen: Vec<FoldedRoot> = folded
         .iter()

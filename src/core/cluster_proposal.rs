@@ -24,6 +24,16 @@
 //! half-way to the nearest non-member nor so far that an off-axis centre would count as on the axis.
 //! Results are sorted by kind, then angle, then modulus. The search is O(R² · rounds) in the number
 //! of roots R, which is small (J · model order).
+//!
+//! **Relaxing the aggregation condition step by step.** A mode shared by 7 of 8 segment models is
+//! still a mode of the engine (one segment's ARX model may have put that root elsewhere, or the
+//! step was too small to excite it); requiring m = J throws it away. So the search runs at m = J
+//! first, then at J − 1, J − 2, … on the roots no accepted cluster holds, down to a majority of
+//! the segments, m = ⌊J/2⌋ + 1: a root that recurs in only half of the step responses is no more a
+//! property of the engine than its absence is. A cluster accepted below the output's own condition
+//! records the m it was accepted at ([`Cluster::min_segments`]), so it stays valid when it is
+//! evaluated again. Whether a candidate cluster enters the model is decided afterwards, by what it
+//! does to the simulation error (`core::reduce`), not here.
 
 use nalgebra::Complex;
 
@@ -65,9 +75,16 @@ pub fn propose_clusters(
         // One root alone is a "cluster" of radius zero: the aggregation condition means nothing.
         return Err(ClusterError::TooFewSegments { found: needed, needed: 2 });
     }
+    let floor = relaxed_floor(segments).min(needed);
     let mut clusters = Vec::new();
     for kind in [RootKind::Pole, RootKind::Zero] {
-        clusters.extend(propose_kind(kind, roots, settings, needed, dt_secs));
+        let folded = folded_roots(roots, kind);
+        let mut in_play = folded.clone();
+        for m in (floor..=needed).rev() {
+            let own = (m < needed).then_some(m);
+            let found = propose_kind(kind, &folded, &mut in_play, &clusters, settings, m, dt_secs);
+            clusters.extend(found.into_iter().map(|c| c.with_min_segments(own)));
+        }
     }
     clusters.sort_by(|a, b| {
         a.kind
@@ -91,40 +108,49 @@ fn angle_of(z: Complex64) -> f64 {
     z.im.abs().atan2(z.re)
 }
 
+/// The smallest aggregation condition the proposal relaxes to: a majority of the J segments (and
+/// at least two, so that a cluster is a gathering of roots at all).
+pub fn relaxed_floor(segments: usize) -> usize {
+    (segments / 2 + 1).max(2)
+}
+
+/// Clusters of `kind` at aggregation condition `needed`, grown over the roots still `in_play`
+/// (their members are taken out of play), disjoint from the clusters in `earlier`.
 fn propose_kind(
     kind: RootKind,
-    roots: &[SegmentRoots],
+    folded: &[Vec<FoldedRoot>],
+    in_play: &mut [Vec<FoldedRoot>],
+    earlier: &[Cluster],
     settings: &ClusterSettings,
     needed: usize,
     dt_secs: f64,
 ) -> Vec<Cluster> {
-    let folded = folded_roots(roots, kind);
-    let mut in_play = folded.clone();
-    let mut accepted: Vec<Cluster> = Vec::new();
+    let mut accepted: Vec<Cluster> = earlier.iter().filter(|c| c.kind == kind).cloned().collect();
+    let before = accepted.len();
     loop {
         let mut best: Option<(Candidate, Cluster)> = None;
         for seed in in_play.iter().flatten() {
-            let Some(candidate) = grow(seed.z, &in_play, needed, settings) else {
+            let Some(candidate) = grow(seed.z, in_play, needed, settings) else {
                 continue;
             };
             if best.as_ref().is_some_and(|(b, _)| !ranks_before(&candidate, b)) {
                 continue;
             }
-            if let Some(cluster) = accept(kind, &candidate, &folded, &accepted, needed, settings, dt_secs) {
+            if let Some(cluster) = accept(kind, &candidate, folded, &accepted, needed, settings, dt_secs) {
                 best = Some((candidate, cluster));
             }
         }
         let Some((candidate, cluster)) = best else {
             break;
         };
-        for seg in &mut in_play {
+        for seg in in_play.iter_mut() {
             seg.retain(|p| {
                 !candidate.members.iter().any(|m| m.segment == p.segment && m.root_index == p.root_index)
             });
         }
         accepted.push(cluster);
     }
-    accepted
+    accepted.split_off(before)
 }
 
 /// Strictly better: smaller radius, then lower angle, then smaller modulus.

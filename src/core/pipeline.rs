@@ -8,12 +8,14 @@ use crate::core::cluster::{
     self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots,
 };
 use crate::core::metrics::{Metrics, MetricsError, metrics};
-use crate::core::refine::{Refinement, refine_roots};
+use crate::core::reduce::{self, IdentData, RootGroup};
+use crate::core::refine::Refinement;
+use crate::core::structure::{self, Proposal};
 use crate::core::run::Run;
 use crate::core::segment::{Segment, SegmentError, SegmentSettings, auto_segments, check_segments};
-use crate::core::static_map::{OrderSuggestion, StaticMap, StaticMapError, fit_static_map, suggest_order};
+use crate::core::static_map::{OrderSuggestion, StaticMap, StaticMapError};
 use crate::core::tf::BodePoint;
-use crate::core::wiener::{LinearBlock, WienerError, WienerModel, fit_linear_block};
+use crate::core::wiener::{LinearBlock, WienerError, WienerModel};
 
 /// Settings for identifying one output.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -26,8 +28,21 @@ pub struct OutputSettings {
     pub max_static_order: usize,
     /// Length of the settled tail of each segment that gives its steady-state point.
     pub settle_secs: f64,
-    /// Polish the cluster centroids by simulation error (see `core::refine`).
+    /// Polish the cluster centroids by simulation error (see `core::reduce`).
     pub refine: bool,
+    /// Where the polish may move a root that came from a cluster.
+    pub polish: PolishRegion,
+}
+
+/// Where the polish may move a root that came from a cluster.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PolishRegion {
+    /// Inside the cluster's circle: the model's roots and the clusters tell one story.
+    #[default]
+    WithinClusters,
+    /// Anywhere inside the unit circle (the cluster only gives the starting point).
+    Free,
 }
 
 impl Default for OutputSettings {
@@ -46,6 +61,7 @@ impl Default for OutputSettings {
             max_static_order: 3,
             settle_secs: 6.0,
             refine: true,
+            polish: PolishRegion::WithinClusters,
         }
     }
 }
@@ -80,6 +96,8 @@ pub enum PipelineError {
     StaticMap(#[from] StaticMapError),
     #[error("scoring run '{run}': {source}")]
     Metrics { run: String, source: MetricsError },
+    #[error("no model can be fitted: {reason}")]
+    NoModel { reason: String },
 }
 
 /// The ARX model of every segment, with the roots the clusters are drawn over.
@@ -184,64 +202,21 @@ pub struct GrayBoxModel {
     pub output: String,
     pub clusters: Vec<Cluster>,
     pub wiener: WienerModel,
+    /// The roots of the linear block as the model uses them (polished), each with the cluster it
+    /// came from; free roots when the model was fitted directly.
+    #[serde(default)]
+    pub roots: Vec<RootGroup>,
     /// Steady-state points (v, y) the static map was fitted to.
     pub steady_points: Vec<(f64, f64)>,
     pub static_suggestion: Option<OrderSuggestion>,
-    /// Present when the centroids were polished by simulation error.
+    /// Present when the roots were polished by simulation error.
     pub refinement: Option<Refinement>,
+    /// Why the model was fitted directly rather than built from clusters, when it was.
+    #[serde(default)]
+    pub direct_fit: Option<String>,
 }
 
-/// Range of the identification run the gain and static map are fitted on: first to last segment.
-fn fit_range(fits: &SegmentFits) -> (usize, usize) {
-    let start = fits.segments.first().map_or(0, |s| s.start);
-    let end = fits.segments.last().map_or(0, |s| s.end);
-    (start, end)
-}
-
-/// The Wiener model for given reduced roots, fitted on the identification range.
-struct Assembled {
-    wiener: WienerModel,
-    steady_points: Vec<(f64, f64)>,
-    suggestion: Option<OrderSuggestion>,
-    residual: Vec<f64>,
-}
-
-fn assemble(
-    fits: &SegmentFits,
-    u: &[f64],
-    y: &[f64],
-    start: usize,
-    poles: &[num_complex::Complex64],
-    zeros: &[num_complex::Complex64],
-    settings: &OutputSettings,
-    static_order: Option<usize>,
-) -> Result<Assembled, PipelineError> {
-    let linear = fit_linear_block(poles, zeros, u, y, fits.dt_secs)?;
-    let v = linear.simulate(u);
-    let tail = ((settings.settle_secs / fits.dt_secs).round() as usize).max(3);
-    let mut steady_points = Vec::with_capacity(fits.segments.len() + 1);
-    if let Some(first) = fits.segments.first() {
-        let b = first.step_at - start;
-        steady_points.push((mean(&v[..b]), mean(&y[..b])));
-    }
-    for seg in &fits.segments {
-        let (a, b) = seg.settled_tail(tail);
-        steady_points.push((mean(&v[a - start..b - start]), mean(&y[a - start..b - start])));
-    }
-    let (vs, ys): (Vec<f64>, Vec<f64>) = steady_points.iter().copied().unzip();
-    let (order, suggestion) = match static_order {
-        Some(order) => (order, None),
-        None => {
-            let s = suggest_order(&vs, &ys, settings.max_static_order)?;
-            (s.order, Some(s))
-        }
-    };
-    let map = fit_static_map(&vs, &ys, order)?;
-    let residual = v.iter().zip(y).map(|(vk, yk)| map.eval(*vk) - yk).collect();
-    Ok(Assembled { wiener: WienerModel { linear, map }, steady_points, suggestion, residual })
-}
-
-/// Clusters → reduced linear block → static map (the live path's model building).
+/// Clusters → reduced linear block (each root polished inside its cluster) → static map.
 pub fn build_gray_box(
     fits: &SegmentFits,
     ident: &Run,
@@ -249,41 +224,70 @@ pub fn build_gray_box(
     settings: &OutputSettings,
 ) -> Result<(GrayBoxModel, Vec<ClusterEval>), PipelineError> {
     let evals = cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)?;
-    let poles = cluster::valid_reduced_roots(&evals, RootKind::Pole);
-    let zeros = cluster::valid_reduced_roots(&evals, RootKind::Zero);
-    let y_all = output_values(ident, &fits.output)?;
-    let (start, end) = fit_range(fits);
-    let (u, y) = (&ident.input.values[start..end], &y_all[start..end]);
-    let first = assemble(fits, u, y, start, &poles, &zeros, settings, settings.static_order)?;
-    let order = Some(first.wiener.map.order());
-    let suggestion = first.suggestion.clone();
-    let refined = if settings.refine {
-        refine_roots(&poles, &zeros, |p, z| {
-            assemble(fits, u, y, start, p, z, settings, order).ok().map(|a| a.residual)
-        })
-    } else {
-        None
-    };
-    let (assembled, refinement) = match refined {
-        Some((p, z, info)) if info.rms_after < info.rms_before => {
-            (assemble(fits, u, y, start, &p, &z, settings, order)?, Some(info))
-        }
-        _ => (first, None),
-    };
-    let model = GrayBoxModel {
-        output: fits.output.clone(),
-        clusters: clusters.to_vec(),
-        wiener: assembled.wiener,
-        steady_points: assembled.steady_points,
-        static_suggestion: suggestion,
-        refinement,
-    };
+    let groups: Vec<RootGroup> = evals
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.valid)
+        .map(|(i, e)| RootGroup::of_cluster(i, e).within(settings.polish))
+        .collect();
+    if groups.iter().all(|g| g.kind != RootKind::Pole) {
+        return Err(PipelineError::Wiener(WienerError::NoPoles));
+    }
+    let data = IdentData::new(fits, ident, settings)?;
+    let model = model_of_groups(&data, &groups, clusters, None)?;
     Ok((model, evals))
 }
 
-/// Automatic clusters for these fits.
-pub fn auto_clusters(fits: &SegmentFits, settings: &OutputSettings) -> Result<Vec<Cluster>, PipelineError> {
-    Ok(cluster::propose_clusters(&fits.roots, &settings.cluster, fits.dt_secs)?)
+/// The Wiener model of root groups on the identification range: assembled with the static-map order
+/// leave-one-out chooses (or the settings fix), then polished when the settings ask for it.
+fn model_of_groups(
+    data: &IdentData,
+    groups: &[RootGroup],
+    clusters: &[Cluster],
+    direct_fit: Option<String>,
+) -> Result<GrayBoxModel, PipelineError> {
+    let first = reduce::assemble_groups(data, groups, data.settings.static_order)?;
+    let order = first.wiener.map.order();
+    let polished = if data.settings.refine { reduce::polish(data, groups, order) } else { None };
+    let (assembled, roots, refinement) = match polished {
+        Some(p) if p.refinement.rms_after < p.refinement.rms_before => {
+            (p.assembled, p.groups, Some(p.refinement))
+        }
+        _ => (first.clone(), groups.to_vec(), None),
+    };
+    Ok(GrayBoxModel {
+        output: data.fits.output.clone(),
+        clusters: clusters.to_vec(),
+        wiener: assembled.wiener,
+        roots,
+        steady_points: assembled.steady_points,
+        static_suggestion: first.suggestion,
+        refinement,
+        direct_fit,
+    })
+}
+
+/// The automatic proposal for these fits: candidate clusters, which of them the model keeps and
+/// why, or the direct fit when none gives a model (see `core::structure`).
+pub fn propose(fits: &SegmentFits, ident: &Run, settings: &OutputSettings) -> Result<Proposal, PipelineError> {
+    structure::propose(fits, ident, settings)
+}
+
+/// The model of an automatic proposal: built from its clusters, or its direct fit.
+pub fn build_proposed(
+    fits: &SegmentFits,
+    ident: &Run,
+    proposal: &Proposal,
+    settings: &OutputSettings,
+) -> Result<(GrayBoxModel, Vec<ClusterEval>), PipelineError> {
+    match &proposal.direct {
+        Some(direct) => {
+            let data = IdentData::new(fits, ident, settings)?;
+            let model = model_of_groups(&data, &direct.groups, &[], Some(direct.note.clone()))?;
+            Ok((model, Vec::new()))
+        }
+        None => build_gray_box(fits, ident, &proposal.clusters, settings),
+    }
 }
 
 /// A model's simulation of one run and its metrics.
@@ -342,6 +346,8 @@ pub struct Identified {
     pub fits: SegmentFits,
     pub model: GrayBoxModel,
     pub evals: Vec<ClusterEval>,
+    /// The automatic proposal, when the clusters were not given.
+    pub proposal: Option<Proposal>,
 }
 
 pub fn identify_output(
@@ -352,12 +358,17 @@ pub fn identify_output(
     clusters: Option<&[Cluster]>,
 ) -> Result<Identified, PipelineError> {
     let fits = fit_segments(ident, output, segments, settings.orders)?;
-    let clusters = match clusters {
-        Some(c) => c.to_vec(),
-        None => auto_clusters(&fits, settings)?,
-    };
-    let (model, evals) = build_gray_box(&fits, ident, &clusters, settings)?;
-    Ok(Identified { fits, model, evals })
+    match clusters {
+        Some(c) => {
+            let (model, evals) = build_gray_box(&fits, ident, c, settings)?;
+            Ok(Identified { fits, model, evals, proposal: None })
+        }
+        None => {
+            let proposal = propose(&fits, ident, settings)?;
+            let (model, evals) = build_proposed(&fits, ident, &proposal, settings)?;
+            Ok(Identified { fits, model, evals, proposal: Some(proposal) })
+        }
+    }
 }
 
 /// The static map as the paper prints it: β0, β1, … (for reports).

@@ -1,15 +1,13 @@
-//! Polishing the reduced model: the clusters choose the structure (how many real poles, complex
-//! pairs and zeros) and the centroids are the starting point; Levenberg–Marquardt then moves those
-//! roots to minimise the Wiener model's simulation error on the identification data, with the gain,
-//! offset and static map re-solved by linear least squares at every step (variable projection).
+//! Roots as parameters of a polish, and the record of what a polish did. The polish itself is in
+//! `core::reduce` (the reduced model, each root kept inside its cluster) and `core::effects` (the
+//! model with its effect blocks).
 //!
-//! Why: a high-order ARX fitted to data with output noise is biased, so cluster centroids sit a
-//! little off the true roots (0.02 in z on a complex pair at a tenth of the paper's noise), which
-//! costs several tenths of a percent of validation error. The structure stays the user's choice.
+//! Why polish: a high-order ARX fitted to data with output noise is biased, so cluster centroids sit
+//! a little off the true roots (0.02 in z on a complex pair at a tenth of the paper's noise), which
+//! costs several tenths of a percent of validation error.
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::lm::{LmOptions, levenberg_marquardt};
 
 /// Roots of one kind as refinement parameters: a real root is one parameter, a pair is (re, im).
 #[derive(Clone, Debug, PartialEq)]
@@ -65,49 +63,6 @@ pub struct Refinement {
     pub rms_before: f64,
     pub rms_after: f64,
     pub iterations: usize,
-}
-
-/// Refine poles and zeros. `simulate` returns the residual vector of the whole Wiener model for
-/// candidate roots (or `None` where they are not admissible).
-pub fn refine_roots<F>(
-    poles: &[Complex64],
-    zeros: &[Complex64],
-    mut residual: F,
-) -> Option<(Vec<Complex64>, Vec<Complex64>, Refinement)>
-where
-    F: FnMut(&[Complex64], &[Complex64]) -> Option<Vec<f64>>,
-{
-    let (pole_params, theta_p) = RootParams::from_roots(poles);
-    let (zero_params, theta_z) = RootParams::from_roots(zeros);
-    let np = pole_params.n_params();
-    let theta0: Vec<f64> = theta_p.iter().chain(&theta_z).copied().collect();
-    let split = |theta: &[f64]| (pole_params.roots(&theta[..np]), zero_params.roots(&theta[np..]));
-    let opts = LmOptions { max_iterations: 30, cost_tol: 1e-7, ..LmOptions::default() };
-    let result = levenberg_marquardt(
-        &theta0,
-        |theta| {
-            let (p, z) = split(theta);
-            if p.iter().any(|r| r.norm() >= 0.999) {
-                return None;
-            }
-            residual(&p, &z)
-        },
-        &opts,
-    )
-    .ok()?;
-    let (p, z) = split(&result.theta);
-    let n = residual(&p, &z).map_or(1, |r| r.len().max(1)) as f64;
-    Some((
-        p,
-        z,
-        Refinement {
-            poles_before: poles.to_vec(),
-            zeros_before: zeros.to_vec(),
-            rms_before: (result.initial_cost / n).sqrt(),
-            rms_after: (result.cost / n).sqrt(),
-            iterations: result.iterations,
-        },
-    ))
 }
 
 #[cfg(test)]

@@ -77,13 +77,34 @@ pub fn fit_linear_block(
     y: &[f64],
     dt_secs: f64,
 ) -> Result<LinearBlock, WienerError> {
+    fit_linear_block_excluding(poles, zeros, u, y, dt_secs, None)
+}
+
+/// [`fit_linear_block`] with the samples of `held_out` left out of the least squares (the block is
+/// still simulated through them): what a cross-validation fold fits on.
+pub fn fit_linear_block_excluding(
+    poles: &[Complex64],
+    zeros: &[Complex64],
+    u: &[f64],
+    y: &[f64],
+    dt_secs: f64,
+    held_out: Option<std::ops::Range<usize>>,
+) -> Result<LinearBlock, WienerError> {
     let shape = unit_gain_tf(poles, zeros, dt_secs)?;
     if u.len() < 3 || u.len() != y.len() {
         return Err(WienerError::TooFewSamples { samples: u.len().min(y.len()) });
     }
     let w = shape.simulate_from_steady(u);
-    let a = faer::Mat::from_fn(w.len(), 2, |r, c| if c == 0 { w[r] } else { 1.0 });
-    let sol = solve_lstsq(&a, y)?;
+    let kept: Vec<usize> = match &held_out {
+        Some(out) => (0..w.len()).filter(|k| !out.contains(k)).collect(),
+        None => (0..w.len()).collect(),
+    };
+    if kept.len() < 3 {
+        return Err(WienerError::TooFewSamples { samples: kept.len() });
+    }
+    let a = faer::Mat::from_fn(kept.len(), 2, |r, c| if c == 0 { w[kept[r]] } else { 1.0 });
+    let y_kept: Vec<f64> = kept.iter().map(|&k| y[k]).collect();
+    let sol = solve_lstsq(&a, &y_kept)?;
     let (k, offset) = (sol.x[0], sol.x[1]);
     let tf = DiscreteTf::new(shape.num_zinv.iter().map(|b| b * k).collect(), shape.den_zinv, dt_secs)?;
     Ok(LinearBlock { tf, offset })

@@ -6,12 +6,13 @@
 //! - fuel system (metering valve + line + injectors), second order, unit gain:
 //!   ẅ_b = ω_f² (u(t − d) − w_b) − 2 ζ_f ω_f ẇ_b
 //! - turbine power available at corrected burnt fuel w_c = w_b / (δ √θ), normalised to the reference
-//!   point: p_t = (N_rl(w_c) / N_ref)³ with the running line N_rl(w) = a + b w + c w²
+//!   point: p_t = (N_rl(w_c) / N_ref)^k with the running line N_rl(w) = r₀ + r₁ w + r₂ w²
 //! - thermal soak (effect): ṡ = (p_t − s)/τ_s and net power p = p_t − g (p_t − s); otherwise p = p_t
-//! - spool power balance J ω ω̇ = P_t − P_c with compressor power ∝ N³ (plus the bleed effect):
-//!   Ṅ_c = K (p − n³ (1 + k_b max(0, n − n_b))) / n,  K = N_ref / (3 τ_ref),
-//!   so the linearised time constant is τ(N) = τ_ref · N_ref / N; Ṅ_c is divided by the
-//!   deceleration (acceleration) factor while negative (positive); physical N = √θ · N_c
+//! - spool power balance J ω ω̇ = P_t − P_c with compressor power ∝ N^k, k = 2 + a (plus the bleed
+//!   effect): Ṅ_c = K (p − n^k (1 + k_b max(0, n − n_b))) / n,  K = N_ref / (k τ_ref),
+//!   so the linearised time constant is τ(N) = τ_ref · (N_ref / N)^a (the SR-30 calibration has
+//!   a = 1: compressor power ∝ N³, τ ∝ 1/N); Ṅ_c is divided by the deceleration (acceleration)
+//!   factor while negative (positive); physical N = √θ · N_c
 //! - engine thrust F = δ (F_0 + F_1 n^p_F)
 //! - load cell: first-order lag τ_lc, then a second-order stand (f_s, ζ_s) driven by F (+ buffeting)
 //! - EGT: gas temperature T_amb + θ ΔT_ref (w_c / w_ref) / n^β seen through a thermocouple lag τ_egt
@@ -56,6 +57,8 @@ pub struct EngineParams {
     pub ref_fuel_gph: f64,
     /// Spool time constant τ_ref at N_ref, s.
     pub spool_tau_ref_secs: f64,
+    /// Exponent a of the time-constant law τ(N) = τ_ref (N_ref / N)^a; compressor power ∝ N^(2 + a).
+    pub spool_tau_exponent: f64,
     /// Running line N_rl(w) = a + b w + c w² (rpm, rpm/(gal/h), rpm/(gal/h)²).
     pub running_line_rpm: [f64; 3],
     /// Fuel-system natural frequency ω_f, rad/s.
@@ -90,6 +93,7 @@ impl Default for EngineParams {
             ref_speed_rpm: 73_850.0,
             ref_fuel_gph: 5.43,
             spool_tau_ref_secs: 1.7,
+            spool_tau_exponent: 1.0,
             // Through (2.0 gal/h, 45,000 rpm), (5.43, 73,850), (7.6, 87,000).
             running_line_rpm: [23_618.25, 11_530.58, -419.852],
             fuel_omega_rad_s: 2.8,
@@ -168,7 +172,12 @@ impl Engine {
         let [a, b, c] = self.params.running_line_rpm;
         let w = fuel_corr_gph.max(0.0);
         let n_rl = ((a + b * w + c * w * w) / self.params.ref_speed_rpm).max(MIN_SPEED_RATIO);
-        n_rl.powi(3)
+        n_rl.powf(self.load_exponent())
+    }
+
+    /// Exponent k of the compressor power law P_c ∝ N^k.
+    fn load_exponent(&self) -> f64 {
+        2.0 + self.params.spool_tau_exponent
     }
 
     /// Normalised compressor (plus bleed) power at normalised corrected speed n.
@@ -177,7 +186,7 @@ impl Engine {
             .effects
             .bleed
             .map_or(0.0, |(bleed_rpm, gain)| gain * (n - bleed_rpm / self.params.ref_speed_rpm).max(0.0));
-        n.powi(3) * (1.0 + bleed)
+        n.max(0.0).powf(self.load_exponent()) * (1.0 + bleed)
     }
 
     fn engine_thrust_n(&self, n: f64, delta: f64) -> f64 {
@@ -214,7 +223,7 @@ impl Engine {
             None => power_turbine,
         };
         let n = (x[SPEED] / p.ref_speed_rpm).max(MIN_SPEED_RATIO);
-        let gain_rpm_s = p.ref_speed_rpm / (3.0 * p.spool_tau_ref_secs);
+        let gain_rpm_s = p.ref_speed_rpm / (self.load_exponent() * p.spool_tau_ref_secs);
         let speed_rate = gain_rpm_s * (power_net - self.load_power(n)) / n;
         dx[SPEED] = if speed_rate < 0.0 {
             speed_rate / self.effects.decel_factor

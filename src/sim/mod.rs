@@ -16,11 +16,13 @@ pub mod designs;
 pub mod effects;
 pub mod engine;
 pub mod error;
+pub mod family;
 
 pub use designs::{FuelProfile, TestKind};
 pub use effects::{ActiveEffects, EFFECT_IDS, Effect};
 pub use engine::{Engine, EngineParams};
 pub use error::SimError;
+pub use family::{DrawnEngine, EngineFamily};
 
 use ambient::Day;
 use engine::{Drive, State};
@@ -115,6 +117,13 @@ impl SimConfig {
 
     pub fn with_effects(mut self, effects: Vec<Effect>) -> Self {
         self.effects = effects;
+        self
+    }
+
+    /// The same test on another engine, with that engine's sensor noise.
+    pub fn on_engine(mut self, engine: &DrawnEngine) -> Self {
+        self.engine = engine.params.clone();
+        self.noise = engine.noise.clone();
         self
     }
 }

@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use crate::core::cluster::{self, Cluster, ClusterEval};
 use crate::core::pipeline::{
-    self, GrayBoxModel, OutputSettings, RunPrediction, SegmentFits, auto_clusters, fit_segments, live_update,
+    self, GrayBoxModel, OutputSettings, RunPrediction, SegmentFits, fit_segments, live_update,
     segments_for,
 };
 use crate::core::run::Run;
@@ -272,7 +272,7 @@ impl OutputCache {
         }
         if refit || setup.settings.cluster != self.setup.settings.cluster {
             self.automatic = match &self.fits {
-                Ok(fits) => auto_clusters(fits, &setup.settings).map_err(|e| e.to_string()),
+                Ok(fits) => pipeline::propose(fits, run, &setup.settings).map(|p| p.clusters).map_err(|e| e.to_string()),
                 Err(err) => Err(err.clone()),
             };
         }

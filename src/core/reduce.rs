@@ -1,0 +1,450 @@
+//! The reduced model of one output: its roots, the Wiener model they give on the identification
+//! range, and the polish that moves them by simulation error while keeping each inside its cluster.
+//!
+//! **Root groups.** The reduced linear block is a list of [`RootGroup`]s: one real root, or one
+//! conjugate pair, each taken from a valid cluster (its centroid) or free (the direct output-error
+//! fit of `core::structure`). For given roots the Wiener model is [`assemble`]d the one way the
+//! whole crate uses: the unit-gain response is simulated, gain and offset come from least squares
+//! on the identification range, and the static map is fitted to the steady-state points (the
+//! pre-step baseline and the settled tail of every segment), its order chosen by leave-one-out
+//! unless the output's settings fix it.
+//!
+//! **The polish keeps one story.** A high-order ARX fitted to noisy data is biased, so centroids sit
+//! a little off the engine's roots; Levenberg–Marquardt then moves the roots to minimise the Wiener
+//! model's simulation error on the identification range, with gain, offset and map re-solved by
+//! least squares at every step (variable projection). Each root that came from a cluster is kept
+//! inside that cluster's circle: it is written as centre + radius · tanh(ρ)/ρ · θ (θ ∈ ℝ² for a
+//! pair, the real segment of the circle for a real root), so the optimiser moves freely and the
+//! root cannot leave. The circle is the engineer's statement of where the segment models put the
+//! root; the polish finds the best root inside it, and the z-plane, the cluster table and the model
+//! tell the same story. A root that ends on the rim is reported ([`RootGroup::at_rim`]): the data
+//! pull it further, and widening the circle lets them.
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::core::cluster::{ClusterEval, RootKind, natural_freq_and_damping};
+use crate::core::lm::{LmOptions, levenberg_marquardt};
+use crate::core::pipeline::{OutputSettings, PipelineError, SegmentFits, output_values};
+use crate::core::refine::Refinement;
+use crate::core::run::Run;
+use crate::core::static_map::{OrderSuggestion, fit_static_map, suggest_order};
+use crate::core::wiener::{WienerModel, fit_linear_block_excluding};
+
+/// Roots must stay inside this modulus while polishing (a stable, not quite integrating block).
+const MAX_POLE_MODULUS: f64 = 0.999;
+/// A root whose distance from its circle's centre is at least this share of the radius is on the
+/// rim: the tanh map has then used 98 % of its room, so the optimiser was stopped by the circle.
+const RIM_SHARE: f64 = 0.98;
+/// Largest |w| a starting point may have inside its circle (w = (z − c)/r), so atanh stays finite.
+const MAX_START_SHARE: f64 = 0.995;
+/// Iterations of the polish; it usually converges in 5–15.
+const POLISH_ITERATIONS: usize = 30;
+/// Relative cost decrease below which the polish stops.
+const POLISH_COST_TOL: f64 = 1e-7;
+
+/// A circle a root is kept in.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Region {
+    pub centre: Complex64,
+    pub radius: f64,
+}
+
+/// One real root or one conjugate pair of the reduced linear block.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RootGroup {
+    pub kind: RootKind,
+    /// The root; in the closed upper half-plane for a pair (its conjugate is implied), real otherwise.
+    pub root: Complex64,
+    pub pair: bool,
+    /// The circle the polish keeps the root in (its cluster's); `None` for a free root.
+    pub region: Option<Region>,
+    /// Index of the cluster the root came from, in the cluster list it was built from.
+    pub cluster: Option<usize>,
+}
+
+impl RootGroup {
+    /// A free real root at `x`.
+    pub fn free_real(kind: RootKind, x: f64) -> Self {
+        Self { kind, root: Complex64::new(x, 0.0), pair: false, region: None, cluster: None }
+    }
+
+    /// A free conjugate pair at `z` (and its conjugate).
+    pub fn free_pair(kind: RootKind, z: Complex64) -> Self {
+        let root = Complex64::new(z.re, z.im.abs());
+        Self { kind, root, pair: true, region: None, cluster: None }
+    }
+
+    /// The group of a valid cluster: its centroid, kept inside its circle.
+    pub fn of_cluster(index: usize, eval: &ClusterEval) -> Self {
+        let pair = !eval.cluster.is_real_axis();
+        let root = if pair { eval.centroid } else { Complex64::new(eval.centroid.re, 0.0) };
+        Self {
+            kind: eval.cluster.kind,
+            root,
+            pair,
+            region: Some(Region { centre: eval.cluster.centre, radius: eval.cluster.radius }),
+            cluster: Some(index),
+        }
+    }
+
+    /// The group with its circle dropped when the polish may move it freely.
+    pub fn within(self, region: crate::core::pipeline::PolishRegion) -> Self {
+        match region {
+            crate::core::pipeline::PolishRegion::WithinClusters => self,
+            crate::core::pipeline::PolishRegion::Free => Self { region: None, ..self },
+        }
+    }
+
+    /// The roots this group puts in the transfer function.
+    pub fn roots(&self) -> Vec<Complex64> {
+        if self.pair { vec![self.root, self.root.conj()] } else { vec![Complex64::new(self.root.re, 0.0)] }
+    }
+
+    /// Number of roots (1 or 2).
+    pub fn count(&self) -> usize {
+        if self.pair { 2 } else { 1 }
+    }
+
+    /// True when the polish left the root on the rim of its circle (see [`RIM_SHARE`]).
+    pub fn at_rim(&self) -> bool {
+        self.region.is_some_and(|r| r.radius > 0.0 && (self.root - r.centre).norm() >= RIM_SHARE * r.radius)
+    }
+
+    /// (ωn rad/s, ζ, τ s) of the root: τ for a real root in (0, 1), ωn and ζ always.
+    pub fn s_plane(&self, dt_secs: f64) -> (f64, f64, Option<f64>) {
+        let (omega, zeta) = natural_freq_and_damping(self.root, dt_secs);
+        let tau = (!self.pair && self.root.re > 0.0 && self.root.re < 1.0)
+            .then(|| -dt_secs / self.root.re.ln())
+            .filter(|t| t.is_finite());
+        (omega, zeta, tau)
+    }
+
+    /// Number of polish parameters: 0 for a real root pinned to a circle that only touches the axis.
+    fn n_params(&self) -> usize {
+        match (self.pair, self.region) {
+            (true, _) => 2,
+            (false, Some(r)) if real_half_width(r) <= 0.0 => 0,
+            (false, _) => 1,
+        }
+    }
+
+    /// The group's polish parameters.
+    fn encode(&self) -> Vec<f64> {
+        match (self.pair, self.region) {
+            (true, None) => vec![self.root.re, self.root.im],
+            (false, None) => vec![self.root.re],
+            (true, Some(r)) => {
+                let w = (self.root - r.centre) / r.radius.max(f64::MIN_POSITIVE);
+                let rho = w.norm().min(MAX_START_SHARE);
+                let scale = if rho > 0.0 { rho.atanh() / w.norm() } else { 1.0 };
+                vec![w.re * scale, w.im * scale]
+            }
+            (false, Some(r)) => {
+                let h = real_half_width(r);
+                if h <= 0.0 {
+                    return Vec::new();
+                }
+                let x = ((self.root.re - r.centre.re) / h).clamp(-MAX_START_SHARE, MAX_START_SHARE);
+                vec![x.atanh()]
+            }
+        }
+    }
+
+    /// The group moved to the parameters `theta` (as many as [`RootGroup::n_params`]).
+    fn decode(&self, theta: &[f64]) -> Option<Self> {
+        let root = match (self.pair, self.region) {
+            (true, None) => Complex64::new(*theta.first()?, theta.get(1)?.abs()),
+            (false, None) => Complex64::new(*theta.first()?, 0.0),
+            (true, Some(r)) => {
+                let t = Complex64::new(*theta.first()?, *theta.get(1)?);
+                let rho = t.norm();
+                let shrink = if rho > 1e-12 { rho.tanh() / rho } else { 1.0 };
+                let z = r.centre + t * (r.radius * shrink);
+                Complex64::new(z.re, z.im.abs())
+            }
+            (false, Some(r)) => {
+                let h = real_half_width(r);
+                let x = if h > 0.0 { r.centre.re + h * theta.first()?.tanh() } else { r.centre.re };
+                Complex64::new(x, 0.0)
+            }
+        };
+        Some(Self { root, ..self.clone() })
+    }
+}
+
+/// Half the length of the real axis inside a circle (0 when the circle does not reach the axis).
+fn real_half_width(r: Region) -> f64 {
+    (r.radius * r.radius - r.centre.im * r.centre.im).max(0.0).sqrt()
+}
+
+/// All roots of one kind in a list of groups.
+pub fn roots_of(groups: &[RootGroup], kind: RootKind) -> Vec<Complex64> {
+    let mut roots: Vec<Complex64> = groups.iter().filter(|g| g.kind == kind).flat_map(RootGroup::roots).collect();
+    roots.sort_by(|a, b| a.arg().total_cmp(&b.arg()).then(a.norm().total_cmp(&b.norm())));
+    roots
+}
+
+/// Number of roots of one kind.
+pub fn count_of(groups: &[RootGroup], kind: RootKind) -> usize {
+    groups.iter().filter(|g| g.kind == kind).map(RootGroup::count).sum()
+}
+
+/// The identification data a reduced model is fitted on: the run over the segments' range.
+pub struct IdentData<'a> {
+    pub fits: &'a SegmentFits,
+    pub u: &'a [f64],
+    pub y: &'a [f64],
+    /// Index in the identification run of the first sample of `u` and `y`.
+    pub start: usize,
+    pub settings: &'a OutputSettings,
+    /// Samples of `u` and `y` left out of every fit (a cross-validation fold's held-out segment).
+    pub held_out: Option<std::ops::Range<usize>>,
+}
+
+impl<'a> IdentData<'a> {
+    /// The range of `ident` from the first segment's start to the last segment's end.
+    pub fn new(fits: &'a SegmentFits, ident: &'a Run, settings: &'a OutputSettings) -> Result<Self, PipelineError> {
+        let y_all = output_values(ident, &fits.output)?;
+        let start = fits.segments.first().map_or(0, |s| s.start);
+        let end = fits.segments.last().map_or(0, |s| s.end).min(y_all.len()).min(ident.input.values.len());
+        let (u, y) = match (ident.input.values.get(start..end), y_all.get(start..end)) {
+            (Some(u), Some(y)) => (u, y),
+            _ => (&ident.input.values[..0], &y_all[..0]),
+        };
+        Ok(Self { fits, u, y, start, settings, held_out: None })
+    }
+
+    /// The same data with the samples `start..end` of the identification run held out.
+    pub fn holding_out(&self, start: usize, end: usize) -> Self {
+        let (a, b) = (start.saturating_sub(self.start), end.saturating_sub(self.start).min(self.u.len()));
+        Self { held_out: Some(a..b.max(a)), ..*self }
+    }
+
+    /// Standard deviation of the output's measurement noise, read from the data: the median absolute
+    /// first difference over the identification range, scaled to σ for Gaussian noise (Δy of white
+    /// noise has σ√2, and its median absolute value is 0.6745 σ√2). The dynamics at these sample
+    /// rates move the output little from one sample to the next except during the few seconds after
+    /// each step, which the median ignores.
+    pub fn noise_sigma(&self) -> f64 {
+        let mut diffs: Vec<f64> = self.y.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+        if diffs.is_empty() {
+            return 0.0;
+        }
+        diffs.sort_by(f64::total_cmp);
+        let median = diffs[diffs.len() / 2];
+        median / (0.674_489_75 * std::f64::consts::SQRT_2)
+    }
+
+    /// Whether sample `k` of `u` and `y` takes part in the fit.
+    pub fn fits_sample(&self, k: usize) -> bool {
+        self.held_out.as_ref().is_none_or(|out| !out.contains(&k))
+    }
+}
+
+/// A Wiener model for given roots, fitted on the identification range, with its residual there.
+#[derive(Clone, Debug)]
+pub struct Assembled {
+    pub wiener: WienerModel,
+    /// Steady-state points (v, y) the static map was fitted to.
+    pub steady_points: Vec<(f64, f64)>,
+    pub suggestion: Option<OrderSuggestion>,
+    /// Simulated minus measured output over the identification range.
+    pub residual: Vec<f64>,
+}
+
+impl Assembled {
+    /// Root-mean-square of the residual.
+    pub fn rms(&self) -> f64 {
+        rms(&self.residual)
+    }
+}
+
+/// Root-mean-square of a residual (0 for an empty one).
+pub fn rms(residual: &[f64]) -> f64 {
+    (residual.iter().map(|r| r * r).sum::<f64>() / residual.len().max(1) as f64).sqrt()
+}
+
+fn mean(x: &[f64]) -> f64 {
+    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
+}
+
+/// Gain, offset and static map for these roots (see the module documentation). `static_order`
+/// `None` lets leave-one-out choose within the settings' maximum.
+pub fn assemble(
+    data: &IdentData,
+    poles: &[Complex64],
+    zeros: &[Complex64],
+    static_order: Option<usize>,
+) -> Result<Assembled, PipelineError> {
+    let fits = data.fits;
+    let linear = fit_linear_block_excluding(poles, zeros, data.u, data.y, fits.dt_secs, data.held_out.clone())?;
+    let v = linear.simulate(data.u);
+    let tail = ((data.settings.settle_secs / fits.dt_secs).round() as usize).max(3);
+    let mut steady_points = Vec::with_capacity(fits.segments.len() + 1);
+    let window = |a: usize, b: usize| -> Option<(f64, f64)> {
+        let (a, b) = (a.checked_sub(data.start)?, b.checked_sub(data.start)?);
+        if data.held_out.as_ref().is_some_and(|out| out.start < b && a < out.end) {
+            return None;
+        }
+        Some((mean(v.get(a..b)?), mean(data.y.get(a..b)?)))
+    };
+    if let Some(point) = fits.segments.first().and_then(|first| window(data.start, first.step_at)) {
+        steady_points.push(point);
+    }
+    for seg in &fits.segments {
+        let (a, b) = seg.settled_tail(tail);
+        steady_points.extend(window(a, b));
+    }
+    let (vs, ys): (Vec<f64>, Vec<f64>) = steady_points.iter().copied().unzip();
+    let (order, suggestion) = match static_order {
+        Some(order) => (order, None),
+        None => {
+            let s = suggest_order(&vs, &ys, data.settings.max_static_order)?;
+            (s.order, Some(s))
+        }
+    };
+    let map = fit_static_map(&vs, &ys, order)?;
+    let residual = v.iter().zip(data.y).map(|(vk, yk)| map.eval(*vk) - yk).collect();
+    Ok(Assembled { wiener: WienerModel { linear, map }, steady_points, suggestion, residual })
+}
+
+/// Assemble the model of a list of root groups.
+pub fn assemble_groups(
+    data: &IdentData,
+    groups: &[RootGroup],
+    static_order: Option<usize>,
+) -> Result<Assembled, PipelineError> {
+    assemble(data, &roots_of(groups, RootKind::Pole), &roots_of(groups, RootKind::Zero), static_order)
+}
+
+/// RMS of the residual over the samples that take part in the fit.
+fn fitted_rms(data: &IdentData, residual: &[f64]) -> f64 {
+    let kept: Vec<f64> =
+        residual.iter().enumerate().filter(|(k, _)| data.fits_sample(*k)).map(|(_, r)| *r).collect();
+    rms(&kept)
+}
+
+/// The groups moved to a parameter vector; `None` where a pole leaves [`MAX_POLE_MODULUS`].
+fn decode_all(groups: &[RootGroup], theta: &[f64]) -> Option<Vec<RootGroup>> {
+    let mut at = 0;
+    let mut out = Vec::with_capacity(groups.len());
+    for g in groups {
+        let n = g.n_params();
+        let moved = g.decode(theta.get(at..at + n)?)?;
+        if moved.kind == RootKind::Pole && moved.root.norm() >= MAX_POLE_MODULUS {
+            return None;
+        }
+        out.push(moved);
+        at += n;
+    }
+    Some(out)
+}
+
+/// A polished model: the roots where the polish left them, and what it did.
+#[derive(Clone, Debug)]
+pub struct Polished {
+    pub groups: Vec<RootGroup>,
+    pub assembled: Assembled,
+    pub refinement: Refinement,
+}
+
+/// Polish the roots by simulation error on the identification range, each cluster's root inside its
+/// circle, free roots anywhere inside the unit circle; the static map keeps `static_order`. `None`
+/// when the starting roots give no model. The result is never worse than the start.
+pub fn polish(data: &IdentData, groups: &[RootGroup], static_order: usize) -> Option<Polished> {
+    polish_with(data, groups, static_order, POLISH_ITERATIONS)
+}
+
+/// [`polish`] with at most `max_iterations` Levenberg–Marquardt steps.
+pub fn polish_with(
+    data: &IdentData,
+    groups: &[RootGroup],
+    static_order: usize,
+    max_iterations: usize,
+) -> Option<Polished> {
+    let start = assemble_groups(data, groups, Some(static_order)).ok()?;
+    let theta0: Vec<f64> = groups.iter().flat_map(RootGroup::encode).collect();
+    let residual = |theta: &[f64]| {
+        let moved = decode_all(groups, theta)?;
+        let full = assemble_groups(data, &moved, Some(static_order)).ok()?.residual;
+        Some(match &data.held_out {
+            None => full,
+            Some(_) => full.into_iter().enumerate().filter(|(k, _)| data.fits_sample(*k)).map(|(_, r)| r).collect(),
+        })
+    };
+    let opts = LmOptions { max_iterations, cost_tol: POLISH_COST_TOL, ..LmOptions::default() };
+    let fitted = levenberg_marquardt(&theta0, residual, &opts).ok();
+    let moved = fitted.as_ref().and_then(|f| decode_all(groups, &f.theta));
+    let after = moved.as_ref().and_then(|m| assemble_groups(data, m, Some(static_order)).ok());
+    let before_rms = fitted_rms(data, &start.residual);
+    let refinement = |after_rms: f64, iterations: usize| Refinement {
+        poles_before: roots_of(groups, RootKind::Pole),
+        zeros_before: roots_of(groups, RootKind::Zero),
+        rms_before: before_rms,
+        rms_after: after_rms,
+        iterations,
+    };
+    match (moved, after, fitted) {
+        (Some(moved), Some(after), Some(fit)) if fitted_rms(data, &after.residual) < before_rms => Some(Polished {
+            refinement: refinement(fitted_rms(data, &after.residual), fit.iterations),
+            groups: moved,
+            assembled: after,
+        }),
+        (_, _, fit) => Some(Polished {
+            refinement: refinement(before_rms, fit.map_or(0, |f| f.iterations)),
+            groups: groups.to_vec(),
+            assembled: start,
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn region(re: f64, im: f64, radius: f64) -> Option<Region> {
+        Some(Region { centre: Complex64::new(re, im), radius })
+    }
+
+    #[test]
+    fn parameters_round_trip_and_stay_inside_the_circle() {
+        let pair = RootGroup {
+            kind: RootKind::Pole,
+            root: Complex64::new(0.82, 0.21),
+            pair: true,
+            region: region(0.84, 0.2, 0.05),
+            cluster: Some(0),
+        };
+        let real = RootGroup {
+            kind: RootKind::Pole,
+            root: Complex64::new(0.93, 0.0),
+            pair: false,
+            region: region(0.935, 0.004, 0.02),
+            cluster: Some(1),
+        };
+        for g in [&pair, &real, &RootGroup::free_real(RootKind::Zero, -0.3)] {
+            let back = g.decode(&g.encode()).unwrap();
+            assert!((back.root - g.root).norm() < 1e-12, "{g:?} → {back:?}");
+            assert_eq!(g.encode().len(), g.n_params());
+        }
+        for theta in [[50.0, -80.0], [-3.0, 0.2], [0.0, 0.0]] {
+            let z = pair.decode(&theta).unwrap().root;
+            assert!((z - Complex64::new(0.84, 0.2)).norm() <= 0.05 + 1e-12);
+            let x = real.decode(&theta[..1]).unwrap().root;
+            assert!(x.im == 0.0 && (x - Complex64::new(0.935, 0.004)).norm() <= 0.02 + 1e-12);
+        }
+        assert!(pair.decode(&[50.0, -80.0]).unwrap().at_rim() && !pair.at_rim());
+        let touching = RootGroup { region: region(0.9, 0.02, 0.02), ..real.clone() };
+        assert_eq!(touching.n_params(), 0);
+        assert!((touching.decode(&[]).unwrap().root.re - 0.9).abs() < 1e-15);
+    }
+
+    #[test]
+    fn s_plane_figures_of_a_real_root() {
+        let dt = 0.1;
+        let g = RootGroup::free_real(RootKind::Pole, (-dt / 2.0_f64).exp());
+        let (omega, zeta, tau) = g.s_plane(dt);
+        assert!((tau.unwrap() - 2.0).abs() < 1e-12 && (omega - 0.5).abs() < 1e-12 && (zeta - 1.0).abs() < 1e-12);
+    }
+}

@@ -130,13 +130,14 @@ fn sr30_models_have_the_papers_structure() {
     let thrust =
         identify_output(&ident, "thrust_n", &OutputSettings::for_output("thrust_n"), &segments, None)
             .unwrap();
-    let poles = thrust.model.wiener.linear.tf.poles().unwrap();
-    let slowest = poles.iter().max_by(|a, b| a.norm().total_cmp(&b.norm())).unwrap();
-    assert!(slowest.im.abs() < 1e-9 && (0.92..=0.96).contains(&slowest.re), "thrust poles {poles:?}");
-    // Dominated by that pole: every other pole is at least three times faster.
-    let tau = |z: f64| -1.0 / z.ln();
-    for p in poles.iter().filter(|p| *p != slowest) {
-        assert!(tau(p.norm()) < tau(slowest.re) / 3.0, "thrust pole {p} is not much faster than {slowest}");
+    let thrust_poles = thrust.model.wiener.linear.tf.poles().unwrap();
+    let slowest = thrust_poles.iter().max_by(|a, b| a.norm().total_cmp(&b.norm())).unwrap();
+    assert!(slowest.im.abs() < 1e-9 && (0.92..=0.96).contains(&slowest.re), "thrust poles {thrust_poles:?}");
+    // Thrust is a static function of spool speed seen through a fast load cell and stand, so its
+    // model's slower dynamics are those of the speed model, found independently from its own roots.
+    for p in thrust_poles.iter().filter(|p| p.im > 1e-9) {
+        let nearest = poles.iter().map(|q| (p - q).norm()).fold(f64::INFINITY, f64::min);
+        assert!(nearest < 0.05, "thrust pole {p} has no counterpart among the speed poles {poles:?}");
     }
 }
 

@@ -322,27 +322,39 @@ mod tests {
             .collect()
     }
 
+    /// The clusters held by every segment (the relaxed ones are candidates for `core::structure`).
+    fn full(clusters: &[Cluster]) -> Vec<&Cluster> {
+        clusters.iter().filter(|c| c.min_segments.is_none()).collect()
+    }
+
     #[test]
     fn finds_the_true_roots_and_nothing_else() {
         let settings = ClusterSettings::default();
         for seed in 0..12 {
             let roots = speed_like(seed, 7, 0.005);
             let clusters = propose_clusters(&roots, &settings, DT).unwrap();
-            let centres: Vec<Complex64> = clusters.iter().map(|c| c.centre).collect();
-            assert_eq!(clusters.len(), 2, "seed {seed}: {centres:?}");
-            assert!(clusters.iter().all(|c| c.kind == RootKind::Pole));
+            let full = full(&clusters);
+            let centres: Vec<Complex64> = full.iter().map(|c| c.centre).collect();
+            assert_eq!(full.len(), 2, "seed {seed}: {centres:?}");
+            assert!(full.iter().all(|c| c.kind == RootKind::Pole));
             assert!((centres[0] - c(REAL_POLE, 0.0)).norm() < 0.01, "seed {seed}: {centres:?}");
             assert!((centres[1] - pair()).norm() < 0.01, "seed {seed}: {centres:?}");
-            assert!(clusters[0].is_real_axis() && !clusters[1].is_real_axis());
-            for cl in &clusters {
+            assert!(full[0].is_real_axis() && !full[1].is_real_axis());
+            for cl in &full {
                 let e = evaluate_cluster(cl, &roots, &settings, DT).unwrap();
                 assert_eq!(e.segments_found, 7);
+            }
+            // Chance gatherings of the scattered roots may be candidates at a relaxed condition,
+            // never below a majority, and each stays valid at the condition it was accepted at.
+            for cl in clusters.iter().filter(|c| c.min_segments.is_some()) {
+                assert!(cl.min_segments.is_some_and(|m| (4..7).contains(&m)), "{cl:?}");
+                assert!(evaluate_cluster(cl, &roots, &settings, DT).unwrap().valid);
             }
         }
     }
 
     #[test]
-    fn noise_ring_and_origin_roots_give_no_clusters() {
+    fn noise_ring_and_origin_roots_give_no_clusters_held_by_every_segment() {
         let settings = ClusterSettings::default();
         let mut spurious = 0;
         for seed in 0..20 {
@@ -355,7 +367,7 @@ mod tests {
                     SegmentRoots { label: format!("S{j}"), poles, zeros: vec![] }
                 })
                 .collect();
-            spurious += propose_clusters(&roots, &settings, DT).unwrap().len();
+            spurious += full(&propose_clusters(&roots, &settings, DT).unwrap()).len();
         }
         assert_eq!(spurious, 0);
     }
@@ -366,12 +378,16 @@ mod tests {
         // Segment 3 loses its real pole.
         roots[3].poles.remove(0);
         let all = propose_clusters(&roots, &ClusterSettings::default(), DT).unwrap();
-        assert_eq!(all.len(), 1);
-        assert!((all[0].centre - pair()).norm() < 0.01);
+        let full = full(&all);
+        assert_eq!(full.len(), 1);
+        assert!((full[0].centre - pair()).norm() < 0.01);
+        // Relaxing step by step finds the real pole in 6 of the 7 segments and says so.
+        let real = all.iter().find(|cl| (cl.centre - c(REAL_POLE, 0.0)).norm() < 0.01).unwrap();
+        assert_eq!(real.min_segments, Some(6));
         let six = ClusterSettings { min_segments: Some(6), ..ClusterSettings::default() };
         let some = propose_clusters(&roots, &six, DT).unwrap();
-        assert_eq!(some.len(), 2, "{some:?}");
-        assert!((some[0].centre - c(REAL_POLE, 0.0)).norm() < 0.01);
+        assert!(some.len() >= 2, "{some:?}");
+        assert!(some.iter().any(|cl| (cl.centre - c(REAL_POLE, 0.0)).norm() < 0.01 && cl.min_segments.is_none()));
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! Run: `cargo bench --bench live_path --no-default-features`.
 use std::path::Path;
 
-use jetid::core::pipeline::{OutputSettings, fit_segments, live_update, propose, segments_for};
+use jetid::core::pipeline::{OutputSettings, fit_segments_for, live_update, propose, segments_for};
 use jetid::core::run::Run;
 use jetid::core::segment::SegmentSettings;
 use jetid::core::tf::log_space;
@@ -29,7 +29,7 @@ fn segment_fits(bencher: divan::Bencher, output: &str) {
     let ident = sample("ident.csv");
     let settings = OutputSettings::for_output(output);
     let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap_or_default();
-    bencher.bench(|| fit_segments(&ident, output, &segments, settings.orders).map(|f| f.models.len()));
+    bencher.bench(|| fit_segments_for(&ident, output, &segments, &settings).map(|f| f.models.len()));
 }
 
 fn live(bencher: divan::Bencher, output: &str, refine: bool) {
@@ -38,8 +38,10 @@ fn live(bencher: divan::Bencher, output: &str, refine: bool) {
     let refs: Vec<&Run> = validation.iter().collect();
     let settings = OutputSettings { refine, ..OutputSettings::for_output(output) };
     let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap_or_default();
-    let Ok(fits) = fit_segments(&ident, output, &segments, settings.orders) else { panic!("fits failed") };
-    let Ok(mut clusters) = propose(&fits, &ident, &settings).map(|p| p.clusters) else { panic!("no clusters") };
+    let Ok(fits) = fit_segments_for(&ident, output, &segments, &settings) else { panic!("fits failed") };
+    let Ok(mut clusters) = propose(&fits, &ident, &settings).map(|p| p.clusters) else {
+        panic!("no clusters")
+    };
     let omegas = log_space(0.05, std::f64::consts::PI / ident.dt_secs, 512);
     let mut k = 0u32;
     bencher.bench_local(|| {

@@ -8,7 +8,7 @@
 use jetid::core::arx::ArxOrders;
 use jetid::core::diagnose::diagnose;
 use jetid::core::effects::{ExtendedModel, FitData, refit};
-use jetid::core::pipeline::{OutputSettings, SegmentFits, fit_segments, identify_output, segments_for};
+use jetid::core::pipeline::{OutputSettings, SegmentFits, fit_segments_for, identify_output, segments_for};
 use jetid::core::run::Run;
 use jetid::core::segment::SegmentSettings;
 use jetid::sim::{Effect, SensorNoise, SimConfig, SimOutput, TestKind, simulate};
@@ -98,7 +98,7 @@ fn current_model(
         return Ok((ExtendedModel::from_gray_box(&speed.model), speed.fits, speed_settings));
     }
     let settings = OutputSettings::for_output(output);
-    let fits = fit_segments(ident, output, &speed.fits.segments, settings.orders)?;
+    let fits = fit_segments_for(ident, output, &speed.fits.segments, &settings)?;
     let data = FitData::new(ident, &fits, &settings)?;
     let model = refit(&ExtendedModel::new(output, speed.model.wiener.clone()), &data)?;
     Ok((model, fits, settings))

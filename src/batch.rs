@@ -17,8 +17,7 @@ use crate::io::csv_run::load_run;
 use crate::io::model_file::{ModelFile, SignalInfo, write_model};
 use crate::io::project::{LoadSpec, Project, RunSource, bundled_project_path, load_project};
 use crate::io::report::{
-    ClusterSummary, DiagnosisEntry, HistoryStep, IdentSummary, OutputReport, Report, SegmentSummary,
-    write_report_json, write_report_md,
+    DiagnosisEntry, HistoryStep, IdentSummary, OutputReport, Report, write_report_json, write_report_md,
 };
 
 /// The loaded runs of a project, by role.
@@ -172,54 +171,6 @@ pub fn identify(project: &Project, runs: &Runs, output: &str) -> Result<Identifi
     )
 }
 
-fn summarise(identified: &Identified) -> IdentSummary {
-    let model = &identified.model;
-    let tf = &model.wiener.linear.tf;
-    let fits = &identified.fits;
-    IdentSummary {
-        arx_orders: fits.models.first().map_or([0; 3], |m| [m.orders.na, m.orders.nb, m.orders.nk]),
-        segments: fits
-            .segments
-            .iter()
-            .zip(&fits.models)
-            .map(|(s, m)| SegmentSummary {
-                label: s.label.clone(),
-                start: s.start,
-                step_at: s.step_at,
-                end: s.end,
-                rank: m.rank,
-                cond: m.cond,
-            })
-            .collect(),
-        clusters: identified
-            .evals
-            .iter()
-            .map(|e| ClusterSummary {
-                kind: format!("{:?}", e.cluster.kind),
-                centre: e.cluster.centre,
-                radius: e.cluster.radius,
-                found: e.segments_found,
-                needed: e.segments_needed,
-                valid: e.valid,
-                status: format!("{:?}", e.status),
-                centroid: e.centroid,
-                spread: e.spread,
-                natural_freq_rad_s: e.natural_freq_rad_s,
-                time_constant_secs: e.time_constant_secs,
-            })
-            .collect(),
-        poles: tf.poles().unwrap_or_default(),
-        zeros: tf.zeros().unwrap_or_default(),
-        dc_gain: tf.dc_gain().ok(),
-        offset: model.wiener.linear.offset,
-        static_map_beta: model.wiener.map.beta(),
-        static_order: model.wiener.map.order(),
-        static_order_loo: model.static_suggestion.as_ref().map(|s| s.loo_rmse.clone()).unwrap_or_default(),
-        refined: model.refinement.is_some(),
-        diagnostics: fits.diagnostics.clone(),
-    }
-}
-
 /// Runs the models are scored on: validation runs, then the chirp run.
 pub fn scored_runs(runs: &Runs) -> Vec<&Run> {
     runs.validate.iter().chain(&runs.chirp).collect()
@@ -311,7 +262,7 @@ pub fn run(args: &BatchArgs) -> Result<()> {
         let mut out = OutputReport {
             unit,
             models: BTreeMap::new(),
-            identified: summarise(&identified),
+            identified: IdentSummary::of(&identified),
             diagnosis: Vec::new(),
             effects_applied: Vec::new(),
             error_history: Vec::new(),
@@ -455,12 +406,14 @@ fn diagnose_output(
         .skipped
         .iter()
         .map(|s| format!("diagnosis of '{output}': {} not tried: {}", s.effect, s.reason))
+        .chain(report.structure_note.iter().map(|n| format!("diagnosis of '{output}': {n}")))
         .collect();
     let entries = report
         .entries
         .iter()
         .map(|d| DiagnosisEntry {
             effect: d.effect.clone(),
+            kind: d.kind.label().to_owned(),
             significant: d.significant,
             rmspe_before_pct: d.rmspe_before_pct,
             rmspe_after_pct: d.rmspe_after_pct,

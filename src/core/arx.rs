@@ -117,6 +117,67 @@ pub fn fit_arx(u: &[f64], y: &[f64], orders: ArxOrders, dt_secs: f64) -> Result<
     })
 }
 
+/// The input dead time of a set of step segments, as the ARX models see it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeadTime {
+    /// Input delay of the ARX models, samples (1: no dead time beyond the sampling).
+    pub nk: usize,
+    /// Mean squared one-step error of the short-B ARX models for each delay tried.
+    pub losses: Vec<(usize, f64)>,
+}
+
+impl DeadTime {
+    /// Dead time beyond one sample, samples (what the reduced model carries as z^(−d)).
+    pub fn extra_samples(&self) -> usize {
+        self.nk.saturating_sub(1)
+    }
+}
+
+/// B length of the ARX models that time the dead time: with only this many input coefficients the
+/// model cannot stand a long delay in leading near-zero coefficients (as a long B does), so its
+/// one-step error is least when the input is delayed by the real dead time.
+pub const DEAD_TIME_NB: usize = 2;
+
+/// Estimate the input dead time of step segments (each `(u, y)`, deviations): ARX models with `na`
+/// poles and a short B ([`DEAD_TIME_NB`]) are fitted for every delay 1..=`max_nk` on the same rows
+/// of every segment, and the shortest delay whose pooled mean squared one-step error is within two
+/// standard errors of the least one is taken. The standard error of a mean square over N samples of
+/// Gaussian error is √(2/N) of it; losses closer than that fit equally well, and a longer dead time
+/// is then not what the data show. `None` when no delay can be fitted.
+pub fn estimate_dead_time(
+    segments: &[(Vec<f64>, Vec<f64>)],
+    na: usize,
+    max_nk: usize,
+    dt_secs: f64,
+) -> Option<DeadTime> {
+    let first_row = |nk: usize| na.max(nk + DEAD_TIME_NB);
+    let common = first_row(max_nk.max(1));
+    let mut losses = Vec::new();
+    let mut rows_used = 0usize;
+    for nk in 1..=max_nk.max(1) {
+        let orders = ArxOrders { na, nb: DEAD_TIME_NB, nk };
+        let skip = common - first_row(nk);
+        let (mut sq, mut rows) = (0.0, 0usize);
+        for (u, y) in segments {
+            let (Some(u), Some(y)) = (u.get(skip..), y.get(skip..)) else { continue };
+            if let Ok(m) = fit_arx(u, y, orders, dt_secs) {
+                let r = m.n_samples - orders.first_row();
+                sq += m.residual_rms * m.residual_rms * r as f64;
+                rows += r;
+            }
+        }
+        if rows == 0 {
+            return None;
+        }
+        rows_used = rows;
+        losses.push((nk, sq / rows as f64));
+    }
+    let least = losses.iter().map(|(_, l)| *l).fold(f64::INFINITY, f64::min);
+    let tolerance = 2.0 * (2.0 / rows_used.max(1) as f64).sqrt();
+    let nk = losses.iter().find(|(_, l)| *l <= least * (1.0 + tolerance)).map(|(nk, _)| *nk)?;
+    Some(DeadTime { nk, losses })
+}
+
 impl ArxModel {
     /// Bode data of this segment model.
     pub fn bode_response(&self, omegas_rad_s: &[f64]) -> Vec<tf::BodePoint> {

@@ -408,7 +408,8 @@ pub(crate) fn evaluate_folded(
     settings: &ClusterSettings,
     dt_secs: f64,
 ) -> ClusterEval {
-    let cluster = Cluster::new(cluster.kind, cluster.centre, cluster.radius).with_min_segments(cluster.min_segments);
+    let cluster =
+        Cluster::new(cluster.kind, cluster.centre, cluster.radius).with_min_segments(cluster.min_segments);
     let real_axis = cluster.is_real_axis();
     let chosen: Vec<FoldedRoot> = folded
         .iter()

@@ -387,7 +387,9 @@ mod tests {
         let six = ClusterSettings { min_segments: Some(6), ..ClusterSettings::default() };
         let some = propose_clusters(&roots, &six, DT).unwrap();
         assert!(some.len() >= 2, "{some:?}");
-        assert!(some.iter().any(|cl| (cl.centre - c(REAL_POLE, 0.0)).norm() < 0.01 && cl.min_segments.is_none()));
+        assert!(
+            some.iter().any(|cl| (cl.centre - c(REAL_POLE, 0.0)).norm() < 0.01 && cl.min_segments.is_none())
+        );
     }
 
     #[test]

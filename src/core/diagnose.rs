@@ -19,13 +19,21 @@
 //! ranking itself stays on RMSPE. An effect is *significant* when `p < SIGNIFICANCE_LEVEL` (0.01)
 //! **and** it removes at least `MIN_RELATIVE_REDUCTION` (10 %) of the refitted model's validation
 //! RMSPE (and beats the current model): a real effect must be both beyond what noise gives and large
-//! enough to matter. The second condition also guards against the many-candidates problem (six
+//! enough to matter. The second condition also guards against the many-candidates problem (ten
 //! trials per diagnosis) and against the small structural gains any extra parameter buys on an
 //! engine that is not exactly a Wiener system.
+//!
+//! **Structure before physics.** Before any effect is credited, the model's own structure is
+//! refined the same way (one more real pole, pole pair or zero, one more static-map order; see
+//! [`StructuralChange`]), judged by the same rule. A physical effect is significant only when it
+//! also beats the best of these refinements by that rule (one-sided Diebold–Mariano on the loss
+//! differences against the refinement, p < 0.01, and at least 10 % of its RMSPE removed): a lag
+//! block or a dead time that only stands in for a missing pole pair is no evidence of physics. When
+//! a refinement is significant the report says what the model needs, in words.
 use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
 use crate::core::effects::{
-    AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, apply_effect, evidence, physics,
-    refit,
+    AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, StructuralChange, apply_effect,
+    evidence, physics, refine_structure, refit,
 };
 use crate::core::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
@@ -60,11 +68,46 @@ pub enum DiagnoseError {
     Effect(#[from] EffectError),
 }
 
-/// One effect's trial: the fitted extension, its validation score and the evidence.
+/// Whether a trial adds physics (an effect of the catalog) or refines the model's own structure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DiagnosisKind {
+    /// An effect of the catalog.
+    Physics,
+    /// One more real pole, pole pair or zero, or a higher static-map order (see
+    /// [`StructuralChange`]).
+    Structure,
+}
+
+impl DiagnosisKind {
+    /// "physics" or "structure".
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Physics => "physics",
+            Self::Structure => "structure",
+        }
+    }
+}
+
+/// The best structural refinement a physical effect was held against.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StructureRival {
+    /// Id of the structural refinement (see [`StructuralChange::id`]).
+    pub id: String,
+    /// Its validation error, %.
+    pub rmspe_pct: f64,
+    /// Diebold–Mariano test of "the effect is no better than this refinement".
+    pub test: DmTest,
+    /// Share of the refinement's validation RMSPE the effect removes.
+    pub reduction: f64,
+}
+
+/// One trial: the fitted extension, its validation score and the evidence.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diagnosis {
-    /// Catalog id of the effect.
+    /// Catalog id of the effect, or the id of the structural refinement.
     pub effect: String,
+    /// Physics or structure.
+    pub kind: DiagnosisKind,
     /// What the effect means physically.
     pub physics: String,
     /// Beyond what noise gives and large enough to matter (see the module documentation).
@@ -79,6 +122,8 @@ pub struct Diagnosis {
     pub evidence: String,
     /// The current model with the effect added and refitted on the identification data.
     pub model: ExtendedModel,
+    /// For a physical effect: the best structural refinement it had to beat as well.
+    pub rival: Option<StructureRival>,
 }
 
 impl Diagnosis {
@@ -110,6 +155,9 @@ pub struct DiagnosisReport {
     pub entries: Vec<Diagnosis>,
     /// The effects not tried, with the reason.
     pub skipped: Vec<SkippedEffect>,
+    /// When a structural refinement is significant: what the linear block or the map needs, in
+    /// words ("the linear block needs a pole pair near 2.31 rad/s (ζ 0.60)").
+    pub structure_note: Option<String>,
 }
 
 impl DiagnosisReport {
@@ -221,7 +269,7 @@ pub fn diagnose_with_progress(
     settings: &OutputSettings,
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<DiagnosisReport, DiagnoseError> {
-    let steps = EFFECT_IDS.len() as f64 + 1.0;
+    let steps = (EFFECT_IDS.len() + StructuralChange::ALL.len()) as f64 + 1.0;
     if !progress(0.0) {
         return Err(DiagnoseError::Cancelled);
     }
@@ -236,10 +284,59 @@ pub fn diagnose_with_progress(
     let rmspe_refit_pct = mean_rmspe(&yardstick);
     let traces = residual_traces(current, &data, validation)?;
     let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
+    let judge = Judge { yardstick: &yardstick, rmspe_before_pct, rmspe_refit_pct };
     let mut entries = Vec::new();
     let mut skipped = Vec::new();
-    for (done, id) in EFFECT_IDS.into_iter().enumerate() {
-        if !progress((done as f64 + 1.0) / steps) {
+    let mut done = 0.0;
+    // Structure first: what the model's own linear block and map can still do.
+    let mut rival: Option<(StructureRival, Vec<Vec<f64>>)> = None;
+    for change in StructuralChange::ALL {
+        done += 1.0;
+        if !progress(done / steps) {
+            return Err(DiagnoseError::Cancelled);
+        }
+        let trial = refine_structure(&reference, change, &data).map_err(DiagnoseError::from).and_then(
+            |(model, words)| {
+                let after = pct_errors(&model, validation)?;
+                Ok((model, words, after))
+            },
+        );
+        let (model, words, after) = match trial {
+            Ok(t) => t,
+            Err(e) => {
+                skipped.push(SkippedEffect { effect: change.id().to_owned(), reason: e.to_string() });
+                continue;
+            }
+        };
+        let (test, rmspe_after_pct, significant) = judge.verdict(&after);
+        let evidence = format!(
+            "{words}: with it the validation error goes {rmspe_before_pct:.3} → {rmspe_after_pct:.3} %"
+        );
+        if rival.as_ref().is_none_or(|(r, _)| rmspe_after_pct < r.rmspe_pct) {
+            let r = StructureRival {
+                id: change.id().to_owned(),
+                rmspe_pct: rmspe_after_pct,
+                test,
+                reduction: 0.0,
+            };
+            rival = Some((r, after.clone()));
+        }
+        entries.push(Diagnosis {
+            effect: change.id().to_owned(),
+            kind: DiagnosisKind::Structure,
+            physics: change.meaning().to_owned(),
+            significant,
+            rmspe_before_pct,
+            rmspe_after_pct,
+            test,
+            evidence,
+            model,
+            rival: None,
+        });
+    }
+    for id in EFFECT_IDS {
+        done += 1.0;
+        if !progress(done / steps) {
             return Err(DiagnoseError::Cancelled);
         }
         if let Some(reason) = not_applicable(id, current, &all_runs) {
@@ -257,29 +354,34 @@ pub fn diagnose_with_progress(
                 continue;
             }
         };
-        let d: Vec<Vec<f64>> = yardstick
-            .iter()
-            .zip(&after)
-            .map(|(b, a)| b.iter().zip(a).map(|(pb, pa)| pb.abs() - pa.abs()).collect())
-            .collect();
-        let test = diebold_mariano(&d);
-        let rmspe_after_pct = mean_rmspe(&after);
-        let reduction = 1.0 - rmspe_after_pct / rmspe_refit_pct.max(f64::MIN_POSITIVE);
-        let significant = test.p_value < SIGNIFICANCE_LEVEL
-            && reduction >= MIN_RELATIVE_REDUCTION
-            && rmspe_after_pct < rmspe_before_pct;
+        let (test, rmspe_after_pct, beats_current) = judge.verdict(&after);
+        // A physical effect must also beat the best structural refinement, by the same rule.
+        let held = rival.as_ref().map(|(r, errors)| {
+            let vs = diebold_mariano(&loss_differences(errors, &after));
+            let reduction = 1.0 - rmspe_after_pct / r.rmspe_pct.max(f64::MIN_POSITIVE);
+            StructureRival { test: vs, reduction, ..r.clone() }
+        });
+        let beats_structure = held
+            .as_ref()
+            .is_none_or(|r| r.test.p_value < SIGNIFICANCE_LEVEL && r.reduction >= MIN_RELATIVE_REDUCTION);
         entries.push(Diagnosis {
             effect: id.to_owned(),
+            kind: DiagnosisKind::Physics,
             physics: physics(id)?.to_owned(),
-            significant,
+            significant: beats_current && beats_structure,
             rmspe_before_pct,
             rmspe_after_pct,
             test,
             evidence: evidence(id, &traces)?,
             model,
+            rival: held,
         });
     }
     entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
+    let structure_note = entries
+        .iter()
+        .find(|d| d.kind == DiagnosisKind::Structure && d.significant)
+        .map(|d| format!("structure is the missing piece: {}", d.evidence));
     progress(1.0);
     Ok(DiagnosisReport {
         output: current.output.clone(),
@@ -287,7 +389,33 @@ pub fn diagnose_with_progress(
         rmspe_refit_pct,
         entries,
         skipped,
+        structure_note,
     })
+}
+
+/// Per-sample loss differences `|p_a| − |p_b|` of two models' percentage errors, run by run.
+fn loss_differences(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    a.iter().zip(b).map(|(ra, rb)| ra.iter().zip(rb).map(|(pa, pb)| pa.abs() - pb.abs()).collect()).collect()
+}
+
+/// The significance rule of the module documentation, against the refitted current model.
+struct Judge<'a> {
+    yardstick: &'a [Vec<f64>],
+    rmspe_before_pct: f64,
+    rmspe_refit_pct: f64,
+}
+
+impl Judge<'_> {
+    /// The test, the trial's validation RMSPE and whether it is significant.
+    fn verdict(&self, after: &[Vec<f64>]) -> (DmTest, f64, bool) {
+        let test = diebold_mariano(&loss_differences(self.yardstick, after));
+        let rmspe_after_pct = mean_rmspe(after);
+        let reduction = 1.0 - rmspe_after_pct / self.rmspe_refit_pct.max(f64::MIN_POSITIVE);
+        let significant = test.p_value < SIGNIFICANCE_LEVEL
+            && reduction >= MIN_RELATIVE_REDUCTION
+            && rmspe_after_pct < self.rmspe_before_pct;
+        (test, rmspe_after_pct, significant)
+    }
 }
 
 /// Add the effect `id` to `current` and refit on the identification data of `fits`.

@@ -3,17 +3,17 @@
 //! validation → Bode → metrics) can run on every drag.
 use serde::{Deserialize, Serialize};
 
-use crate::core::arx::{ArxModel, ArxOrders, fit_arx};
+use crate::core::arx::{self, ArxModel, ArxOrders, DeadTime, fit_arx};
 use crate::core::cluster::{
     self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots,
 };
 use crate::core::metrics::{Metrics, MetricsError, metrics};
 use crate::core::reduce::{self, IdentData, RootGroup};
 use crate::core::refine::Refinement;
-use crate::core::structure::{self, Proposal};
 use crate::core::run::Run;
 use crate::core::segment::{Segment, SegmentError, SegmentSettings, auto_segments, check_segments};
 use crate::core::static_map::{OrderSuggestion, StaticMap, StaticMapError};
+use crate::core::structure::{self, Proposal};
 use crate::core::tf::BodePoint;
 use crate::core::wiener::{LinearBlock, WienerError, WienerModel};
 
@@ -32,6 +32,12 @@ pub struct OutputSettings {
     pub refine: bool,
     /// Where the polish may move a root that came from a cluster.
     pub polish: PolishRegion,
+    /// Estimate the input delay of the segment ARX models from the step segments (see
+    /// [`arx::estimate_dead_time`]); when false, `orders.nk` is used.
+    pub estimate_dead_time: bool,
+    /// Input dead time of the reduced model built from given clusters, samples (the automatic
+    /// proposal chooses its own, see `core::structure`); `None` is none.
+    pub dead_time_samples: Option<usize>,
 }
 
 /// Where the polish may move a root that came from a cluster.
@@ -62,6 +68,8 @@ impl Default for OutputSettings {
             settle_secs: 6.0,
             refine: true,
             polish: PolishRegion::WithinClusters,
+            estimate_dead_time: true,
+            dead_time_samples: None,
         }
     }
 }
@@ -110,6 +118,16 @@ pub struct SegmentFits {
     pub roots: Vec<SegmentRoots>,
     /// Segments that could not be fitted, and fits with rank deficiency.
     pub diagnostics: Vec<String>,
+    /// The input dead time, when it was estimated from the segments.
+    #[serde(default)]
+    pub dead_time: Option<DeadTime>,
+}
+
+impl SegmentFits {
+    /// The segment models' input delay, samples (1: none beyond the sampling).
+    pub fn nk(&self) -> usize {
+        self.models.first().map_or(1, |m| m.orders.nk)
+    }
 }
 
 pub fn output_values<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], PipelineError> {
@@ -193,7 +211,44 @@ pub fn fit_segments(
         models,
         roots,
         diagnostics,
+        dead_time: None,
     })
+}
+
+/// Longest input dead time searched, s: fuel-line and valve delays of small engines are well under
+/// it, and the step segments (tens of seconds) show several times this much response after it.
+pub const MAX_DEAD_TIME_SECS: f64 = 2.5;
+
+/// [`fit_segments`] with the output's settings: the input dead time estimated from the segments
+/// first when the settings ask for it (see [`arx::estimate_dead_time`]), else `orders.nk`.
+pub fn fit_segments_for(
+    run: &Run,
+    output: &str,
+    segments: &[Segment],
+    settings: &OutputSettings,
+) -> Result<SegmentFits, PipelineError> {
+    if !settings.estimate_dead_time {
+        return fit_segments(run, output, segments, settings.orders);
+    }
+    let y = output_values(run, output)?;
+    let u = &run.input.values;
+    let deviations: Vec<(Vec<f64>, Vec<f64>)> = segments
+        .iter()
+        .filter(|seg| seg.start < seg.step_at && seg.end <= y.len() && seg.end <= u.len())
+        .map(|seg| {
+            let (u0, y0) = (mean(&u[seg.start..seg.step_at]), mean(&y[seg.start..seg.step_at]));
+            (
+                u[seg.start..seg.end].iter().map(|v| v - u0).collect(),
+                y[seg.start..seg.end].iter().map(|v| v - y0).collect(),
+            )
+        })
+        .collect();
+    let max_nk = ((MAX_DEAD_TIME_SECS / run.dt_secs).round() as usize).clamp(1, 50);
+    let dead_time = arx::estimate_dead_time(&deviations, settings.orders.na, max_nk, run.dt_secs);
+    let nk = dead_time.as_ref().map_or(settings.orders.nk, |d| d.nk);
+    let mut fits = fit_segments(run, output, segments, ArxOrders { nk, ..settings.orders })?;
+    fits.dead_time = dead_time;
+    Ok(fits)
 }
 
 /// The reduced model of one output: clusters, linear block, static map and how they were chosen.
@@ -269,7 +324,11 @@ fn model_of_groups(
 
 /// The automatic proposal for these fits: candidate clusters, which of them the model keeps and
 /// why, or the direct fit when none gives a model (see `core::structure`).
-pub fn propose(fits: &SegmentFits, ident: &Run, settings: &OutputSettings) -> Result<Proposal, PipelineError> {
+pub fn propose(
+    fits: &SegmentFits,
+    ident: &Run,
+    settings: &OutputSettings,
+) -> Result<Proposal, PipelineError> {
     structure::propose(fits, ident, settings)
 }
 
@@ -286,7 +345,11 @@ pub fn build_proposed(
             let model = model_of_groups(&data, &direct.groups, &[], Some(direct.note.clone()))?;
             Ok((model, Vec::new()))
         }
-        None => build_gray_box(fits, ident, &proposal.clusters, settings),
+        None => {
+            let settings =
+                OutputSettings { dead_time_samples: Some(proposal.dead_time.in_model()), ..settings.clone() };
+            build_gray_box(fits, ident, &proposal.clusters, &settings)
+        }
     }
 }
 
@@ -357,7 +420,7 @@ pub fn identify_output(
     segments: &[Segment],
     clusters: Option<&[Cluster]>,
 ) -> Result<Identified, PipelineError> {
-    let fits = fit_segments(ident, output, segments, settings.orders)?;
+    let fits = fit_segments_for(ident, output, segments, settings)?;
     match clusters {
         Some(c) => {
             let (model, evals) = build_gray_box(&fits, ident, c, settings)?;

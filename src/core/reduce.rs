@@ -179,7 +179,8 @@ fn real_half_width(r: Region) -> f64 {
 
 /// All roots of one kind in a list of groups.
 pub fn roots_of(groups: &[RootGroup], kind: RootKind) -> Vec<Complex64> {
-    let mut roots: Vec<Complex64> = groups.iter().filter(|g| g.kind == kind).flat_map(RootGroup::roots).collect();
+    let mut roots: Vec<Complex64> =
+        groups.iter().filter(|g| g.kind == kind).flat_map(RootGroup::roots).collect();
     roots.sort_by(|a, b| a.arg().total_cmp(&b.arg()).then(a.norm().total_cmp(&b.norm())));
     roots
 }
@@ -199,11 +200,17 @@ pub struct IdentData<'a> {
     pub settings: &'a OutputSettings,
     /// Samples of `u` and `y` left out of every fit (a cross-validation fold's held-out segment).
     pub held_out: Option<std::ops::Range<usize>>,
+    /// Input dead time of the reduced model, samples (besides what its roots give).
+    pub delay: usize,
 }
 
 impl<'a> IdentData<'a> {
     /// The range of `ident` from the first segment's start to the last segment's end.
-    pub fn new(fits: &'a SegmentFits, ident: &'a Run, settings: &'a OutputSettings) -> Result<Self, PipelineError> {
+    pub fn new(
+        fits: &'a SegmentFits,
+        ident: &'a Run,
+        settings: &'a OutputSettings,
+    ) -> Result<Self, PipelineError> {
         let y_all = output_values(ident, &fits.output)?;
         let start = fits.segments.first().map_or(0, |s| s.start);
         let end = fits.segments.last().map_or(0, |s| s.end).min(y_all.len()).min(ident.input.values.len());
@@ -211,13 +218,26 @@ impl<'a> IdentData<'a> {
             (Some(u), Some(y)) => (u, y),
             _ => (&ident.input.values[..0], &y_all[..0]),
         };
-        Ok(Self { fits, u, y, start, settings, held_out: None })
+        Ok(Self {
+            fits,
+            u,
+            y,
+            start,
+            settings,
+            held_out: None,
+            delay: settings.dead_time_samples.unwrap_or(0),
+        })
+    }
+
+    /// The same data for a reduced model with `delay` samples of input dead time.
+    pub fn with_delay(&self, delay: usize) -> Self {
+        Self { delay, held_out: self.held_out.clone(), ..*self }
     }
 
     /// The same data with the samples `start..end` of the identification run held out.
     pub fn holding_out(&self, start: usize, end: usize) -> Self {
         let (a, b) = (start.saturating_sub(self.start), end.saturating_sub(self.start).min(self.u.len()));
-        Self { held_out: Some(a..b.max(a)), ..*self }
+        Self { held_out: Some(a..b.max(a)), delay: self.delay, ..*self }
     }
 
     /// Standard deviation of the output's measurement noise, read from the data: the median absolute
@@ -277,7 +297,15 @@ pub fn assemble(
     static_order: Option<usize>,
 ) -> Result<Assembled, PipelineError> {
     let fits = data.fits;
-    let linear = fit_linear_block_excluding(poles, zeros, data.u, data.y, fits.dt_secs, data.held_out.clone())?;
+    let linear = fit_linear_block_excluding(
+        poles,
+        zeros,
+        data.delay,
+        data.u,
+        data.y,
+        fits.dt_secs,
+        data.held_out.clone(),
+    )?;
     let v = linear.simulate(data.u);
     let tail = ((data.settings.settle_secs / fits.dt_secs).round() as usize).max(3);
     let mut steady_points = Vec::with_capacity(fits.segments.len() + 1);
@@ -369,7 +397,9 @@ pub fn polish_with(
         let full = assemble_groups(data, &moved, Some(static_order)).ok()?.residual;
         Some(match &data.held_out {
             None => full,
-            Some(_) => full.into_iter().enumerate().filter(|(k, _)| data.fits_sample(*k)).map(|(_, r)| r).collect(),
+            Some(_) => {
+                full.into_iter().enumerate().filter(|(k, _)| data.fits_sample(*k)).map(|(_, r)| r).collect()
+            }
         })
     };
     let opts = LmOptions { max_iterations, cost_tol: POLISH_COST_TOL, ..LmOptions::default() };
@@ -385,11 +415,13 @@ pub fn polish_with(
         iterations,
     };
     match (moved, after, fitted) {
-        (Some(moved), Some(after), Some(fit)) if fitted_rms(data, &after.residual) < before_rms => Some(Polished {
-            refinement: refinement(fitted_rms(data, &after.residual), fit.iterations),
-            groups: moved,
-            assembled: after,
-        }),
+        (Some(moved), Some(after), Some(fit)) if fitted_rms(data, &after.residual) < before_rms => {
+            Some(Polished {
+                refinement: refinement(fitted_rms(data, &after.residual), fit.iterations),
+                groups: moved,
+                assembled: after,
+            })
+        }
         (_, _, fit) => Some(Polished {
             refinement: refinement(before_rms, fit.map_or(0, |f| f.iterations)),
             groups: groups.to_vec(),
@@ -445,6 +477,8 @@ mod tests {
         let dt = 0.1;
         let g = RootGroup::free_real(RootKind::Pole, (-dt / 2.0_f64).exp());
         let (omega, zeta, tau) = g.s_plane(dt);
-        assert!((tau.unwrap() - 2.0).abs() < 1e-12 && (omega - 0.5).abs() < 1e-12 && (zeta - 1.0).abs() < 1e-12);
+        assert!(
+            (tau.unwrap() - 2.0).abs() < 1e-12 && (omega - 0.5).abs() < 1e-12 && (zeta - 1.0).abs() < 1e-12
+        );
     }
 }

@@ -8,7 +8,6 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-
 /// Roots of one kind as refinement parameters: a real root is one parameter, a pair is (re, im).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RootParams {

@@ -35,9 +35,8 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::cluster::{
-    self, Cluster, ClusterEval, RootKind, SegmentRoots, natural_freq_and_damping,
-};
+use crate::core::arx;
+use crate::core::cluster::{self, Cluster, ClusterEval, RootKind, SegmentRoots, natural_freq_and_damping};
 use crate::core::pipeline::{OutputSettings, PipelineError, SegmentFits};
 use crate::core::reduce::{IdentData, Polished, RootGroup, assemble_groups, count_of, polish, rms};
 use crate::core::run::Run;
@@ -83,8 +82,51 @@ pub struct Proposal {
     pub clusters: Vec<Cluster>,
     /// Every candidate with its verdict.
     pub verdicts: Vec<CandidateVerdict>,
+    /// The input dead time candidate and its verdict.
+    pub dead_time: DeadTimeVerdict,
     /// Present when no cluster gave a model and the roots were fitted directly.
     pub direct: Option<DirectFit>,
+}
+
+/// The input dead time the reduced model may carry (a fuel line and valve delay), as a candidate of
+/// the proposal like a root: what the segment ARX models say, and what the cross-validation said.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeadTimeVerdict {
+    /// Dead time tried (or kept), samples.
+    pub samples: usize,
+    pub dt_secs: f64,
+    pub kept: bool,
+    /// The segment ARX models' input delay, samples (1: none beyond the sampling).
+    pub arx_nk: usize,
+    pub reason: String,
+}
+
+impl DeadTimeVerdict {
+    fn untried(data: &IdentData) -> Self {
+        Self {
+            samples: data.delay,
+            dt_secs: data.fits.dt_secs,
+            kept: data.delay > 0,
+            arx_nk: data.fits.nk(),
+            reason: "not tried".to_owned(),
+        }
+    }
+
+    /// The dead time the model carries, samples (0 when none was kept).
+    pub fn in_model(&self) -> usize {
+        if self.kept { self.samples } else { 0 }
+    }
+
+    /// The sentence the report and the app show.
+    pub fn sentence(&self) -> String {
+        format!(
+            "input dead time {:.2} s ({} samples; the segment ARX models fit best with the input {} samples late): {}",
+            self.samples as f64 * self.dt_secs,
+            self.samples,
+            self.arx_nk,
+            self.reason
+        )
+    }
 }
 
 /// Free roots fitted directly by output error, and why they were needed.
@@ -111,6 +153,7 @@ impl Proposal {
                 )
             })
             .collect();
+        out.push(self.dead_time.sentence());
         out.extend(self.direct.as_ref().map(|d| d.note.clone()));
         out
     }
@@ -142,9 +185,9 @@ struct Gain {
 }
 
 impl Gain {
-    /// From the per-segment held-out mean squared errors of the two structures; `noise_var` is the
-    /// measurement noise's variance, which no structure can remove.
-    fn of(without: &[f64], with: &[f64], noise_var: f64) -> Self {
+    /// From the per-segment held-out mean squared errors of the two structures; `noise` is the
+    /// measurement noise, which no structure can remove.
+    fn of(without: &[f64], with: &[f64], noise: Noise) -> Self {
         let d: Vec<f64> = without.iter().zip(with).map(|(a, b)| (a - b) / a.max(f64::MIN_POSITIVE)).collect();
         let n = d.len().max(1) as f64;
         let mean = d.iter().sum::<f64>() / n;
@@ -152,7 +195,7 @@ impl Gain {
         let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
         let (without, with) = (pooled(without), pooled(with));
         Self {
-            reduction: model_error_reduction(without, with, noise_var),
+            reduction: model_error_reduction(without, with, noise),
             without: without.sqrt(),
             with: with.sqrt(),
             wins: d.iter().filter(|x| **x > 0.0).count(),
@@ -186,15 +229,33 @@ fn fmt_error(x: f64) -> String {
     if x.abs() >= 100.0 { format!("{x:.0}") } else { format!("{x:.3}") }
 }
 
+/// The measurement noise's variance σ² as read from the data, and how uncertain that reading is.
+#[derive(Clone, Copy, Debug)]
+struct Noise {
+    var: f64,
+    /// Two standard errors of `var`: σ is read by a median (of absolute first differences), whose
+    /// asymptotic efficiency for Gaussian noise is about 37 %, so SE(σ̂) ≈ 1.16 σ/√N and
+    /// SE(σ̂²) ≈ 2.33 σ²/√N over N samples.
+    uncertainty: f64,
+}
+
+impl Noise {
+    fn of(data: &IdentData) -> Self {
+        let var = data.noise_sigma().powi(2);
+        Self { var, uncertainty: 2.0 * 2.33 * var / (data.y.len().max(1) as f64).sqrt() }
+    }
+}
+
 /// Share of the model error — the held-out mean squared error above the measurement noise's
 /// variance — that a trial removes, as a share of RMS: 1 − √((with − σ²)/(without − σ²)). Zero when
-/// the model is already at the noise level (nothing left to remove).
-fn model_error_reduction(without_mse: f64, with_mse: f64, noise_var: f64) -> f64 {
-    let excess = without_mse - noise_var;
-    if excess <= 0.0 {
+/// the model error is within the noise reading's own uncertainty: the model is at the noise level
+/// and nothing is left that a root could remove.
+fn model_error_reduction(without_mse: f64, with_mse: f64, noise: Noise) -> f64 {
+    let excess = without_mse - noise.var;
+    if excess <= noise.uncertainty {
         return 0.0;
     }
-    let left = (with_mse - noise_var).max(0.0);
+    let left = (with_mse - noise.var).max(0.0);
     1.0 - (left / excess).sqrt()
 }
 
@@ -242,18 +303,32 @@ pub fn fitted(data: &IdentData, groups: &[RootGroup]) -> Option<Polished> {
 
 /// The automatic proposal: candidate clusters, the forward selection and, when no cluster gives a
 /// model, the direct fit (see the module documentation).
-pub fn propose(fits: &SegmentFits, ident: &Run, settings: &OutputSettings) -> Result<Proposal, PipelineError> {
+pub fn propose(
+    fits: &SegmentFits,
+    ident: &Run,
+    settings: &OutputSettings,
+) -> Result<Proposal, PipelineError> {
     let candidates = cluster::propose_clusters(&fits.roots, &settings.cluster, fits.dt_secs)?;
     let evals = cluster::evaluate_clusters(&candidates, &fits.roots, &settings.cluster, fits.dt_secs)?;
     let data = IdentData::new(fits, ident, settings)?;
     let mut verdicts: Vec<CandidateVerdict> = evals.iter().map(|e| verdict(e, fits.roots.len())).collect();
-    let kept = select(&data, &evals, &mut verdicts);
-    if kept.is_empty() {
+    let selection = select(&data, &evals, &mut verdicts);
+    if selection.kept.is_empty() {
         let direct = direct_fit(&data, &fits.roots)?;
-        return Ok(Proposal { clusters: Vec::new(), verdicts, direct: Some(direct) });
+        return Ok(Proposal {
+            clusters: Vec::new(),
+            verdicts,
+            dead_time: selection.dead_time,
+            direct: Some(direct),
+        });
     }
-    let clusters = evals.iter().enumerate().filter(|(i, _)| kept.contains(i)).map(|(_, e)| e.cluster.clone()).collect();
-    Ok(Proposal { clusters, verdicts, direct: None })
+    let clusters = evals
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| selection.kept.contains(i))
+        .map(|(_, e)| e.cluster.clone())
+        .collect();
+    Ok(Proposal { clusters, verdicts, dead_time: selection.dead_time, direct: None })
 }
 
 fn verdict(e: &ClusterEval, segments_total: usize) -> CandidateVerdict {
@@ -271,19 +346,33 @@ fn verdict(e: &ClusterEval, segments_total: usize) -> CandidateVerdict {
     }
 }
 
-/// Forward selection over the valid candidates; returns the indices kept and fills the verdicts.
-fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerdict]) -> Vec<usize> {
-    let groups: Vec<Option<RootGroup>> =
-        evals
-            .iter()
-            .enumerate()
-            .map(|(i, e)| e.valid.then(|| RootGroup::of_cluster(i, e).within(data.settings.polish)))
-            .collect();
+/// What the forward selection kept: candidate indices and the dead time, with every verdict.
+struct Selection {
+    kept: Vec<usize>,
+    dead_time: DeadTimeVerdict,
+}
+
+/// A trial of the forward selection: a cluster candidate (its index) or the dead time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Trial {
+    Cluster(usize),
+    DeadTime,
+}
+
+/// Forward selection over the valid candidates and the dead time (see the module documentation);
+/// fills the clusters' verdicts.
+fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerdict]) -> Selection {
+    let groups: Vec<Option<RootGroup>> = evals
+        .iter()
+        .enumerate()
+        .map(|(i, e)| e.valid.then(|| RootGroup::of_cluster(i, e).within(data.settings.polish)))
+        .collect();
     for (v, g) in verdicts.iter_mut().zip(&groups) {
         if g.is_none() {
             v.reason = "not valid, so not tried".to_owned();
         }
     }
+    let mut dead_time = DeadTimeVerdict::untried(data);
     // The first pole: the candidate that alone fits best.
     let mut first: Option<(usize, Polished)> = None;
     for (i, g) in groups.iter().enumerate() {
@@ -298,20 +387,22 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             None => verdicts[i].reason = "gives no model on its own (its gain cannot be fitted)".to_owned(),
         }
     }
-    let Some((first_index, mut current)) = first else { return Vec::new() };
+    let Some((first_index, mut current)) = first else { return Selection { kept: Vec::new(), dead_time } };
     let mut kept = vec![first_index];
     verdicts[first_index].kept = true;
     verdicts[first_index].reason = format!(
         "kept: of the pole candidates it alone fits the identification run best (RMS error {})",
         fmt_error(current.assembled.rms())
     );
+    let mut delay = data.delay;
     let mut current_cv = cross_validate(data, &current.groups, current.assembled.wiener.map.order());
-    let noise_var = data.noise_sigma().powi(2);
+    let noise_var = Noise::of(data);
     loop {
+        let at = data.with_delay(delay);
         let (n_poles, n_zeros) =
             (count_of(&current.groups, RootKind::Pole), count_of(&current.groups, RootKind::Zero));
         // Every remaining candidate beside the kept roots, fitted on the whole identification range.
-        let mut trials: Vec<(usize, Polished)> = Vec::new();
+        let mut trials: Vec<(Trial, Polished, usize)> = Vec::new();
         for (i, g) in groups.iter().enumerate() {
             let Some(g) = g.as_ref().filter(|_| !kept.contains(&i)) else { continue };
             if g.kind == RootKind::Zero && n_zeros + g.count() > n_poles {
@@ -322,55 +413,190 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             }
             let mut trial_groups = current.groups.clone();
             trial_groups.push(g.clone());
-            match fitted(data, &trial_groups) {
-                Some(trial) => trials.push((i, trial)),
+            match fitted(&at, &trial_groups) {
+                Some(trial) => trials.push((Trial::Cluster(i), trial, delay)),
                 None => verdicts[i].reason = "gives no model beside the kept roots".to_owned(),
             }
         }
         trials.sort_by(|a, b| a.1.assembled.rms().total_cmp(&b.1.assembled.rms()));
         // The most promising few are cross-validated; the rest are judged on their fit alone.
-        let mut best: Option<(usize, Polished, Vec<f64>, Gain)> = None;
-        for (rank, (i, trial)) in trials.into_iter().enumerate() {
+        let mut best: Option<(Trial, Polished, usize, Vec<f64>, Gain)> = None;
+        for (rank, (which, trial, d)) in trials.into_iter().enumerate() {
             let without = current.assembled.rms();
             let in_sample = model_error_reduction(without.powi(2), trial.assembled.rms().powi(2), noise_var);
-            if std::env::var_os("JETID_TRACE").is_some() { eprintln!("FIT {:?} start {:?} r={:?} fit {:.1}%", trial.groups.last().map(|g| g.root), groups[i].as_ref().map(|g| g.root), groups[i].as_ref().and_then(|g| g.region.map(|r| r.radius)), 100.0*in_sample); }
-            let v = &mut verdicts[i];
-            v.rms_without = Some(without);
-            v.rms_with = Some(trial.assembled.rms());
-            let screened_out = rank >= CROSS_VALIDATED_TRIALS || in_sample < SCREEN_SHARE * MIN_RELATIVE_REDUCTION;
+            let screened_out =
+                rank >= CROSS_VALIDATED_TRIALS || in_sample < SCREEN_SHARE * MIN_RELATIVE_REDUCTION;
             let cv = if screened_out {
                 None
             } else {
-                cross_validate(data, &trial.groups, trial.assembled.wiener.map.order())
+                cross_validate(&data.with_delay(d), &trial.groups, trial.assembled.wiener.map.order())
             };
-            let (Some(cv), Some(cur)) = (cv, current_cv.as_deref()) else {
-                v.reason = format!(
+            let reason = match (cv.as_deref(), current_cv.as_deref()) {
+                (Some(cv), Some(cur)) => {
+                    let gain = Gain::of(cur, cv, noise_var);
+                    let words = format!("dropped: beside the kept roots, {}", gain.words());
+                    if best.as_ref().is_none_or(|b| gain.reduction > b.4.reduction) {
+                        best = Some((which, trial.clone(), d, cv.to_vec(), gain));
+                    }
+                    words
+                }
+                _ => format!(
                     "dropped: beside the kept roots it {} the identification error from {} to {} ({:+.0} %), \
                      too little of the error above noise to try it on held-out segments",
                     if in_sample > 0.0 { "lowers" } else { "raises" },
                     fmt_error(without),
                     fmt_error(trial.assembled.rms()),
                     -100.0 * in_sample
-                );
-                continue;
+                ),
             };
-            let gain = Gain::of(cur, &cv, noise_var);
-            if std::env::var_os("JETID_TRACE").is_some() { eprintln!("TRIAL {:?} r={:?} fit {:.1}% cv: {}", groups[i].as_ref().map(|g| g.root), groups[i].as_ref().and_then(|g| g.region.map(|r| r.radius)), 100.0*in_sample, gain.words()); }
-            v.standard_errors = Some(gain.standard_errors);
-            v.reason = format!("dropped: beside the kept roots, {}", gain.words());
-            if best.as_ref().is_none_or(|b| gain.reduction > b.3.reduction) {
-                best = Some((i, trial, cv, gain));
+            match which {
+                Trial::Cluster(i) => {
+                    let v = &mut verdicts[i];
+                    v.rms_without = Some(without);
+                    v.rms_with = Some(trial.assembled.rms());
+                    v.reason = reason;
+                }
+                Trial::DeadTime => {
+                    dead_time.samples = d;
+                    dead_time.reason = reason;
+                }
             }
         }
-        let Some((i, trial, cv, gain)) = best.filter(|b| b.3.passes()) else { break };
-        verdicts[i].kept = true;
-        verdicts[i].reason = format!("kept: {}", gain.words());
-        kept.push(i);
+        // The dead time competes with the roots for the part of the late start the kept roots do
+        // not explain; roots are preferred (they are the segment models' direct evidence), so the dead
+        // time is kept over the best root only when it also removes a tenth of the model error that
+        // root leaves.
+        let mut best = best.filter(|b| b.4.passes());
+        if !dead_time.kept {
+            let excess = data.fits.nk().saturating_sub(apparent_nk(&at, &current.assembled));
+            if excess < 1 && dead_time.reason == "not tried" {
+                dead_time.reason = format!(
+                    "not needed: the kept roots already explain the responses' late start (their own \
+                     simulation fits best {} samples late)",
+                    data.fits.nk()
+                );
+            }
+            let tried = (excess >= 1).then(|| with_dead_time(data, &current.groups, excess)).flatten();
+            if let (Some((trial, d)), Some(cur)) = (tried, current_cv.as_deref()) {
+                dead_time.samples = d;
+                match cross_validate(&data.with_delay(d), &trial.groups, trial.assembled.wiener.map.order()) {
+                    Some(cv) => {
+                        let gain = Gain::of(cur, &cv, noise_var);
+                        let beats_root = best.as_ref().is_none_or(|b| {
+                            let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
+                            model_error_reduction(pooled(&b.3), pooled(&cv), noise_var)
+                                >= MIN_RELATIVE_REDUCTION
+                        });
+                        dead_time.reason = if gain.passes() && !beats_root {
+                            format!(
+                                "dropped: {}, but a root of the segment models does as well (roots are preferred)",
+                                gain.words()
+                            )
+                        } else {
+                            format!("dropped: beside the kept roots, {}", gain.words())
+                        };
+                        if gain.passes() && beats_root {
+                            best = Some((Trial::DeadTime, trial, d, cv, gain));
+                        }
+                    }
+                    None => dead_time.reason = "gives no model on held-out segments".to_owned(),
+                }
+            }
+        }
+        let Some((which, trial, d, cv, gain)) = best else { break };
+        let words = format!("kept: {}", gain.words());
+        match which {
+            Trial::Cluster(i) => {
+                verdicts[i].kept = true;
+                verdicts[i].standard_errors = Some(gain.standard_errors);
+                verdicts[i].reason = words;
+                kept.push(i);
+            }
+            Trial::DeadTime => {
+                dead_time.kept = true;
+                dead_time.samples = d;
+                dead_time.reason = words;
+            }
+        }
+        delay = d;
         current = trial;
         current_cv = Some(cv);
     }
+    if dead_time.kept {
+        // Roots kept before the dead time may only have stood in for it: each is taken out again
+        // unless the model with the dead time still needs it by the same rule.
+        let at = data.with_delay(delay);
+        for i in kept.clone().into_iter().skip(1).rev() {
+            let Some(cur) = current_cv.clone() else { break };
+            let Some(index) = current.groups.iter().position(|g| g.cluster == Some(i)) else { continue };
+            let mut fewer = current.groups.clone();
+            fewer.remove(index);
+            let Some(without) = fitted(&at, &fewer) else { continue };
+            let Some(cv) = cross_validate(&at, &without.groups, without.assembled.wiener.map.order()) else {
+                continue;
+            };
+            let gain = Gain::of(&cv, &cur, noise_var);
+            if !gain.passes() {
+                verdicts[i].kept = false;
+                verdicts[i].reason = format!(
+                    "dropped once the dead time was kept: it only stood in for it; with the dead time, {}",
+                    gain.words()
+                );
+                kept.retain(|k| *k != i);
+                current = without;
+                current_cv = Some(cv);
+            }
+        }
+    }
     kept.sort_unstable();
-    kept
+    Selection { kept, dead_time }
+}
+
+/// The dead time candidate beside `groups`, around `excess` samples (the late start the roots do not
+/// explain): the whole delays next to it screened on the identification error with the roots as they
+/// are, the best few polished with the roots.
+fn with_dead_time(data: &IdentData, groups: &[RootGroup], excess: usize) -> Option<(Polished, usize)> {
+    let max = ((crate::core::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).max(1);
+    let mut screened: Vec<(f64, usize)> = (excess.saturating_sub(1).max(1)..=(excess + 1).min(max))
+        .filter_map(|d| {
+            assemble_groups(&data.with_delay(d), groups, data.settings.static_order)
+                .ok()
+                .map(|a| (a.rms(), d))
+        })
+        .collect();
+    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
+    screened
+        .into_iter()
+        .take(REFINED_GUESSES)
+        .filter_map(|(_, d)| fitted(&data.with_delay(d), groups).map(|p| (p, d)))
+        .min_by(|a, b| a.0.assembled.rms().total_cmp(&b.0.assembled.rms()))
+}
+
+/// The input delay at which short-B ARX models fit a model's own simulated step responses best (the
+/// same estimator that timed the data, [`arx::estimate_dead_time`]): how late the model itself starts.
+fn apparent_nk(data: &IdentData, assembled: &crate::core::reduce::Assembled) -> usize {
+    let simulated: Vec<f64> = data.y.iter().zip(&assembled.residual).map(|(y, r)| y + r).collect();
+    let deviations: Vec<(Vec<f64>, Vec<f64>)> = data
+        .fits
+        .segments
+        .iter()
+        .filter_map(|seg| {
+            let (a, s, b) = (
+                seg.start.checked_sub(data.start)?,
+                seg.step_at.checked_sub(data.start)?,
+                seg.end.checked_sub(data.start)?,
+            );
+            let (u, y) = (data.u.get(a..b)?, simulated.get(a..b)?);
+            let (u0, y0) = (mean(data.u.get(a..s)?), mean(simulated.get(a..s)?));
+            Some((u.iter().map(|x| x - u0).collect(), y.iter().map(|x| x - y0).collect()))
+        })
+        .collect();
+    let max = ((crate::core::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).clamp(1, 50);
+    arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
+}
+
+fn mean(x: &[f64]) -> f64 {
+    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }
 
 /// Time constants (s) a free real pole is started from: geometric from two samples to half the
@@ -448,7 +674,7 @@ fn direct_fit(data: &IdentData, roots: &[SegmentRoots]) -> Result<DirectFit, Pip
     while count_of(&current.groups, RootKind::Pole) < MAX_DIRECT_POLES {
         let Some(trial) = add_free_pole(data, &current.groups, MAX_DIRECT_POLES) else { break };
         let (Some(cur), Some(cv)) = (current_cv.as_deref(), cv_of(&trial)) else { break };
-        let gain = Gain::of(cur, &cv, data.noise_sigma().powi(2));
+        let gain = Gain::of(cur, &cv, Noise::of(data));
         if !gain.passes() {
             break;
         }

@@ -64,6 +64,20 @@ impl DiscreteTf {
         Self::new(num_zinv, den, dt_secs)
     }
 
+    /// The same transfer function `samples` samples later: z^(−samples) · G.
+    pub fn with_input_delay(&self, samples: usize) -> Self {
+        let mut num_zinv = vec![0.0; samples];
+        num_zinv.extend_from_slice(&self.num_zinv);
+        Self { num_zinv, ..self.clone() }
+    }
+
+    /// Input dead time in samples beyond what the roots give, for a transfer function built from
+    /// zeros and poles ([`DiscreteTf::from_zpk`], possibly [`DiscreteTf::with_input_delay`]): such a
+    /// numerator is exactly as long as the denominator, plus one coefficient per sample of delay.
+    pub fn input_delay(&self) -> usize {
+        self.num_zinv.len().saturating_sub(self.den_zinv.len())
+    }
+
     /// Poles (roots of the denominator read in powers of z), sorted.
     pub fn poles(&self) -> Result<Vec<Complex64>, poly::PolyError> {
         poly::roots(&self.den_zinv)

@@ -77,20 +77,22 @@ pub fn fit_linear_block(
     y: &[f64],
     dt_secs: f64,
 ) -> Result<LinearBlock, WienerError> {
-    fit_linear_block_excluding(poles, zeros, u, y, dt_secs, None)
+    fit_linear_block_excluding(poles, zeros, 0, u, y, dt_secs, None)
 }
 
-/// [`fit_linear_block`] with the samples of `held_out` left out of the least squares (the block is
-/// still simulated through them): what a cross-validation fold fits on.
+/// [`fit_linear_block`] with `delay` samples of input dead time and the samples of `held_out` left
+/// out of the least squares (the block is still simulated through them): what a cross-validation
+/// fold fits on.
 pub fn fit_linear_block_excluding(
     poles: &[Complex64],
     zeros: &[Complex64],
+    delay: usize,
     u: &[f64],
     y: &[f64],
     dt_secs: f64,
     held_out: Option<std::ops::Range<usize>>,
 ) -> Result<LinearBlock, WienerError> {
-    let shape = unit_gain_tf(poles, zeros, dt_secs)?;
+    let shape = unit_gain_tf(poles, zeros, dt_secs)?.with_input_delay(delay);
     if u.len() < 3 || u.len() != y.len() {
         return Err(WienerError::TooFewSamples { samples: u.len().min(y.len()) });
     }

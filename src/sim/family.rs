@@ -28,9 +28,9 @@ use std::ops::Range;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::SensorNoise;
 use super::designs::{IDLE_FUEL_GPH, MAX_FUEL_GPH, REF_FUEL_GPH};
 use super::engine::EngineParams;
-use super::SensorNoise;
 
 /// Stream of the random generator that draws engines (sensor noise uses stream 0, buffeting 1).
 const FAMILY_STREAM: u64 = 7;

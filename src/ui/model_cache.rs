@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use crate::core::cluster::{self, Cluster, ClusterEval};
 use crate::core::pipeline::{
-    self, GrayBoxModel, OutputSettings, RunPrediction, SegmentFits, fit_segments, live_update,
+    self, GrayBoxModel, OutputSettings, RunPrediction, SegmentFits, fit_segments_for, live_update,
     segments_for,
 };
 use crate::core::run::Run;
@@ -250,7 +250,7 @@ impl OutputCache {
         let refit = !same_run || key != self.fits_key || self.fits_key.is_none();
         if refit {
             self.fits = match segments {
-                Ok(segments) => fit_segments(run, &self.name, segments, setup.settings.orders)
+                Ok(segments) => fit_segments_for(run, &self.name, segments, &setup.settings)
                     .map(Arc::new)
                     .map_err(|e| e.to_string()),
                 Err(err) => Err(format!("no segments: {err}")),
@@ -272,7 +272,9 @@ impl OutputCache {
         }
         if refit || setup.settings.cluster != self.setup.settings.cluster {
             self.automatic = match &self.fits {
-                Ok(fits) => pipeline::propose(fits, run, &setup.settings).map(|p| p.clusters).map_err(|e| e.to_string()),
+                Ok(fits) => pipeline::propose(fits, run, &setup.settings)
+                    .map(|p| p.clusters)
+                    .map_err(|e| e.to_string()),
                 Err(err) => Err(err.clone()),
             };
         }

@@ -63,22 +63,7 @@ impl AsymmetricDynamics {
 
     /// Unit-gain response of the split block to `u`, from the steady state of `u[0]`.
     pub fn respond(&self, shape: &SplitShape, u: &[f64]) -> Vec<f64> {
-        let r = match &shape.rest {
-            Some(tf) => tf.simulate_from_steady(u),
-            None => u.to_vec(),
-        };
-        let rise = shape.pole;
-        let fall = shape.pole.powf(1.0 / self.decel_factor);
-        let mut x = r.first().copied().unwrap_or(0.0);
-        let mut prev = x;
-        r.iter()
-            .map(|rk| {
-                let a = if prev >= x { rise } else { fall };
-                x = a * x + (1.0 - a) * prev;
-                prev = *rk;
-                x
-            })
-            .collect()
+        super::scheduled_time_constant::respond(shape, u, Some(self), None)
     }
 
     pub(super) fn free_params(&self) -> Vec<f64> {
@@ -121,6 +106,39 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
     format!(
         "measured response lags the model by {lag_up:.2} s while it rises and {lag_down:.2} s while it \
          falls: {meaning}"
+    )
+}
+
+/// How far the measurement lags the model at the low and at the high end of the operating range:
+/// the residual regressed on the model's rate of change, split at the median output level.
+pub(super) fn level_evidence(traces: &[ResidualTrace]) -> String {
+    let mut levels: Vec<f64> = traces.iter().flat_map(|t| t.y_hat.iter().copied()).collect();
+    levels.sort_by(f64::total_cmp);
+    let Some(&middle) = levels.get(levels.len() / 2) else { return "no response to look at".to_owned() };
+    let (mut rows, mut e) = (Vec::new(), Vec::new());
+    for t in traces {
+        let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
+        for ((r, ek), level) in rate.iter().zip(t.residual()).zip(&t.y_hat) {
+            let low = *level < middle;
+            rows.push([if low { *r } else { 0.0 }, if low { 0.0 } else { *r }, 1.0]);
+            e.push(ek);
+        }
+    }
+    let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
+    let Ok(sol) = solve_lstsq(&a, &e) else { return "the response never moves".to_owned() };
+    let (lag_low, lag_high) = (-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c));
+    let meaning = if (lag_low - lag_high).abs() > 0.1 {
+        if lag_low > lag_high {
+            "the engine responds more slowly at the low end than the model"
+        } else {
+            "the engine responds more slowly at the high end than the model"
+        }
+    } else {
+        "the response is as fast at both ends"
+    };
+    format!(
+        "measured response lags the model by {lag_low:.2} s below the middle of the operating range and \
+         {lag_high:.2} s above it: {meaning}"
     )
 }
 

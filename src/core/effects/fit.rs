@@ -10,13 +10,13 @@
 //! in samples, the starting point of every other parameter — are screened on that same error first.
 use num_complex::Complex64;
 
-use super::model::{ExtendedModel, input_stage, linear_stage, output_stage};
+use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output_stage};
 use super::solver::{LmSettings, minimise};
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics, StaticMapOrder,
-    ThermalSoak, TransportDelay, check_id,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ScheduledTimeConstant, SensorDynamics,
+    StaticMapOrder, ThermalSoak, TransportDelay, check_id,
 };
 use crate::core::pipeline::{OutputSettings, SegmentFits};
 use crate::core::refine::RootParams;
@@ -25,7 +25,7 @@ use crate::core::tf::DiscreteTf;
 use crate::core::wiener::{LinearBlock, WienerModel, unit_gain_tf};
 
 /// Starting points refined by Levenberg–Marquardt after screening.
-const REFINED_STARTS: usize = 2;
+pub(super) const REFINED_STARTS: usize = 2;
 /// Screening rounds for blocks with a discrete choice.
 const MAX_SCREENING_ROUNDS: usize = 3;
 /// Poles must stay inside this radius.
@@ -45,6 +45,10 @@ pub struct FitData {
     pub y: Vec<f64>,
     /// Steady-state windows `(start, end)` in `run`.
     pub steady_windows: Vec<(usize, usize)>,
+    /// The longest segment's response after its step, s (the slowest dynamics the data can show).
+    pub longest_segment_secs: f64,
+    /// Highest static-map order the settings allow.
+    pub max_static_order: usize,
 }
 
 impl FitData {
@@ -74,7 +78,18 @@ impl FitData {
             steady_windows.push((a.saturating_sub(start), b.saturating_sub(start).min(y.len())));
         }
         steady_windows.retain(|(a, b)| a < b);
-        Ok(Self { output: fits.output.clone(), dt_secs: ident.dt_secs, run, y, steady_windows })
+        let longest_segment_secs =
+            fits.segments.iter().map(|s| s.end.saturating_sub(s.step_at)).max().unwrap_or(0) as f64
+                * ident.dt_secs;
+        Ok(Self {
+            output: fits.output.clone(),
+            dt_secs: ident.dt_secs,
+            run,
+            y,
+            steady_windows,
+            longest_segment_secs,
+            max_static_order: settings.max_static_order,
+        })
     }
 }
 
@@ -96,25 +111,33 @@ fn slice_run(run: &Run, start: usize, end: usize) -> Run {
 
 /// What the fit moves: roots, effects (with their current parameters) and the map order.
 #[derive(Clone, Debug, PartialEq)]
-struct Structure {
-    poles: Vec<Complex64>,
-    zeros: Vec<Complex64>,
-    effects: Vec<EffectBlock>,
-    map_order: usize,
+pub(super) struct Structure {
+    pub(super) poles: Vec<Complex64>,
+    pub(super) zeros: Vec<Complex64>,
+    pub(super) effects: Vec<EffectBlock>,
+    pub(super) map_order: usize,
+    /// Input dead time of the linear block beyond what its roots give, samples (kept as it is).
+    pub(super) delay: usize,
 }
 
 /// A fitted model with its residual on the identification data.
-struct Assembled {
-    model: ExtendedModel,
-    structure: Structure,
-    residual: Vec<f64>,
-    cost: f64,
+pub(super) struct Assembled {
+    pub(super) model: ExtendedModel,
+    pub(super) structure: Structure,
+    pub(super) residual: Vec<f64>,
+    pub(super) cost: f64,
 }
 
 impl Structure {
-    fn of(model: &ExtendedModel) -> Result<Self, EffectError> {
+    pub(super) fn of(model: &ExtendedModel) -> Result<Self, EffectError> {
         let (poles, zeros) = model.roots()?;
-        Ok(Self { poles, zeros, effects: model.effects.clone(), map_order: model.wiener.map.order().max(1) })
+        Ok(Self {
+            poles,
+            zeros,
+            effects: model.effects.clone(),
+            map_order: model.wiener.map.order().max(1),
+            delay: model.wiener.linear.tf.input_delay(),
+        })
     }
 
     fn with(&self, block: EffectBlock) -> Self {
@@ -127,11 +150,11 @@ impl Structure {
 }
 
 /// Gain, offset and static map for a structure; its simulation error on the data.
-fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
+pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
     let dt = data.dt_secs;
-    let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?;
+    let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
     let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
-    let split = match s.effects.iter().any(|e| matches!(e, EffectBlock::AsymmetricDynamics(_))) {
+    let split = match needs_split(&s.effects) {
         true => Some(AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?),
         false => None,
     };
@@ -204,7 +227,7 @@ fn fit_gain_offset(w: &[f64], y: &[f64]) -> Option<(f64, f64)> {
 }
 
 /// Move roots and continuous effect parameters together from `start`.
-fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
+pub(super) fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
     refine_with(start, data, &LmSettings::default())
 }
 
@@ -227,7 +250,7 @@ fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Opti
             effects.push(e.with_free_params(theta.get(at..at + len)?, data.dt_secs)?);
             at += len;
         }
-        Some(Structure { poles, zeros, effects, map_order: start.map_order })
+        Some(Structure { poles, zeros, effects, map_order: start.map_order, delay: start.delay })
     };
     let residual = |theta: &[f64]| unpack(theta).and_then(|s| assemble(&s, data)).map(|a| a.residual);
     let (theta, _) = minimise(&theta0, residual, settings)?;
@@ -291,10 +314,39 @@ pub fn apply_effect(model: &ExtendedModel, id: &str, data: &FitData) -> Result<E
     let search = Search { id, guesses: &guesses, data };
     let mut starts: Vec<Structure> = search.screen(&base, &[]);
     starts.extend(neutral_block(id, data).map(|b| base.with(b)));
+    if id == TransportDelay::ID {
+        // Poles may stand in for a dead time (an ARX model cannot hold a long delay, so the segment
+        // models put fast roots where it is): the delay is also tried with the fastest one or two pole
+        // groups taken out.
+        let mut reduced = base.clone();
+        for _ in 0..2 {
+            let Some(fewer) = without_fastest_pole_group(&reduced) else { break };
+            starts.extend(search.screen(&fewer, &[]));
+            reduced = fewer;
+        }
+    }
     let discrete = matches!(id, TransportDelay::ID | StaticMapOrder::ID);
     let rounds = if discrete { MAX_SCREENING_ROUNDS } else { 1 };
     let best = search.improve(None, starts, rounds);
     best.map(|b| b.model).ok_or_else(|| failed("no admissible starting point"))
+}
+
+/// The structure without its fastest pole group (a real pole or a pair, the one of smallest
+/// modulus; the slowest pole always stays), and without its fastest zero when that leaves more
+/// zeros than poles. `None` when only one pole group is left.
+fn without_fastest_pole_group(s: &Structure) -> Option<Structure> {
+    let groups: Vec<Complex64> = s.poles.iter().filter(|p| p.im >= 0.0).copied().collect();
+    if groups.len() < 2 {
+        return None;
+    }
+    let fastest = groups.iter().min_by(|a, b| a.norm().total_cmp(&b.norm())).copied()?;
+    let mut out = s.clone();
+    out.poles.retain(|p| (p - fastest).norm() > 1e-12 && (p - fastest.conj()).norm() > 1e-12);
+    while out.zeros.len() > out.poles.len() {
+        let (i, _) = out.zeros.iter().enumerate().min_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))?;
+        out.zeros.remove(i);
+    }
+    Some(out)
 }
 
 /// Screening and refinement of one block's starting points.
@@ -361,6 +413,9 @@ fn neutral_block(id: &str, data: &FitData) -> Option<EffectBlock> {
         AsymmetricDynamics::ID => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
         }
+        ScheduledTimeConstant::ID => Some(EffectBlock::ScheduledTimeConstant(
+            ScheduledTimeConstant::for_input(&data.run.input.values, 0.0),
+        )),
         SensorDynamics::ID => Some(EffectBlock::SensorDynamics(SensorDynamics {
             freq_hz: 0.9 * SensorDynamics::max_freq_hz(data.dt_secs),
             zeta: 0.7,
@@ -388,6 +443,13 @@ fn starting_points(
         AsymmetricDynamics::ID => {
             AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
             AsymmetricDynamics::guesses().into_iter().map(EffectBlock::AsymmetricDynamics).collect()
+        }
+        ScheduledTimeConstant::ID => {
+            AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
+            ScheduledTimeConstant::guesses(&data.run.input.values)
+                .into_iter()
+                .map(EffectBlock::ScheduledTimeConstant)
+                .collect()
         }
         SensorDynamics::ID => {
             let y_hat = current.simulate(&data.run)?;

@@ -5,7 +5,8 @@
 //! added in, they act in the order of the signal path:
 //!
 //! ```text
-//! u ─ambient: u/(δ√θ)─▶ transport delay z⁻ᵈ ─▶ G(z) (asymmetric: rise/fall time constants)
+//! u ─ambient: u/(δ√θ)─▶ transport delay z⁻ᵈ ─▶ G(z) (asymmetric: rise/fall time constants;
+//!   scheduled: the spool time constant follows the operating point)
 //!   ─▶ thermal soak branch ─▶ v ─▶ f(v) (+ static-map kink) ─ambient: ·√θ or ·δ─▶ sensor ─▶ y
 //! ```
 //!
@@ -21,10 +22,12 @@ mod ambient_correction;
 mod asymmetric_dynamics;
 mod fit;
 mod model;
+mod scheduled_time_constant;
 mod sensor_dynamics;
 mod solver;
 mod static_map_order;
 pub mod stats;
+mod structural;
 mod thermal_soak;
 mod transport_delay;
 
@@ -32,17 +35,31 @@ pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;
 pub use fit::{FitData, apply_effect, refit, refit_static};
 pub use model::ExtendedModel;
+pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
 pub use static_map_order::StaticMapOrder;
+pub use structural::{StructuralChange, refine_structure};
 pub use thermal_soak::ThermalSoak;
 pub use transport_delay::TransportDelay;
 
-/// Effect ids in the order of METHOD.md's catalog.
+/// Effect ids in the order of METHOD.md's catalog: the physics the diagnosis tries.
 pub const EFFECT_IDS: [&str; 6] = [
     TransportDelay::ID,
     ThermalSoak::ID,
     AmbientCorrection::ID,
     AsymmetricDynamics::ID,
+    SensorDynamics::ID,
+    StaticMapOrder::ID,
+];
+
+/// Every block a model can hold, in signal-path order: the catalog's effects and the scheduled
+/// time constant, which refines the model's own structure (the diagnosis tries it as structure).
+pub const BLOCK_IDS: [&str; 7] = [
+    TransportDelay::ID,
+    ThermalSoak::ID,
+    AmbientCorrection::ID,
+    AsymmetricDynamics::ID,
+    ScheduledTimeConstant::ID,
     SensorDynamics::ID,
     StaticMapOrder::ID,
 ];
@@ -129,16 +146,18 @@ pub enum EffectBlock {
     SensorDynamics(SensorDynamics),
     /// See [`StaticMapOrder`].
     StaticMapOrder(StaticMapOrder),
+    /// See [`ScheduledTimeConstant`].
+    ScheduledTimeConstant(ScheduledTimeConstant),
 }
 
-/// The catalog's known ids as owned strings (for error messages).
+/// The known block ids as owned strings (for error messages).
 fn known_ids() -> Vec<String> {
-    EFFECT_IDS.iter().map(|s| (*s).to_owned()).collect()
+    BLOCK_IDS.iter().map(|s| (*s).to_owned()).collect()
 }
 
-/// Check that `id` is in the catalog.
+/// Check that `id` names a block (an effect of the catalog or the scheduled time constant).
 pub fn check_id(id: &str) -> Result<&'static str, EffectError> {
-    EFFECT_IDS
+    BLOCK_IDS
         .iter()
         .find(|known| **known == id)
         .copied()
@@ -153,6 +172,7 @@ pub fn param_specs(id: &str) -> Result<&'static [ParamSpec], EffectError> {
         AmbientCorrection::ID => AmbientCorrection::PARAMS,
         AsymmetricDynamics::ID => AsymmetricDynamics::PARAMS,
         SensorDynamics::ID => SensorDynamics::PARAMS,
+        ScheduledTimeConstant::ID => ScheduledTimeConstant::PARAMS,
         _ => StaticMapOrder::PARAMS,
     })
 }
@@ -173,6 +193,10 @@ pub fn physics(id: &str) -> Result<&'static str, EffectError> {
             "acceleration and deceleration differ: the spool time constant is scaled while slowing down"
         }
         SensorDynamics::ID => "load cell or stand resonance and sensor lag: a second-order sensor block",
+        ScheduledTimeConstant::ID => {
+            "the spool time constant changes with the operating point (slower at low speed): the \
+             slowest pole is scheduled on the operating point"
+        }
         _ => "the static map is too simple: a kink (bleed valve, limiter) is added to f(v)",
     })
 }
@@ -186,6 +210,7 @@ pub fn evidence(id: &str, traces: &[stats::ResidualTrace]) -> Result<String, Eff
         AmbientCorrection::ID => ambient_correction::evidence(traces),
         AsymmetricDynamics::ID => asymmetric_dynamics::evidence(traces),
         SensorDynamics::ID => sensor_dynamics::evidence(traces),
+        ScheduledTimeConstant::ID => asymmetric_dynamics::level_evidence(traces),
         _ => static_map_order::evidence(traces),
     })
 }
@@ -234,12 +259,13 @@ impl EffectBlock {
             Self::AsymmetricDynamics(_) => AsymmetricDynamics::ID,
             Self::SensorDynamics(_) => SensorDynamics::ID,
             Self::StaticMapOrder(_) => StaticMapOrder::ID,
+            Self::ScheduledTimeConstant(_) => ScheduledTimeConstant::ID,
         }
     }
 
-    /// Position in the signal path (and in the catalog).
+    /// Position in the signal path.
     pub fn rank(&self) -> usize {
-        EFFECT_IDS.iter().position(|id| *id == self.id()).unwrap_or(EFFECT_IDS.len())
+        BLOCK_IDS.iter().position(|id| *id == self.id()).unwrap_or(BLOCK_IDS.len())
     }
 
     /// Parameter values in the order of [`param_specs`].
@@ -251,6 +277,7 @@ impl EffectBlock {
             Self::AsymmetricDynamics(b) => vec![b.decel_factor],
             Self::SensorDynamics(b) => vec![b.freq_hz, b.zeta, b.lag_s],
             Self::StaticMapOrder(b) => vec![b.knot_v, b.slope_change],
+            Self::ScheduledTimeConstant(b) => vec![b.log_ratio, b.state_log_ratio, b.ref_input, b.input_span],
         }
     }
 
@@ -275,6 +302,12 @@ impl EffectBlock {
             SensorDynamics::ID => {
                 Self::SensorDynamics(SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2) })
             }
+            ScheduledTimeConstant::ID => Self::ScheduledTimeConstant(ScheduledTimeConstant {
+                log_ratio: at(0),
+                state_log_ratio: at(1),
+                ref_input: at(2),
+                input_span: at(3),
+            }),
             _ => Self::StaticMapOrder(StaticMapOrder { knot_v: at(0), slope_change: at(1) }),
         })
     }
@@ -305,6 +338,7 @@ impl EffectBlock {
             Self::AsymmetricDynamics(b) => b.free_params(),
             Self::SensorDynamics(b) => b.free_params(),
             Self::StaticMapOrder(b) => b.free_params(),
+            Self::ScheduledTimeConstant(b) => b.free_params(),
             Self::AmbientCorrection(_) => Vec::new(),
         }
     }
@@ -317,6 +351,7 @@ impl EffectBlock {
             Self::AsymmetricDynamics(b) => Self::AsymmetricDynamics(b.with_free_params(theta)?),
             Self::SensorDynamics(b) => Self::SensorDynamics(b.with_free_params(theta, dt_secs)?),
             Self::StaticMapOrder(b) => Self::StaticMapOrder(b.with_free_params(theta)?),
+            Self::ScheduledTimeConstant(b) => Self::ScheduledTimeConstant(b.with_free_params(theta)?),
             Self::AmbientCorrection(_) => self.clone(),
         })
     }

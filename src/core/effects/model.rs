@@ -4,7 +4,8 @@ use num_complex::Complex64;
 use super::ambient_correction::Conditions;
 use super::asymmetric_dynamics::SplitShape;
 use super::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectRecord, SensorDynamics, check_id,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectRecord, SensorDynamics,
+    TransportDelay, check_id,
 };
 use crate::core::pipeline::GrayBoxModel;
 use crate::core::run::Run;
@@ -118,12 +119,11 @@ impl ExtendedModel {
     /// Simulate and also return the linear block's output `v` (what the static map reads).
     pub fn simulate_with_v(&self, run: &Run) -> Result<(Vec<f64>, Vec<f64>), EffectError> {
         let (u, conditions) = input_stage(&self.effects, run)?;
-        let split = match self.effect(AsymmetricDynamics::ID) {
-            Some(_) => {
-                let (poles, zeros) = self.roots()?;
-                Some(AsymmetricDynamics::split(&poles, &zeros, run.dt_secs)?)
-            }
-            None => None,
+        let split = if needs_split(&self.effects) {
+            let (poles, zeros) = self.roots()?;
+            Some(AsymmetricDynamics::split(&poles, &zeros, run.dt_secs)?)
+        } else {
+            None
         };
         let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, run.dt_secs)?;
         let y = output_stage(&self.effects, &self.wiener.map, &v, conditions.as_ref(), run.dt_secs);
@@ -153,8 +153,17 @@ pub(super) fn input_stage(
     Ok((u, conditions))
 }
 
-/// `v`: the linear block (with rise/fall time constants when asymmetric) and the soak branch.
-/// `split` must be given when the asymmetric block is present.
+/// Whether the blocks act on the spool pole split off the linear block (asymmetric dynamics or a
+/// scheduled time constant).
+pub(super) fn needs_split(effects: &[EffectBlock]) -> bool {
+    effects
+        .iter()
+        .any(|e| matches!(e, EffectBlock::AsymmetricDynamics(_) | EffectBlock::ScheduledTimeConstant(_)))
+}
+
+/// `v`: the linear block (with rise/fall time constants when asymmetric, the spool time constant
+/// following the operating point when scheduled) and the soak branch. `split` must be given when
+/// [`needs_split`].
 pub(super) fn linear_stage(
     effects: &[EffectBlock],
     linear: &LinearBlock,
@@ -166,13 +175,23 @@ pub(super) fn linear_stage(
         EffectBlock::AsymmetricDynamics(a) => Some(a),
         _ => None,
     });
-    let mut v = match (asymmetric, split) {
-        (Some(a), Some(split)) => {
+    let scheduled = effects.iter().find_map(|e| match e {
+        EffectBlock::ScheduledTimeConstant(s) => Some(s),
+        _ => None,
+    });
+    let mut v = match split.filter(|_| asymmetric.is_some() || scheduled.is_some()) {
+        Some(split) => {
             let gain =
                 linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
-            a.respond(split, u).iter().map(|w| gain * w).collect()
+            // The split is built from the roots alone; the block's dead time delays its input.
+            let delayed = linear.tf.input_delay();
+            let u = TransportDelay { delay_samples: delayed as f64 }.delay(u);
+            super::scheduled_time_constant::respond(split, &u, asymmetric, scheduled)
+                .iter()
+                .map(|w| gain * w)
+                .collect()
         }
-        _ => linear.tf.simulate_from_steady(u),
+        None => linear.tf.simulate_from_steady(u),
     };
     for effect in effects {
         if let EffectBlock::ThermalSoak(soak) = effect {

@@ -4,11 +4,14 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::metrics::Metrics;
 use crate::io::atomic::write_atomic;
+
+mod ident;
+use ident::ident_section;
+pub use ident::{CandidateSummary, ClusterSummary, IdentSummary, RootSummary, SegmentSummary};
 
 pub const REPORT_FORMAT_VERSION: u32 = 1;
 
@@ -23,51 +26,12 @@ pub const PAPER_TABLE1: [(&str, &str, f64, f64, f64, f64); 6] = [
 ];
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SegmentSummary {
-    pub label: String,
-    pub start: usize,
-    pub step_at: usize,
-    pub end: usize,
-    pub rank: usize,
-    pub cond: f64,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ClusterSummary {
-    pub kind: String,
-    pub centre: Complex64,
-    pub radius: f64,
-    pub found: usize,
-    pub needed: usize,
-    pub valid: bool,
-    pub status: String,
-    pub centroid: Complex64,
-    pub spread: f64,
-    pub natural_freq_rad_s: f64,
-    pub time_constant_secs: Option<f64>,
-}
-
-/// What was identified for one output.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct IdentSummary {
-    pub arx_orders: [usize; 3],
-    pub segments: Vec<SegmentSummary>,
-    pub clusters: Vec<ClusterSummary>,
-    pub poles: Vec<Complex64>,
-    pub zeros: Vec<Complex64>,
-    pub dc_gain: Option<f64>,
-    pub offset: f64,
-    pub static_map_beta: Vec<f64>,
-    pub static_order: usize,
-    /// (order, leave-one-out RMSE) when the order was chosen from the data.
-    pub static_order_loo: Vec<(usize, f64)>,
-    pub refined: bool,
-    pub diagnostics: Vec<String>,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosisEntry {
+    /// Effect id of the catalog, or the id of a structural refinement.
     pub effect: String,
+    /// "physics" (an effect of the catalog) or "structure" (a refinement of the model itself).
+    #[serde(default = "physics_kind")]
+    pub kind: String,
     pub significant: bool,
     pub rmspe_before_pct: f64,
     pub rmspe_after_pct: f64,
@@ -75,6 +39,10 @@ pub struct DiagnosisEntry {
     /// Diebold–Mariano p-value of "the effect does not reduce the validation error".
     #[serde(default)]
     pub p_value: Option<f64>,
+}
+
+fn physics_kind() -> String {
+    "physics".to_owned()
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -151,14 +119,6 @@ pub fn write_report_json(path: &Path, report: &Report) -> Result<()> {
     write_atomic(path, text.as_bytes())
 }
 
-fn fmt_complex(z: &Complex64) -> String {
-    if z.im.abs() < 1e-12 {
-        format!("{:.4}", z.re)
-    } else {
-        format!("{:.4} {} {:.4}j", z.re, if z.im < 0.0 { "−" } else { "+" }, z.im.abs())
-    }
-}
-
 fn model_title(name: &str) -> &str {
     match name {
         "gray_box" => "gray-box (Wiener)",
@@ -186,55 +146,6 @@ fn metrics_table(out: &mut String, report: &OutputReport) {
                 m.max_abs_error
             );
         }
-    }
-}
-
-fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
-    let [na, nb, nk] = id.arx_orders;
-    let _ = writeln!(
-        out,
-        "Segment ARX models: {na} poles, {nb} zeros, delay {nk}; {} segments.\n",
-        id.segments.len()
-    );
-    let _ = writeln!(out, "| cluster | centre | radius | members | valid | centroid | ω (rad/s) | τ (s) |");
-    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
-    for (i, c) in id.clusters.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "| {} {} | {} | {:.4} | {}/{} | {} | {} | {:.3} | {} |",
-            c.kind,
-            i + 1,
-            fmt_complex(&c.centre),
-            c.radius,
-            c.found,
-            c.needed,
-            if c.valid { "yes".to_owned() } else { c.status.clone() },
-            fmt_complex(&c.centroid),
-            c.natural_freq_rad_s,
-            c.time_constant_secs.map_or("–".to_owned(), |t| format!("{t:.3}"))
-        );
-    }
-    let poles: Vec<String> = id.poles.iter().map(fmt_complex).collect();
-    let zeros: Vec<String> = id.zeros.iter().map(fmt_complex).collect();
-    let _ = writeln!(
-        out,
-        "\nReduced model{}: poles {}; zeros {}; steady-state gain {} {unit} per input unit, offset {:.4}.",
-        if id.refined { " (centroids polished by simulation error)" } else { "" },
-        poles.join(", "),
-        if zeros.is_empty() { "none".to_owned() } else { zeros.join(", ") },
-        id.dc_gain.map_or("–".to_owned(), |g| format!("{g:.5}")),
-        id.offset
-    );
-    let beta: Vec<String> =
-        id.static_map_beta.iter().enumerate().map(|(i, b)| format!("{b:.6e}·v^{i}")).collect();
-    let _ = writeln!(out, "Static map (order {}): f(v) = {}.", id.static_order, beta.join(" + "));
-    if !id.static_order_loo.is_empty() {
-        let loo: Vec<String> =
-            id.static_order_loo.iter().map(|(o, e)| format!("order {o}: {e:.4}")).collect();
-        let _ = writeln!(out, "Leave-one-out RMSE on the steady points: {}.", loo.join(", "));
-    }
-    for d in &id.diagnostics {
-        let _ = writeln!(out, "- note: {d}");
     }
 }
 
@@ -448,13 +359,15 @@ pub fn render_markdown(report: &Report) -> String {
         if !o.diagnosis.is_empty() {
             let _ = writeln!(
                 out,
-                "\n### Diagnosis\n\n| effect | significant | RMSPE before % | after % | evidence |\n|---|---|---|---|---|"
+                "\n### Diagnosis\n\nStructural refinements of the model are tried before physics: an effect counts \
+                 only when it beats the current model and the best refinement.\n\n\
+                 | effect | kind | significant | RMSPE before % | after % | evidence |\n|---|---|---|---|---|---|"
             );
             for d in &o.diagnosis {
                 let _ = writeln!(
                     out,
-                    "| {} | {} | {:.4} | {:.4} | {} |",
-                    d.effect, d.significant, d.rmspe_before_pct, d.rmspe_after_pct, d.evidence
+                    "| {} | {} | {} | {:.4} | {:.4} | {} |",
+                    d.effect, d.kind, d.significant, d.rmspe_before_pct, d.rmspe_after_pct, d.evidence
                 );
             }
         }

@@ -269,10 +269,18 @@ pub fn run(args: &BatchArgs) -> Result<()> {
             error_boxes: BTreeMap::new(),
             cutoff_rad_s: BTreeMap::new(),
             residuals: Vec::new(),
+            initial_state: String::new(),
+            initial_state_meaning: String::new(),
         };
         let mut models = timings.time(&format!("baselines_{output}"), || {
             crate::batch_compare::fit_baselines(&identified, &runs.ident, output, &mut report.diagnostics)
         });
+        models.initial_state = project.settings_for(output).initial_state;
+        out.initial_state = serde_json::to_value(models.initial_state)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default();
+        out.initial_state_meaning = models.initial_state.describe().to_owned();
         if !extended.effects.is_empty() {
             models.extended = Some(extended.clone());
         }
@@ -377,7 +385,7 @@ fn apply_effects(
         if validation.is_empty() {
             return;
         }
-        match diagnose::validation_rmspe(model, &validation) {
+        match diagnose::validation_rmspe(model, &validation, settings.initial_state) {
             Ok(rmspe_pct) => history.push(HistoryStep { step, rmspe_pct }),
             Err(e) => notes.push(format!("'{output}' {step}: {e}")),
         }

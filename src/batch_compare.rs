@@ -9,6 +9,8 @@ use serde::{Deserialize, Serialize};
 use crate::core::baselines::BaselineError;
 use crate::core::baselines::hammerstein_wiener::{HwModel, HwOptions, HwOrders, fit_hammerstein_wiener};
 use crate::core::baselines::nnarx::{NnarxModel, NnarxOptions, fit_nnarx};
+use crate::core::effects::ExtendedModel;
+use crate::core::initial_state::{InitialState, fit_free_response};
 use crate::core::metrics::{BoxStats, percentage_error_box};
 use crate::core::monte_carlo::{MonteCarloConfig, MonteCarloResult, monte_carlo};
 use crate::core::noise_fit::{Distribution, NoiseFitReport, fit_all};
@@ -26,6 +28,10 @@ pub const NNARX: &str = "nnarx";
 
 /// Every model of one output that can be simulated from an input sequence.
 pub struct OutputModels {
+    /// The output modelled.
+    pub output: String,
+    /// Where every model's simulation of a scored run starts.
+    pub initial_state: InitialState,
     pub wiener: WienerModel,
     /// The gray-box model with the applied effects, when there are any: it is what `gray_box` means
     /// on a run (effects may need the run's auxiliary channels); input-only studies (chirp frequency
@@ -48,21 +54,44 @@ impl OutputModels {
         out
     }
 
-    /// Every model on a run: like [`Self::simulate_all`] on its input, with the gray-box model's
-    /// effects applied (a gray-box simulation that fails, e.g. for a missing channel, is left out).
+    /// The gray-box model as the runs are scored: with its effects, when it has any.
+    pub fn gray_box_model(&self) -> ExtendedModel {
+        self.extended.clone().unwrap_or_else(|| ExtendedModel::new(&self.output, self.wiener.clone()))
+    }
+
+    /// Every model on a scored run, each started as [`Self::initial_state`] says (from the state that
+    /// best fits the first seconds of the measured output, when the run has it): the gray-box model
+    /// with its effects (left out when it fails, e.g. for a missing channel), its linear block, and
+    /// the baselines.
     pub fn simulate_run(&self, run: &Run) -> Vec<(&'static str, Vec<f64>)> {
-        let mut all = self.simulate_all(&run.input.values);
-        if let Some(ext) = &self.extended {
-            match ext.simulate(run) {
-                Ok(y) => {
-                    if let Some(g) = all.iter_mut().find(|(n, _)| *n == GRAY_BOX) {
-                        g.1 = y;
-                    }
-                }
-                Err(_) => all.retain(|(n, _)| *n != GRAY_BOX),
-            }
+        let u = &run.input.values;
+        let measured = run.output(&self.output).map(|c| c.values.as_slice());
+        let estimated = measured.filter(|_| self.initial_state == InitialState::Estimated);
+        let mut out = Vec::with_capacity(4);
+        if let Ok(y) = self.gray_box_model().simulate_scored(run, self.initial_state) {
+            out.push((GRAY_BOX, y));
         }
-        all
+        let linear = self.wiener.linear.simulate(u);
+        out.push((
+            LINEAR,
+            match estimated {
+                Some(y) => {
+                    let poles = self.wiener.linear.tf.poles().unwrap_or_default();
+                    fit_free_response(&poles, &linear, y, <[f64]>::to_vec)
+                }
+                None => linear,
+            },
+        ));
+        if let Some(hw) = &self.hw {
+            out.push((
+                HAMMERSTEIN_WIENER,
+                estimated.map_or_else(|| hw.simulate(u), |y| hw.simulate_estimated(u, y)),
+            ));
+        }
+        if let Some(nn) = &self.nnarx {
+            out.push((NNARX, estimated.map_or_else(|| nn.simulate(u), |y| nn.simulate_from_measured(u, y))));
+        }
+        out
     }
 
     /// One model's simulation.
@@ -87,7 +116,14 @@ pub fn fit_baselines(
 ) -> OutputModels {
     let wiener = &identified.model.wiener;
     fit_baselines_with_progress(&identified.fits, wiener, ident, output, notes, &mut |_| true).unwrap_or_else(
-        |Cancelled| OutputModels { wiener: wiener.clone(), extended: None, hw: None, nnarx: None },
+        |Cancelled| OutputModels {
+            output: output.to_owned(),
+            initial_state: InitialState::default(),
+            wiener: wiener.clone(),
+            extended: None,
+            hw: None,
+            nnarx: None,
+        },
     )
 }
 
@@ -141,7 +177,14 @@ pub fn fit_baselines_with_progress(
             None
         }
     };
-    Ok(OutputModels { wiener: wiener.clone(), extended: None, hw, nnarx })
+    Ok(OutputModels {
+        output: output.to_owned(),
+        initial_state: InitialState::default(),
+        wiener: wiener.clone(),
+        extended: None,
+        hw,
+        nnarx,
+    })
 }
 
 /// `progress` for a part of the work that spans `lo..=hi` of the whole.

@@ -90,11 +90,8 @@ pub fn output_figures(
 
     for run in validation {
         let Some(y) = run.output(output) else { continue };
-        let traces: Vec<(String, Vec<f64>)> = models
-            .simulate_all(&run.input.values)
-            .into_iter()
-            .map(|(n, y)| (model_label(n).to_owned(), y))
-            .collect();
+        let traces: Vec<(String, Vec<f64>)> =
+            models.simulate_run(run).into_iter().map(|(n, y)| (model_label(n).to_owned(), y)).collect();
         let name = format!("{output}_traces_{}.png", run.name);
         keep(
             name.clone(),

@@ -42,10 +42,8 @@ pub fn residual_reports(
     let mut figures = Vec::new();
     for run in runs.iter().filter(|r| r.output(output).is_some()) {
         // The gray-box model as `OutputModels::simulate_run` has it, without simulating the others.
-        let y_hat = match &models.extended {
-            Some(model) => model.simulate(run).map_err(|e| e.to_string()),
-            None => Ok(models.wiener.simulate(&run.input.values).1),
-        };
+        let y_hat =
+            models.gray_box_model().simulate_scored(run, models.initial_state).map_err(|e| e.to_string());
         let y_hat = match y_hat {
             Ok(y) => y,
             Err(e) => {

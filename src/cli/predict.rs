@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+use crate::core::initial_state::InitialState;
 use crate::core::run::{Channel, Run};
 use crate::io::csv_run::{LoadOptions, load_run, write_run};
 use crate::io::model_file::read_model;
@@ -26,6 +27,27 @@ pub struct PredictArgs {
     /// Sample time in seconds, for files without a time column.
     #[arg(long)]
     pub sample_time: Option<f64>,
+    /// Where the simulation starts: `steady` (the steady state of the first input sample) or
+    /// `estimated` (the state that best fits the first seconds of the run's measured output, which
+    /// the run must then hold).
+    #[arg(long = "initial-state", value_enum, default_value_t = InitialStateArg::Steady)]
+    pub initial_state: InitialStateArg,
+}
+
+/// `--initial-state`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum InitialStateArg {
+    Steady,
+    Estimated,
+}
+
+impl From<InitialStateArg> for InitialState {
+    fn from(arg: InitialStateArg) -> Self {
+        match arg {
+            InitialStateArg::Steady => Self::Steady,
+            InitialStateArg::Estimated => Self::Estimated,
+        }
+    }
 }
 
 pub fn run(args: &PredictArgs) -> Result<()> {
@@ -48,8 +70,17 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         let extended =
             crate::core::effects::ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects)
                 .with_context(|| format!("{}: output '{}'", args.model.display(), out.name))?;
+        let initial = InitialState::from(args.initial_state);
+        if initial == InitialState::Estimated && run.output(&out.name).is_none() {
+            bail!(
+                "--initial-state estimated fits the start to the measured '{}', which {} does not hold \
+                 (map it with --map output=COLUMN, or use --initial-state steady)",
+                out.name,
+                args.input.display()
+            );
+        }
         let y = extended
-            .simulate(&run)
+            .simulate_scored(&run, initial)
             .with_context(|| format!("simulating output '{}' on {}", out.name, args.input.display()))?;
         outputs.push(Channel { name: out.name.clone(), unit: out.unit.clone(), values: y });
     }

@@ -35,6 +35,7 @@ use crate::core::effects::{
     AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, StructuralChange, apply_effect,
     evidence, physics, refine_structure, refit,
 };
+use crate::core::initial_state::InitialState;
 use crate::core::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
@@ -168,12 +169,16 @@ impl DiagnosisReport {
 }
 
 /// Percentage errors of a model on each run.
-fn pct_errors(model: &ExtendedModel, runs: &[&Run]) -> Result<Vec<Vec<f64>>, DiagnoseError> {
+fn pct_errors(
+    model: &ExtendedModel,
+    runs: &[&Run],
+    initial: InitialState,
+) -> Result<Vec<Vec<f64>>, DiagnoseError> {
     runs.iter()
         .map(|run| {
             let y = measured(run, &model.output)?;
             let y_hat = model
-                .simulate(run)
+                .simulate_scored(run, initial)
                 .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
             Ok(y.iter().zip(&y_hat).map(|(y, yh)| 100.0 * (y - yh) / y).collect())
         })
@@ -206,8 +211,12 @@ fn mean_rmspe(errors: &[Vec<f64>]) -> f64 {
 }
 
 /// Validation error of a model: the runs' RMSPE averaged over the runs, %.
-pub fn validation_rmspe(model: &ExtendedModel, validation: &[&Run]) -> Result<f64, DiagnoseError> {
-    Ok(mean_rmspe(&pct_errors(model, validation)?))
+pub fn validation_rmspe(
+    model: &ExtendedModel,
+    validation: &[&Run],
+    initial: InitialState,
+) -> Result<f64, DiagnoseError> {
+    Ok(mean_rmspe(&pct_errors(model, validation, initial)?))
 }
 
 /// Why an effect cannot be tried on these runs, if it cannot.
@@ -226,13 +235,14 @@ fn residual_traces(
     current: &ExtendedModel,
     data: &FitData,
     validation: &[&Run],
+    initial: InitialState,
 ) -> Result<Vec<ResidualTrace>, DiagnoseError> {
     std::iter::once(&data.run)
         .chain(validation.iter().copied())
         .map(|run| {
             let y = measured(run, &current.output)?.to_vec();
             let y_hat = current
-                .simulate(run)
+                .simulate_scored(run, initial)
                 .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
             Ok(ResidualTrace {
                 run: run.name.clone(),
@@ -277,12 +287,12 @@ pub fn diagnose_with_progress(
         return Err(DiagnoseError::NoValidationRuns);
     }
     let data = FitData::new(ident, fits, settings)?;
-    let before = pct_errors(current, validation)?;
+    let before = pct_errors(current, validation, settings.initial_state)?;
     let rmspe_before_pct = mean_rmspe(&before);
     let reference = refit(current, &data)?;
-    let yardstick = pct_errors(&reference, validation)?;
+    let yardstick = pct_errors(&reference, validation, settings.initial_state)?;
     let rmspe_refit_pct = mean_rmspe(&yardstick);
-    let traces = residual_traces(current, &data, validation)?;
+    let traces = residual_traces(current, &data, validation, settings.initial_state)?;
     let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
     let judge = Judge { yardstick: &yardstick, rmspe_before_pct, rmspe_refit_pct };
     let mut entries = Vec::new();
@@ -297,7 +307,7 @@ pub fn diagnose_with_progress(
         }
         let trial = refine_structure(&reference, change, &data).map_err(DiagnoseError::from).and_then(
             |(model, words)| {
-                let after = pct_errors(&model, validation)?;
+                let after = pct_errors(&model, validation, settings.initial_state)?;
                 Ok((model, words, after))
             },
         );
@@ -310,7 +320,7 @@ pub fn diagnose_with_progress(
         };
         let (test, rmspe_after_pct, significant) = judge.verdict(&after);
         let evidence = format!(
-            "{words}: with it the validation error goes {rmspe_before_pct:.3} → {rmspe_after_pct:.3} %"
+            "{words}: with it the validation error goes from {rmspe_before_pct:.3} % to {rmspe_after_pct:.3} %"
         );
         if rival.as_ref().is_none_or(|(r, _)| rmspe_after_pct < r.rmspe_pct) {
             let r = StructureRival {
@@ -344,7 +354,7 @@ pub fn diagnose_with_progress(
             continue;
         }
         let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
-            let after = pct_errors(&model, validation)?;
+            let after = pct_errors(&model, validation, settings.initial_state)?;
             Ok((model, after))
         });
         let (model, after) = match trial {

@@ -5,6 +5,7 @@ pub mod cluster;
 pub mod cluster_proposal;
 pub mod diagnose;
 pub mod effects;
+pub mod initial_state;
 pub mod lm;
 pub mod lstsq;
 pub mod metrics;

@@ -7,6 +7,7 @@ use crate::core::arx::{self, ArxModel, ArxOrders, DeadTime, fit_arx};
 use crate::core::cluster::{
     self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots,
 };
+use crate::core::initial_state::InitialState;
 use crate::core::metrics::{Metrics, MetricsError, metrics};
 use crate::core::reduce::{self, IdentData, RootGroup};
 use crate::core::refine::Refinement;
@@ -38,6 +39,8 @@ pub struct OutputSettings {
     /// Input dead time of the reduced model built from given clusters, samples (the automatic
     /// proposal chooses its own, see `core::structure`); `None` is none.
     pub dead_time_samples: Option<usize>,
+    /// Where scored simulations (validation, chirp, diagnosis) start (see `core::initial_state`).
+    pub initial_state: InitialState,
 }
 
 /// Where the polish may move a root that came from a cluster.
@@ -70,6 +73,7 @@ impl Default for OutputSettings {
             polish: PolishRegion::WithinClusters,
             estimate_dead_time: true,
             dead_time_samples: None,
+            initial_state: InitialState::Estimated,
         }
     }
 }

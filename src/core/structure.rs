@@ -210,7 +210,7 @@ impl Gain {
 
     fn words(&self) -> String {
         format!(
-            "held-out error {} → {} (model error above noise {:+.0} %), lower on {} of {} segments \
+            "held-out error from {} to {} (model error above noise {:+.0} %), lower on {} of {} segments \
              ({:.1} standard errors); a root must remove {:.0} % of the model error and more than {} \
              standard error",
             fmt_error(self.without),

@@ -23,6 +23,9 @@
 //! static_order = 2
 //! segments = [[600, 626, 950], ...]        # optional manual segments: start, step, end (samples)
 //! clusters = [{ kind = "Pole", centre = [0.936, 0.0], radius = 0.01 }]
+//! dead_time_samples = 8                    # input dead time of a model built from `clusters`
+//! initial_state = "estimated"              # or "steady": where scored runs start
+//! polish = "within_clusters"               # or "free": where the polish may move a root
 //! ```
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -32,7 +35,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::arx::ArxOrders;
 use crate::core::cluster::Cluster;
-use crate::core::pipeline::OutputSettings;
+use crate::core::initial_state::InitialState;
+use crate::core::pipeline::{OutputSettings, PolishRegion};
 use crate::core::segment::{Segment, segment_label};
 use crate::io::csv_run::LoadOptions;
 
@@ -106,6 +110,12 @@ pub struct OutputSpec {
     pub refine: Option<bool>,
     pub segments: Option<Vec<[usize; 3]>>,
     pub clusters: Option<Vec<Cluster>>,
+    /// Input dead time (samples) of a model built from the given `clusters`.
+    pub dead_time_samples: Option<usize>,
+    /// Where scored runs are simulated from: "estimated" (default) or "steady".
+    pub initial_state: Option<InitialState>,
+    /// Where the polish may move a cluster's root: "within_clusters" (default) or "free".
+    pub polish: Option<PolishRegion>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -206,6 +216,13 @@ fn output_settings(name: &str, spec: &OutputSpec) -> Result<OutputSettings> {
     if let Some(r) = spec.refine {
         s.refine = r;
     }
+    // An input delay the project gives is the user's; the data's estimate is not wanted then.
+    if spec.nk.is_some() {
+        s.estimate_dead_time = false;
+    }
+    s.dead_time_samples = spec.dead_time_samples.or(s.dead_time_samples);
+    s.initial_state = spec.initial_state.unwrap_or(s.initial_state);
+    s.polish = spec.polish.unwrap_or(s.polish);
     Ok(s)
 }
 

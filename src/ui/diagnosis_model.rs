@@ -94,7 +94,7 @@ pub(super) fn apply_effects(
             }
         };
         if history_ok {
-            match diagnose::validation_rmspe(&model, &validation) {
+            match diagnose::validation_rmspe(&model, &validation, settings.initial_state) {
                 Ok(rmspe_pct) => outcome.history.push(HistoryStep { step: format!("+{id}"), rmspe_pct }),
                 Err(err) => {
                     outcome.problems.push(format!("no validation error after +{id}: {err}"));

@@ -101,12 +101,16 @@ fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
     OutputSpec {
         na: Some(settings.orders.na),
         nb: Some(settings.orders.nb),
-        nk: Some(settings.orders.nk),
+        // The input delay is written only when the user fixed it; otherwise it is estimated again.
+        nk: (!settings.estimate_dead_time).then_some(settings.orders.nk),
         static_order: settings.static_order,
         min_segments: settings.cluster.min_segments,
         refine: Some(settings.refine),
         segments: setup.segments.as_ref().map(|s| s.iter().map(|s| [s.start, s.step_at, s.end]).collect()),
+        dead_time_samples: settings.dead_time_samples.filter(|_| clusters.is_some()),
         clusters,
+        initial_state: Some(settings.initial_state),
+        polish: Some(settings.polish),
     }
 }
 

@@ -156,6 +156,25 @@ impl HwModel {
     }
 }
 
+impl HwModel {
+    /// Output-error simulation with the linear block's free response that best fits the first
+    /// seconds of the measured `y` (see `core::initial_state`).
+    pub fn simulate_estimated(&self, u: &[f64], y: &[f64]) -> Vec<f64> {
+        let u_n = self.input_scaling.normalise_all(u);
+        let w: Vec<f64> = u_n.iter().map(|x| self.input_poly.eval(*x)).collect();
+        let w0 = w.first().copied().unwrap_or(0.0);
+        let v = self.linear.simulate_with_history(&w, w0, w0);
+        let poles = self.linear.poles().unwrap_or_default();
+        let output = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .map(|x| self.output_scaling.physical_from_normalised(self.output_poly.eval(*x)))
+                .collect()
+        };
+        let v = crate::core::initial_state::fit_free_response(&poles, &v, y, output);
+        output(&v)
+    }
+}
+
 fn blocks_simulate(f_in: &AscendingPoly, g: &DiscreteTf, f_out: &AscendingPoly, u_n: &[f64]) -> Vec<f64> {
     let w: Vec<f64> = u_n.iter().map(|x| f_in.eval(*x)).collect();
     // Unit steady-state gain: the settled state of w[0] has v = w[0].

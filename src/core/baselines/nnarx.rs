@@ -209,6 +209,26 @@ impl NnarxModel {
             .collect()
     }
 
+    /// Output-error simulation started from the measured outputs: the network's first past outputs
+    /// are the first measured samples (its own state at the start of the run), then its own
+    /// predictions are fed back. The counterpart of an estimated initial state for a model whose
+    /// state is its past outputs.
+    pub fn simulate_from_measured(&self, u: &[f64], y: &[f64]) -> Vec<f64> {
+        let u_n = self.input_scaling.normalise_all(u);
+        let y_n = self.output_scaling.normalise_all(y);
+        let shape = self.shape();
+        let u0 = u_n.first().copied().unwrap_or(0.0);
+        let (y0, _) = equilibrium_normalised(shape, &self.weights, u0, self.nu, self.ny);
+        let first = self.ny.min(y_n.len());
+        let mut out: Vec<f64> = y_n[..first].to_vec();
+        let mut x = Vec::with_capacity(shape.n_inputs);
+        for k in first..u_n.len() {
+            regressor(&mut x, &u_n, &out, k, self.nu, self.ny, (u0, y0));
+            out.push(shape.output(&self.weights, &x));
+        }
+        out.iter().map(|y| self.output_scaling.physical_from_normalised(*y)).collect()
+    }
+
     /// One-step-ahead (series-parallel) prediction from measured past outputs. The first
     /// `max(ny, nu − 1)` samples have no complete regressor and repeat the measurement.
     pub fn predict_one_step(&self, u: &[f64], y: &[f64]) -> Vec<f64> {

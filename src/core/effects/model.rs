@@ -7,6 +7,7 @@ use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectRecord, SensorDynamics,
     TransportDelay, check_id,
 };
+use crate::core::initial_state::{InitialState, fit_free_response};
 use crate::core::pipeline::GrayBoxModel;
 use crate::core::run::Run;
 use crate::core::static_map::StaticMap;
@@ -114,6 +115,21 @@ impl ExtendedModel {
     /// Simulate the output from the run's input (and the channels the effects need) alone.
     pub fn simulate(&self, run: &Run) -> Result<Vec<f64>, EffectError> {
         Ok(self.simulate_with_v(run)?.1)
+    }
+
+    /// Simulate a run to score it: from the steady state of its first input, or with the linear
+    /// block's free response that best fits the first seconds of the measured output (see
+    /// `core::initial_state`). A run without the model's output is simulated from the steady state.
+    pub fn simulate_scored(&self, run: &Run, initial: InitialState) -> Result<Vec<f64>, EffectError> {
+        let measured = run.output(&self.output).map(|c| c.values.as_slice());
+        let (InitialState::Estimated, Some(y)) = (initial, measured) else { return self.simulate(run) };
+        let (_, conditions) = input_stage(&self.effects, run)?;
+        let (v, _) = self.simulate_with_v(run)?;
+        let (poles, _) = self.roots()?;
+        let dt = run.dt_secs;
+        let output = |v: &[f64]| output_stage(&self.effects, &self.wiener.map, v, conditions.as_ref(), dt);
+        let v = fit_free_response(&poles, &v, y, output);
+        Ok(output(&v))
     }
 
     /// Simulate and also return the linear block's output `v` (what the static map reads).
@@ -286,7 +302,7 @@ mod tests {
             Err(EffectError::NotApplied { effect: "thermal_soak".into() })
         );
         assert!(
-            matches!(m.without_effect("warp"), Err(EffectError::UnknownEffect { known, .. }) if known.len() == 6)
+            matches!(m.without_effect("warp"), Err(EffectError::UnknownEffect { known, .. }) if known.len() == crate::core::effects::BLOCK_IDS.len())
         );
         let ambient = model().with_effect(EffectBlock::AmbientCorrection(AmbientCorrection {
             output_theta_exp: 0.0,

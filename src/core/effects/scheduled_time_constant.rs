@@ -120,19 +120,19 @@ mod tests {
     fn no_schedule_is_the_linear_block_and_a_schedule_slows_the_low_end() {
         let poles = [Complex64::new(0.9, 0.0), Complex64::new(0.5, 0.2), Complex64::new(0.5, -0.2)];
         let tf = unit_gain_tf(&poles, &[], 0.1).unwrap();
-        let u: Vec<f64> = (0..300).map(|k| if (k / 60) % 2 == 0 { 1.0 } else { 3.0 }).collect();
+        let u: Vec<f64> = (0..600).map(|k| if (k / 150) % 2 == 0 { 1.0 } else { 3.0 }).collect();
         let split = AsymmetricDynamics::split(&poles, &[], 0.1).unwrap();
         let flat = ScheduledTimeConstant::for_input(&u, 0.0);
         let same = respond(&split, &u, None, Some(&flat));
         for (a, b) in same.iter().zip(tf.simulate_from_steady(&u)) {
             assert!((a - b).abs() < 1e-9, "{a} vs {b}");
         }
-        // Slower when heading for the low end: the fall towards 1.0 (samples 120–140) lags the linear
+        // Slower when heading for the low end: the fall towards 1.0 (from sample 300) lags the linear
         // block; the settled values agree.
         let sched = ScheduledTimeConstant::for_input(&u, 1.0);
         let slow = respond(&split, &u, None, Some(&sched));
-        assert!(slow[130] > same[130] + 0.05, "{} vs {}", slow[130], same[130]);
-        assert!((slow[179] - same[179]).abs() < 1e-3);
+        assert!(slow[310] > same[310] + 0.05, "{} vs {}", slow[310], same[310]);
+        assert!((slow[449] - same[449]).abs() < 1e-3, "{} vs {}", slow[449], same[449]);
         assert!(ScheduledTimeConstant { log_ratio: 9.0, ..sched }.with_free_params(&[9.0]).is_none());
     }
 }

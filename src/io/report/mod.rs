@@ -69,6 +69,12 @@ pub struct OutputReport {
     /// Where the final model fails on each scored run.
     #[serde(default)]
     pub residuals: Vec<ResidualReport>,
+    /// Where every model's simulation of a scored run starts ("estimated" or "steady"), and what
+    /// that means.
+    #[serde(default)]
+    pub initial_state: String,
+    #[serde(default)]
+    pub initial_state_meaning: String,
 }
 
 /// The residual analysis of one output's final model on one run, as the report keeps it (the
@@ -343,7 +349,11 @@ pub fn render_markdown(report: &Report) -> String {
     for (name, o) in &report.outputs {
         let _ = writeln!(out, "\n## Output `{name}` [{}]\n", o.unit);
         ident_section(&mut out, &o.identified, &o.unit);
-        let _ = writeln!(out, "\n### Validation (each model simulated from the input alone)\n");
+        let _ = writeln!(
+            out,
+            "\n### Validation (each model simulated from the input alone; initial state {}: {})\n",
+            o.initial_state, o.initial_state_meaning
+        );
         metrics_table(&mut out, o);
         if !o.error_history.is_empty() {
             let _ = writeln!(

@@ -84,7 +84,9 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         assert!(md.contains(figure), "report.md shows {figure}");
     }
 
-    // predict reproduces the batch's gray-box prediction from model.json alone.
+    // The report names where scored runs start; predict started the same way reproduces the batch's
+    // gray-box prediction from model.json alone.
+    assert_eq!(report["outputs"]["shaft_speed_rpm"]["initial_state"], "estimated");
     let pred = dir.path().join("pred.csv");
     let val = samples().join("validation.csv");
     let o = jetid(&[
@@ -95,6 +97,8 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         val.to_str().unwrap(),
         "--out",
         pred.to_str().unwrap(),
+        "--initial-state",
+        "estimated",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let predicted = load_run(&pred, &LoadOptions::default()).unwrap();
@@ -106,6 +110,37 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         .as_f64()
         .unwrap();
     assert!((m.rmspe_pct - batch).abs() < 1e-6 * batch.max(1.0), "predict {} vs batch {batch}", m.rmspe_pct);
+
+    // A run that lacks one measured output: predict starts it from the steady state; the estimated
+    // start needs the measurement and says so.
+    let rows: String = (0..40)
+        .map(|k| format!("{:.6},{},{}\n", k as f64 / 8.85, if k < 20 { 4.0 } else { 5.0 }, 50 + k))
+        .collect();
+    let schedule = write(dir.path(), "schedule.csv", &format!("time_s,fuel_flow_gph,thrust_n\n{rows}"));
+    let o = jetid(&[
+        "predict",
+        "--model",
+        out.join("model.json").to_str().unwrap(),
+        "--input",
+        schedule.to_str().unwrap(),
+        "--out",
+        dir.path().join("schedule_pred.csv").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    expect_error(
+        &[
+            "predict",
+            "--model",
+            out.join("model.json").to_str().unwrap(),
+            "--input",
+            schedule.to_str().unwrap(),
+            "--out",
+            dir.path().join("schedule_pred2.csv").to_str().unwrap(),
+            "--initial-state",
+            "estimated",
+        ],
+        &["--initial-state estimated", "shaft_speed_rpm", "--initial-state steady"],
+    );
 }
 
 #[test]
@@ -369,6 +404,8 @@ fn add_effect_lowers_the_error_and_predict_honours_it() {
         val.to_str().unwrap(),
         "--out",
         pred.to_str().unwrap(),
+        "--initial-state",
+        "estimated",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let y = load_run(&val, &LoadOptions::default()).unwrap();

@@ -522,6 +522,61 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
         current = trial;
         current_cv = Some(cv);
     }
+    if !dead_time.kept {
+        // Parsimony across the two explanations of a late start: a root kept after the first pole may
+        // only stand in for a dead time. If taking it out for the dead time the late start then leaves
+        // unexplained predicts the held-out segments as well, the dead time (one parameter) replaces
+        // it (two parameters for a pair).
+        for i in kept.clone().into_iter().skip(1).rev() {
+            let Some(cur) = current_cv.clone() else { break };
+            let Some(index) = current.groups.iter().position(|g| g.cluster == Some(i)) else { continue };
+            let mut fewer = current.groups.clone();
+            fewer.remove(index);
+            let at = data.with_delay(delay);
+            let Some(reduced) = fitted(&at, &fewer) else { continue };
+            let excess = data.fits.nk().saturating_sub(apparent_nk(&at, &reduced.assembled));
+            let Some((swapped, d)) = (excess >= 1).then(|| with_dead_time(data, &fewer, excess)).flatten()
+            else {
+                continue;
+            };
+            let Some(cv) =
+                cross_validate(&data.with_delay(d), &swapped.groups, swapped.assembled.wiener.map.order())
+            else {
+                continue;
+            };
+            // A dead time replaces a root only when it is longer than the delay that root itself
+            // gives (its low-frequency group delay) by more than the dead time's own resolution of one
+            // sample: a shorter one is the root's lag read as a delay, and the root, which the segment
+            // models show, is the better explanation.
+            let removed = &current.groups[index];
+            let longer =
+                d.saturating_sub(1) as f64 * data.fits.dt_secs > group_delay_secs(removed, data.fits.dt_secs);
+            let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
+            if longer && pooled(&cv) <= pooled(&cur) {
+                let gain = Gain::of(&cur, &cv, noise_var);
+                verdicts[i].kept = false;
+                verdicts[i].reason = format!(
+                    "dropped: a dead time of {d} samples predicts the held-out segments as well with fewer \
+                     parameters (held-out error from {} to {}); the root only stood in for it",
+                    fmt_error(gain.without),
+                    fmt_error(gain.with)
+                );
+                dead_time.kept = true;
+                dead_time.samples = d;
+                dead_time.reason = format!(
+                    "kept in place of a root that only stood in for it: held-out error from {} to {} with \
+                     fewer parameters",
+                    fmt_error(gain.without),
+                    fmt_error(gain.with)
+                );
+                kept.retain(|k| *k != i);
+                delay = d;
+                current = swapped;
+                current_cv = Some(cv);
+                break;
+            }
+        }
+    }
     if dead_time.kept {
         // Roots kept before the dead time may only have stood in for it: each is taken out again
         // unless the model with the dead time still needs it by the same rule.
@@ -570,6 +625,20 @@ fn with_dead_time(data: &IdentData, groups: &[RootGroup], excess: usize) -> Opti
         .take(REFINED_GUESSES)
         .filter_map(|(_, d)| fitted(&data.with_delay(d), groups).map(|p| (p, d)))
         .min_by(|a, b| a.0.assembled.rms().total_cmp(&b.0.assembled.rms()))
+}
+
+/// Low-frequency group delay of a root group, s: τ for a real pole, 2ζ/ωn for a pair (the slope of
+/// its phase at ω → 0); zero for a zero or a root that is not a stable pole.
+fn group_delay_secs(g: &RootGroup, dt_secs: f64) -> f64 {
+    if g.kind != RootKind::Pole {
+        return 0.0;
+    }
+    let (omega, zeta, tau) = g.s_plane(dt_secs);
+    match (g.pair, tau) {
+        (false, Some(tau)) => tau,
+        (true, _) if omega > 0.0 => 2.0 * zeta / omega,
+        _ => 0.0,
+    }
 }
 
 /// The input delay at which short-B ARX models fit a model's own simulated step responses best (the

@@ -30,10 +30,17 @@
 //! differences against the refinement, p < 0.01, and at least 10 % of its RMSPE removed): a lag
 //! block or a dead time that only stands in for a missing pole pair is no evidence of physics. When
 //! a refinement is significant the report says what the model needs, in words.
+//!
+//! **Dead time or lag: the ranking follows the evidence.** A dead time shifts the whole step
+//! response late; a lag starts it on time but slower (see
+//! [`crate::core::effects::transport_delay::Lateness`]). Poles can mimic either, so where the
+//! measured responses show the whole response shifted, a dead time that fits the validation runs
+//! better than the best structural refinement (and is significant against the current model) is
+//! credited even when the refinement comes within 10 % of it.
 use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
 use crate::core::effects::{
-    AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, StructuralChange, apply_effect,
-    evidence, physics, refine_structure, refit,
+    AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, StructuralChange, TransportDelay,
+    apply_effect, evidence, physics, refine_structure, refit,
 };
 use crate::core::initial_state::InitialState;
 use crate::core::pipeline::{OutputSettings, SegmentFits};
@@ -293,6 +300,7 @@ pub fn diagnose_with_progress(
     let yardstick = pct_errors(&reference, validation, settings.initial_state)?;
     let rmspe_refit_pct = mean_rmspe(&yardstick);
     let traces = residual_traces(current, &data, validation, settings.initial_state)?;
+    let lateness = crate::core::effects::transport_delay::lateness(&traces);
     let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
     let judge = Judge { yardstick: &yardstick, rmspe_before_pct, rmspe_refit_pct };
     let mut entries = Vec::new();
@@ -371,9 +379,15 @@ pub fn diagnose_with_progress(
             let reduction = 1.0 - rmspe_after_pct / r.rmspe_pct.max(f64::MIN_POSITIVE);
             StructureRival { test: vs, reduction, ..r.clone() }
         });
-        let beats_structure = held
-            .as_ref()
-            .is_none_or(|r| r.test.p_value < SIGNIFICANCE_LEVEL && r.reduction >= MIN_RELATIVE_REDUCTION);
+        // The ranking follows the evidence where a lag and a dead time compete: when the whole
+        // response is shifted late (not only its later part), a dead time that fits better than the
+        // best structural refinement is credited even if the refinement comes close: a pole placed
+        // to mimic a dead time is no evidence against one.
+        let evidence_says_dead_time = id == TransportDelay::ID && lateness.whole_response_late();
+        let beats_structure = held.as_ref().is_none_or(|r| {
+            (r.test.p_value < SIGNIFICANCE_LEVEL && r.reduction >= MIN_RELATIVE_REDUCTION)
+                || (evidence_says_dead_time && r.reduction > 0.0)
+        });
         entries.push(Diagnosis {
             effect: id.to_owned(),
             kind: DiagnosisKind::Physics,

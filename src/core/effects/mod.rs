@@ -29,7 +29,7 @@ mod static_map_order;
 pub mod stats;
 mod structural;
 mod thermal_soak;
-mod transport_delay;
+pub mod transport_delay;
 
 pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;

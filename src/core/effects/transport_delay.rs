@@ -62,13 +62,23 @@ impl TransportDelay {
 
 /// Share of a step response at which its start is timed.
 const ONSET_FRACTION: f64 = 0.1;
+/// Share of a step response at which its middle is timed.
+const MIDDLE_FRACTION: f64 = 0.5;
 /// A step is an input change larger than this share of the run's input range within one sample.
 const STEP_FRACTION: f64 = 0.1;
 
-/// Time from `at` until `v` first covers [`ONSET_FRACTION`] of the change from `before` to `after`
-/// (linear interpolation), searched up to `end`.
-fn onset_secs(v: &[f64], at: usize, end: usize, before: f64, after: f64, dt_secs: f64) -> Option<f64> {
-    let level = before + ONSET_FRACTION * (after - before);
+/// Time from `at` until `v` first covers `share` of the change from `before` to `after` (linear
+/// interpolation), searched up to `end`.
+fn crossing_secs(
+    v: &[f64],
+    at: usize,
+    end: usize,
+    before: f64,
+    after: f64,
+    share: f64,
+    dt_secs: f64,
+) -> Option<f64> {
+    let level = before + share * (after - before);
     let sign = (after - before).signum();
     (at..end.min(v.len())).find_map(|k| {
         let (prev, cur) = (if k > 0 { *v.get(k - 1)? } else { before }, *v.get(k)?);
@@ -79,11 +89,60 @@ fn onset_secs(v: &[f64], at: usize, end: usize, before: f64, after: f64, dt_secs
     })
 }
 
-/// When measured step responses start compared with the model's: the median, over the clean input
-/// steps of all runs, of the difference between the times at which the measured and the modelled
-/// output have covered 10 % of their change (measurement smoothed over three samples).
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
-    let mut lags: Vec<f64> = Vec::new();
+/// How late measured step responses are against the model's: the whole response (a dead time) or
+/// only its later part (a lag).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lateness {
+    /// Median over the clean steps of (measured − model) time to cover 10 % of the change, s.
+    pub onset_secs: f64,
+    /// The same at 50 % of the change, s.
+    pub middle_secs: f64,
+    /// Steps timed.
+    pub steps: usize,
+    pub dt_secs: f64,
+}
+
+impl Lateness {
+    /// The whole response is shifted late, as a dead time shifts it: the onset is at least two
+    /// samples late (one is the timing's own resolution) and the middle of the response is no
+    /// later than the onset by more than half of it (a lag delays the middle more than the onset:
+    /// a first-order lag τ moves the 10 % point by about 0.1 τ and the 50 % point by 0.7 τ).
+    pub fn whole_response_late(&self) -> bool {
+        self.steps > 0
+            && self.onset_secs >= 2.0 * self.dt_secs
+            && self.middle_secs - self.onset_secs <= 0.5 * self.onset_secs
+    }
+
+    /// The evidence sentence.
+    pub fn sentence(&self) -> String {
+        if self.steps == 0 {
+            return "no clean input step to time the response on".to_owned();
+        }
+        let meaning = if self.whole_response_late() {
+            "the whole response is shifted late, as a dead time shifts it: fuel reaches the engine later \
+             than the model assumes"
+        } else if self.onset_secs > 0.05 && self.middle_secs > self.onset_secs {
+            "responses start late but their middle later still: a lag more than a dead time"
+        } else if self.onset_secs < -0.05 {
+            "responses start earlier than the model's"
+        } else {
+            "responses start with the model's"
+        };
+        format!(
+            "measured step responses start {:+.2} s and reach half their change {:+.2} s after the \
+             model's (median of {} steps): {meaning}",
+            self.onset_secs, self.middle_secs, self.steps
+        )
+    }
+}
+
+/// When measured step responses start and reach half their change compared with the model's: the
+/// medians, over the clean input steps of all runs, of the differences between the times at which
+/// the measured and the modelled output have covered 10 % and 50 % of their change (measurement
+/// smoothed over three samples).
+pub fn lateness(traces: &[ResidualTrace]) -> Lateness {
+    let (mut onsets, mut middles) = (Vec::new(), Vec::new());
+    let dt_secs = traces.first().map_or(1.0, |t| t.dt_secs);
     for t in traces {
         let (lo, hi) =
             t.u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
@@ -105,29 +164,24 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
             let base = |v: &[f64]| mean(&v[at - before..at]);
             let last = |v: &[f64]| v.get(end - 1).copied().unwrap_or(0.0);
             let (m0, m1, h0, h1) = (base(&smooth), last(&smooth), base(&t.y_hat), last(&t.y_hat));
-            if let (Some(tm), Some(th)) = (
-                onset_secs(&smooth, at, end, m0, m1, t.dt_secs),
-                onset_secs(&t.y_hat, at, end, h0, h1, t.dt_secs),
-            ) {
-                lags.push(tm - th);
+            let timed = |share: f64| -> Option<f64> {
+                Some(
+                    crossing_secs(&smooth, at, end, m0, m1, share, t.dt_secs)?
+                        - crossing_secs(&t.y_hat, at, end, h0, h1, share, t.dt_secs)?,
+                )
+            };
+            if let (Some(onset), Some(middle)) = (timed(ONSET_FRACTION), timed(MIDDLE_FRACTION)) {
+                onsets.push(onset);
+                middles.push(middle);
             }
         }
     }
-    if lags.is_empty() {
-        return "no clean input step to time the response on".to_owned();
-    }
-    let lag_secs = median(&lags);
-    let meaning = if lag_secs > 0.05 {
-        "responses start late: fuel reaches the engine later than the model assumes"
-    } else if lag_secs < -0.05 {
-        "responses start earlier than the model's"
-    } else {
-        "responses start with the model's"
-    };
-    format!(
-        "measured step responses start {lag_secs:+.2} s after the model's (median of {} steps): {meaning}",
-        lags.len()
-    )
+    Lateness { onset_secs: median(&onsets), middle_secs: median(&middles), steps: onsets.len(), dt_secs }
+}
+
+/// The evidence sentence of a dead time (see [`lateness`]).
+pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+    lateness(traces).sentence()
 }
 
 #[cfg(test)]

@@ -31,6 +31,11 @@
 //! block or a dead time that only stands in for a missing pole pair is no evidence of physics. When
 //! a refinement is significant the report says what the model needs, in words.
 //!
+//! **The evidence must agree.** A physical effect is significant only when the current model's
+//! residuals also show its signature: its own evidence sentence does not say there is little or
+//! nothing (see [`crate::core::effects::Evidence`]). A trial fit alone can buy a few percent with
+//! any flexible block; the residual's signature is what tells which physics it is.
+//!
 //! **Dead time or lag: the ranking follows the evidence.** A dead time shifts the whole step
 //! response late; a lag starts it on time but slower (see
 //! [`crate::core::effects::transport_delay::Lateness`]). Poles can mimic either, so where the
@@ -373,6 +378,7 @@ pub fn diagnose_with_progress(
             }
         };
         let (test, rmspe_after_pct, beats_current) = judge.verdict(&after);
+        let evidence = evidence(id, &traces)?;
         // A physical effect must also beat the best structural refinement, by the same rule.
         let held = rival.as_ref().map(|(r, errors)| {
             let vs = diebold_mariano(&loss_differences(errors, &after));
@@ -392,11 +398,11 @@ pub fn diagnose_with_progress(
             effect: id.to_owned(),
             kind: DiagnosisKind::Physics,
             physics: physics(id)?.to_owned(),
-            significant: beats_current && beats_structure,
+            significant: beats_current && beats_structure && evidence.supports,
             rmspe_before_pct,
             rmspe_after_pct,
             test,
-            evidence: evidence(id, &traces)?,
+            evidence: evidence.sentence,
             model,
             rival: held,
         });

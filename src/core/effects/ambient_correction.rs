@@ -1,4 +1,5 @@
 //! `ambient_correction`: the engine scales with inlet conditions.
+use super::Evidence;
 use super::stats::{ResidualTrace, correlation};
 use super::{EffectError, ParamSpec};
 use crate::core::run::Run;
@@ -113,7 +114,7 @@ impl AmbientCorrection {
 }
 
 /// Correlation of the percentage residual with each recorded ambient channel, pooled over runs.
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let best = AmbientCorrection::CHANNELS
         .iter()
         .filter_map(|name| {
@@ -126,7 +127,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
             Some((*name, correlation(&e, &x)))
         })
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
-    let Some((name, r)) = best else { return "no ambient channel recorded".to_owned() };
+    let Some((name, r)) = best else { return Evidence::none("no ambient channel recorded") };
     let meaning = if r.abs() > 0.5 {
         "the engine scales with inlet conditions"
     } else if r.abs() > 0.2 {
@@ -134,7 +135,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
     } else {
         "little dependence on inlet conditions"
     };
-    format!("residual tracks {name}, r = {r:.2}: {meaning}")
+    Evidence { sentence: format!("residual tracks {name}, r = {r:.2}: {meaning}"), supports: r.abs() > 0.2 }
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! `asymmetric_dynamics`: acceleration and deceleration differ.
 use num_complex::Complex64;
 
+use super::Evidence;
 use super::stats::{ResidualTrace, diff};
 use super::{EffectError, ParamSpec};
 use crate::core::lstsq::solve_lstsq;
@@ -82,7 +83,7 @@ impl AsymmetricDynamics {
 
 /// How far the measurement lags the model while the model's response rises and while it falls:
 /// the residual regressed on the model's rate of change, split by its sign (`e ≈ −lag·dŷ/dt`).
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let (mut rows, mut e) = (Vec::new(), Vec::new());
     for t in traces {
         let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
@@ -92,7 +93,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
         }
     }
     let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
-    let Ok(sol) = solve_lstsq(&a, &e) else { return "the response never moves".to_owned() };
+    let Ok(sol) = solve_lstsq(&a, &e) else { return Evidence::none("the response never moves") };
     let (lag_up, lag_down) = (-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c));
     let meaning = if (lag_down - lag_up).abs() > 0.1 {
         if lag_down > lag_up {
@@ -103,18 +104,21 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
     } else {
         "rise and fall look alike"
     };
-    format!(
-        "measured response lags the model by {lag_up:.2} s while it rises and {lag_down:.2} s while it \
-         falls: {meaning}"
-    )
+    Evidence {
+        sentence: format!(
+            "measured response lags the model by {lag_up:.2} s while it rises and {lag_down:.2} s while it \
+             falls: {meaning}"
+        ),
+        supports: (lag_down - lag_up).abs() > 0.1,
+    }
 }
 
 /// How far the measurement lags the model at the low and at the high end of the operating range:
 /// the residual regressed on the model's rate of change, split at the median output level.
-pub(super) fn level_evidence(traces: &[ResidualTrace]) -> String {
+pub(super) fn level_evidence(traces: &[ResidualTrace]) -> Evidence {
     let mut levels: Vec<f64> = traces.iter().flat_map(|t| t.y_hat.iter().copied()).collect();
     levels.sort_by(f64::total_cmp);
-    let Some(&middle) = levels.get(levels.len() / 2) else { return "no response to look at".to_owned() };
+    let Some(&middle) = levels.get(levels.len() / 2) else { return Evidence::none("no response to look at") };
     let (mut rows, mut e) = (Vec::new(), Vec::new());
     for t in traces {
         let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
@@ -125,7 +129,7 @@ pub(super) fn level_evidence(traces: &[ResidualTrace]) -> String {
         }
     }
     let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
-    let Ok(sol) = solve_lstsq(&a, &e) else { return "the response never moves".to_owned() };
+    let Ok(sol) = solve_lstsq(&a, &e) else { return Evidence::none("the response never moves") };
     let (lag_low, lag_high) = (-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c));
     let meaning = if (lag_low - lag_high).abs() > 0.1 {
         if lag_low > lag_high {
@@ -136,10 +140,13 @@ pub(super) fn level_evidence(traces: &[ResidualTrace]) -> String {
     } else {
         "the response is as fast at both ends"
     };
-    format!(
-        "measured response lags the model by {lag_low:.2} s below the middle of the operating range and \
-         {lag_high:.2} s above it: {meaning}"
-    )
+    Evidence {
+        sentence: format!(
+            "measured response lags the model by {lag_low:.2} s below the middle of the operating range and \
+             {lag_high:.2} s above it: {meaning}"
+        ),
+        supports: (lag_low - lag_high).abs() > 0.1,
+    }
 }
 
 #[cfg(test)]

@@ -201,9 +201,27 @@ pub fn physics(id: &str) -> Result<&'static str, EffectError> {
     })
 }
 
-/// One sentence of evidence for effect `id`, computed from the current model's residuals on the
-/// given runs (identification range and validation runs).
-pub fn evidence(id: &str, traces: &[stats::ResidualTrace]) -> Result<String, EffectError> {
+/// What the current model's residuals say about an effect: one sentence, and whether it shows the
+/// effect's signature at all. The thresholds are the evidence sentences' own words: where the
+/// sentence says there is little or nothing ("little slow creep", "no sharp resonance", "rise and
+/// fall look alike", "within noise", "responses start with the model's"), the evidence does not
+/// support the effect.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Evidence {
+    pub sentence: String,
+    pub supports: bool,
+}
+
+impl Evidence {
+    /// Evidence that says nothing for the effect.
+    fn none(sentence: &str) -> Self {
+        Self { sentence: sentence.to_owned(), supports: false }
+    }
+}
+
+/// The evidence for effect `id`, computed from the current model's residuals on the given runs
+/// (identification range and validation runs).
+pub fn evidence(id: &str, traces: &[stats::ResidualTrace]) -> Result<Evidence, EffectError> {
     Ok(match check_id(id)? {
         TransportDelay::ID => transport_delay::evidence(traces),
         ThermalSoak::ID => thermal_soak::evidence(traces),

@@ -1,4 +1,5 @@
 //! `sensor_dynamics`: load cell or stand resonance and sensor lag.
+use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, median, welch_spectrum};
 
@@ -144,13 +145,13 @@ fn spectral_peaks(residual: &[f64], dt_secs: f64) -> Vec<(f64, f64)> {
 }
 
 /// The most prominent peak of the residual spectrum above 0.3 Hz.
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let Some(best) = traces
         .iter()
         .flat_map(|t| spectral_peaks(&t.residual(), t.dt_secs).into_iter().take(1))
         .max_by(|a, b| a.1.total_cmp(&b.1))
     else {
-        return "runs too short for a residual spectrum".to_owned();
+        return Evidence::none("runs too short for a residual spectrum");
     };
     let (freq_hz, ratio) = best;
     let meaning = if ratio > 10.0 {
@@ -160,7 +161,12 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
     } else {
         "no sharp resonance"
     };
-    format!("residual spectrum peaks at {freq_hz:.2} Hz, {ratio:.0}× its neighbourhood: {meaning}")
+    Evidence {
+        sentence: format!(
+            "residual spectrum peaks at {freq_hz:.2} Hz, {ratio:.0}× its neighbourhood: {meaning}"
+        ),
+        supports: ratio > 4.0,
+    }
 }
 
 #[cfg(test)]

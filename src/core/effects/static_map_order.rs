@@ -1,4 +1,5 @@
 //! `static_map_order`: the static map is too simple (bleed valve, limiter).
+use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, plateaus};
 use crate::core::lstsq::solve_lstsq;
@@ -83,7 +84,7 @@ pub fn fit_map_with_knot(
 
 /// Steady-state residuals at the plateaus of every run against the operating point: their spread
 /// and how far the largest lies outside what the noise of a plateau mean allows.
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let mut points: Vec<(f64, f64, f64)> = Vec::new(); // (level, mean residual %, its standard error)
     for t in traces {
         let e = t.residual_pct();
@@ -96,7 +97,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
         }
     }
     if points.len() < 3 {
-        return "too few steady plateaus to judge the static map".to_owned();
+        return Evidence::none("too few steady plateaus to judge the static map");
     }
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (lo, hi) =
@@ -110,11 +111,14 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
     } else {
         "steady states sit on the map within noise"
     };
-    format!(
-        "steady-state residuals at {} plateaus range from {lo:+.2} % to {hi:+.2} % ({low_end:+.2} % at the \
-         lowest, {high_end:+.2} % at the highest operating point; largest {worst:.0}× its noise): {meaning}",
-        points.len()
-    )
+    Evidence {
+        sentence: format!(
+            "steady-state residuals at {} plateaus range from {lo:+.2} % to {hi:+.2} % ({low_end:+.2} % at the \
+             lowest, {high_end:+.2} % at the highest operating point; largest {worst:.0}× its noise): {meaning}",
+            points.len()
+        ),
+        supports: worst > 4.0,
+    }
 }
 
 #[cfg(test)]

@@ -1,4 +1,5 @@
 //! `thermal_soak`: casing and rotor absorb heat after a power change.
+use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, correlation, low_pass};
 
@@ -48,7 +49,7 @@ impl ThermalSoak {
 
 /// How well the residual follows the slow-filtered history of the model's own response (what a
 /// missing soak leaves behind), at the best time constant of the grid.
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let best = TAU_GRID_S
         .iter()
         .map(|&tau_s| {
@@ -62,7 +63,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
             (tau_s, r_sum / n.max(1) as f64)
         })
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
-    let Some((tau_s, r)) = best else { return String::new() };
+    let Some((tau_s, r)) = best else { return Evidence::none("no response to look at") };
     let meaning = if r.abs() > 0.5 {
         "the response keeps creeping long after each power change"
     } else if r.abs() > 0.2 {
@@ -70,7 +71,12 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
     } else {
         "little slow creep after power changes"
     };
-    format!("residual follows the {tau_s:.0} s-filtered history of the response, r = {r:.2}: {meaning}")
+    Evidence {
+        sentence: format!(
+            "residual follows the {tau_s:.0} s-filtered history of the response, r = {r:.2}: {meaning}"
+        ),
+        supports: r.abs() > 0.2,
+    }
 }
 
 #[cfg(test)]

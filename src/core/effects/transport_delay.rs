@@ -1,4 +1,5 @@
 //! `transport_delay`: fuel line and valve dead time.
+use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, median};
 
@@ -179,9 +180,11 @@ pub fn lateness(traces: &[ResidualTrace]) -> Lateness {
     Lateness { onset_secs: median(&onsets), middle_secs: median(&middles), steps: onsets.len(), dt_secs }
 }
 
-/// The evidence sentence of a dead time (see [`lateness`]).
-pub(super) fn evidence(traces: &[ResidualTrace]) -> String {
-    lateness(traces).sentence()
+/// The evidence of a dead time (see [`lateness`]): it supports one when the responses start at
+/// least two samples late (one is the timing's own resolution).
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
+    let late = lateness(traces);
+    Evidence { supports: late.steps > 0 && late.onset_secs >= 2.0 * late.dt_secs, sentence: late.sentence() }
 }
 
 #[cfg(test)]

@@ -20,6 +20,14 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// `jetid predict --model MODEL --input INPUT --out OUT` and `extra`, as arguments.
+fn predict_args<'a>(model: &'a Path, input: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let path = |p: &'a Path| p.to_str().expect("utf-8 path");
+    let mut args = vec!["predict", "--model", path(model), "--input", path(input), "--out", path(out)];
+    args.extend_from_slice(extra);
+    args
+}
+
 #[test]
 fn batch_on_the_bundled_runs_writes_model_and_reports() {
     let dir = tempfile::tempdir().unwrap();
@@ -89,17 +97,7 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
     assert_eq!(report["outputs"]["shaft_speed_rpm"]["initial_state"], "estimated");
     let pred = dir.path().join("pred.csv");
     let val = samples().join("validation.csv");
-    let o = jetid(&[
-        "predict",
-        "--model",
-        out.join("model.json").to_str().unwrap(),
-        "--input",
-        val.to_str().unwrap(),
-        "--out",
-        pred.to_str().unwrap(),
-        "--initial-state",
-        "estimated",
-    ]);
+    let o = jetid(&predict_args(&out.join("model.json"), &val, &pred, &["--initial-state", "estimated"]));
     assert!(o.status.success(), "{}", stderr(&o));
     let predicted = load_run(&pred, &LoadOptions::default()).unwrap();
     let measured = load_run(&val, &LoadOptions::default()).unwrap();
@@ -117,28 +115,16 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         .map(|k| format!("{:.6},{},{}\n", k as f64 / 8.85, if k < 20 { 4.0 } else { 5.0 }, 50 + k))
         .collect();
     let schedule = write(dir.path(), "schedule.csv", &format!("time_s,fuel_flow_gph,thrust_n\n{rows}"));
-    let o = jetid(&[
-        "predict",
-        "--model",
-        out.join("model.json").to_str().unwrap(),
-        "--input",
-        schedule.to_str().unwrap(),
-        "--out",
-        dir.path().join("schedule_pred.csv").to_str().unwrap(),
-    ]);
+    let o =
+        jetid(&predict_args(&out.join("model.json"), &schedule, &dir.path().join("schedule_pred.csv"), &[]));
     assert!(o.status.success(), "{}", stderr(&o));
     expect_error(
-        &[
-            "predict",
-            "--model",
-            out.join("model.json").to_str().unwrap(),
-            "--input",
-            schedule.to_str().unwrap(),
-            "--out",
-            dir.path().join("schedule_pred2.csv").to_str().unwrap(),
-            "--initial-state",
-            "estimated",
-        ],
+        &predict_args(
+            &out.join("model.json"),
+            &schedule,
+            &dir.path().join("schedule_pred2.csv"),
+            &["--initial-state", "estimated"],
+        ),
         &["--initial-state estimated", "shaft_speed_rpm", "--initial-state steady"],
     );
 }
@@ -248,18 +234,7 @@ fn predict_errors_name_what_is_wrong() {
         &["/no/model.json"],
     );
     let junk = write(dir.path(), "m.json", "{\"format_version\": 1}");
-    expect_error(
-        &[
-            "predict",
-            "--model",
-            junk.to_str().unwrap(),
-            "--input",
-            val.to_str().unwrap(),
-            "--out",
-            pred.to_str().unwrap(),
-        ],
-        &["m.json", "not a jetid model"],
-    );
+    expect_error(&predict_args(&junk, &val, &pred, &[]), &["m.json", "not a jetid model"]);
     assert!(!pred.exists());
 }
 
@@ -396,17 +371,7 @@ fn add_effect_lowers_the_error_and_predict_honours_it() {
     assert_eq!(model["outputs"][0]["effects"][0]["id"], "thermal_soak");
     let val = project.parent().unwrap().join("validation.csv");
     let pred = dir.path().join("pred.csv");
-    let o = jetid(&[
-        "predict",
-        "--model",
-        out.join("model.json").to_str().unwrap(),
-        "--input",
-        val.to_str().unwrap(),
-        "--out",
-        pred.to_str().unwrap(),
-        "--initial-state",
-        "estimated",
-    ]);
+    let o = jetid(&predict_args(&out.join("model.json"), &val, &pred, &["--initial-state", "estimated"]));
     assert!(o.status.success(), "{}", stderr(&o));
     let y = load_run(&val, &LoadOptions::default()).unwrap();
     let y_hat = load_run(&pred, &LoadOptions::default()).unwrap();
@@ -443,15 +408,7 @@ fn effect_errors_name_what_is_wrong() {
     let rows: String = (0..40).map(|k| format!("{:.4},5,80\n", k as f64 / 8.85)).collect();
     let bare = write(dir.path(), "bare.csv", &format!("time_s,fuel_flow_gph,thrust_n\n{rows}"));
     expect_error(
-        &[
-            "predict",
-            "--model",
-            out.join("model.json").to_str().unwrap(),
-            "--input",
-            bare.to_str().unwrap(),
-            "--out",
-            dir.path().join("p.csv").to_str().unwrap(),
-        ],
+        &predict_args(&out.join("model.json"), &bare, &dir.path().join("p.csv"), &[]),
         &["ambient_correction", "ambient_temp_c"],
     );
 }

@@ -81,71 +81,67 @@ impl AsymmetricDynamics {
     }
 }
 
-/// How far the measurement lags the model while the model's response rises and while it falls:
-/// the residual regressed on the model's rate of change, split by its sign (`e ≈ −lag·dŷ/dt`).
-pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
+/// The lags (s) of the measurement behind the model on two classes of samples: the residual
+/// regressed on the model's rate of change (`e ≈ −lag·dŷ/dt`), with one lag for the samples `first`
+/// picks and one for the rest. `None` when the response never moves.
+fn split_lags(traces: &[ResidualTrace], first: impl Fn(f64, f64) -> bool) -> Option<(f64, f64)> {
     let (mut rows, mut e) = (Vec::new(), Vec::new());
     for t in traces {
         let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
-        for (r, ek) in rate.iter().zip(t.residual()) {
-            rows.push([r.max(0.0), r.min(0.0), 1.0]);
+        for ((r, ek), level) in rate.iter().zip(t.residual()).zip(&t.y_hat) {
+            let ours = first(*r, *level);
+            rows.push([if ours { *r } else { 0.0 }, if ours { 0.0 } else { *r }, 1.0]);
             e.push(ek);
         }
     }
     let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
-    let Ok(sol) = solve_lstsq(&a, &e) else { return Evidence::none("the response never moves") };
-    let (lag_up, lag_down) = (-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c));
-    let meaning = if (lag_down - lag_up).abs() > 0.1 {
-        if lag_down > lag_up {
-            "decelerations are slower than the model"
-        } else {
-            "accelerations are slower than the model"
-        }
-    } else {
-        "rise and fall look alike"
+    let sol = solve_lstsq(&a, &e).ok()?;
+    Some((-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c)))
+}
+
+/// Lags that differ by more than this, s, differ (about one sample at 8.85 Hz).
+const LAG_DIFFERENCE_SECS: f64 = 0.1;
+
+/// How far the measurement lags the model while the model's response rises and while it falls.
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
+    let Some((lag_up, lag_down)) = split_lags(traces, |rate, _| rate > 0.0) else {
+        return Evidence::none("the response never moves");
+    };
+    let differ = (lag_down - lag_up).abs() > LAG_DIFFERENCE_SECS;
+    let meaning = match (differ, lag_down > lag_up) {
+        (true, true) => "decelerations are slower than the model",
+        (true, false) => "accelerations are slower than the model",
+        (false, _) => "rise and fall look alike",
     };
     Evidence {
         sentence: format!(
             "measured response lags the model by {lag_up:.2} s while it rises and {lag_down:.2} s while it \
              falls: {meaning}"
         ),
-        supports: (lag_down - lag_up).abs() > 0.1,
+        supports: differ,
     }
 }
 
-/// How far the measurement lags the model at the low and at the high end of the operating range:
-/// the residual regressed on the model's rate of change, split at the median output level.
+/// How far the measurement lags the model below and above the median output level.
 pub(super) fn level_evidence(traces: &[ResidualTrace]) -> Evidence {
     let mut levels: Vec<f64> = traces.iter().flat_map(|t| t.y_hat.iter().copied()).collect();
     levels.sort_by(f64::total_cmp);
     let Some(&middle) = levels.get(levels.len() / 2) else { return Evidence::none("no response to look at") };
-    let (mut rows, mut e) = (Vec::new(), Vec::new());
-    for t in traces {
-        let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
-        for ((r, ek), level) in rate.iter().zip(t.residual()).zip(&t.y_hat) {
-            let low = *level < middle;
-            rows.push([if low { *r } else { 0.0 }, if low { 0.0 } else { *r }, 1.0]);
-            e.push(ek);
-        }
-    }
-    let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
-    let Ok(sol) = solve_lstsq(&a, &e) else { return Evidence::none("the response never moves") };
-    let (lag_low, lag_high) = (-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c));
-    let meaning = if (lag_low - lag_high).abs() > 0.1 {
-        if lag_low > lag_high {
-            "the engine responds more slowly at the low end than the model"
-        } else {
-            "the engine responds more slowly at the high end than the model"
-        }
-    } else {
-        "the response is as fast at both ends"
+    let Some((lag_low, lag_high)) = split_lags(traces, |_, level| level < middle) else {
+        return Evidence::none("the response never moves");
+    };
+    let differ = (lag_low - lag_high).abs() > LAG_DIFFERENCE_SECS;
+    let meaning = match (differ, lag_low > lag_high) {
+        (true, true) => "the engine responds more slowly at the low end than the model",
+        (true, false) => "the engine responds more slowly at the high end than the model",
+        (false, _) => "the response is as fast at both ends",
     };
     Evidence {
         sentence: format!(
             "measured response lags the model by {lag_low:.2} s below the middle of the operating range and \
              {lag_high:.2} s above it: {meaning}"
         ),
-        supports: (lag_low - lag_high).abs() > 0.1,
+        supports: differ,
     }
 }
 

@@ -85,3 +85,39 @@ fn paper_wiener_system_is_identified_to_under_0_2_pct() {
     }
     assert!(m.rmspe_pct < 0.2, "validation RMSPE {:.4} %", m.rmspe_pct);
 }
+
+/// No dead ends: when no candidate cluster can be drawn (here the settings allow no circle wider
+/// than 1e-4, so the noisy segment roots never gather), the linear block is fitted directly by
+/// output error, the proposal says so in words, and the model still follows the engine.
+#[test]
+fn without_any_cluster_the_model_is_fitted_directly_and_says_so() {
+    let u_ident = staircase(&[
+        (2.6, 60.0),
+        (3.1, 40.0),
+        (2.8, 40.0),
+        (3.6, 40.0),
+        (4.2, 40.0),
+        (3.4, 40.0),
+        (5.43, 40.0),
+        (6.4, 40.0),
+        (4.6, 40.0),
+    ]);
+    let ident = run("ident", noisy(&u_ident, 0.000327, 1), noisy(&paper_speed(&u_ident), 5.07, 2));
+    let mut settings = OutputSettings::for_output("shaft_speed_rpm");
+    settings.cluster.max_radius = 1e-4;
+    let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap();
+    let result = identify_output(&ident, "shaft_speed_rpm", &settings, &segments, None).unwrap();
+    let proposal = result.proposal.as_ref().unwrap();
+    assert!(proposal.clusters.is_empty(), "{:?}", proposal.clusters);
+    let note = proposal.direct.as_ref().map(|d| d.note.clone()).unwrap();
+    assert!(note.contains("fitted directly"), "{note}");
+    assert_eq!(result.model.direct_fit.as_deref(), Some(note.as_str()));
+    assert!(result.model.roots.iter().all(|g| g.region.is_none() && g.kind == RootKind::Pole));
+
+    let u_val = staircase(&[(3.0, 30.0), (5.0, 20.0), (3.5, 20.0), (6.0, 20.0)]);
+    let y_true = paper_speed(&u_val);
+    let val = run("val", noisy(&u_val, 0.000327, 3), noisy(&y_true, 5.07, 4));
+    let pred = predict_wiener(&result.model.wiener, &val, "shaft_speed_rpm").unwrap();
+    let m = metrics(&y_true, &pred.y_hat).unwrap();
+    assert!(m.rmspe_pct < 0.5, "direct fit validation RMSPE {:.4} %", m.rmspe_pct);
+}

@@ -544,13 +544,14 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             else {
                 continue;
             };
-            // A dead time replaces a root only when it is longer than the delay that root itself
-            // gives (its low-frequency group delay) by more than the dead time's own resolution of one
-            // sample: a shorter one is the root's lag read as a delay, and the root, which the segment
-            // models show, is the better explanation.
+            // A dead time replaces a root only when it is at least twice the delay that root itself
+            // gives (its low-frequency group delay, the time by which it shifts a slow input), less
+            // the dead time's own resolution of one sample: a dead time the root's lag could account
+            // for is that lag read as a delay, and the root, which the segment models show, is the
+            // better explanation.
             let removed = &current.groups[index];
-            let longer =
-                d.saturating_sub(1) as f64 * data.fits.dt_secs > group_delay_secs(removed, data.fits.dt_secs);
+            let lag_secs = group_delay_secs(removed, data.fits.dt_secs);
+            let longer = d.saturating_sub(1) as f64 * data.fits.dt_secs >= 2.0 * lag_secs;
             let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
             if longer && pooled(&cv) <= pooled(&cur) {
                 let gain = Gain::of(&cur, &cv, noise_var);

@@ -22,6 +22,7 @@ const OUTPUTS: [&str; 2] = ["shaft_speed_rpm", "thrust_n"];
 fn setup(output: &str) -> (Harness<'static, App>, Pos2, Pos2) {
     let mut app = App::startup(None);
     assert!(app.session.runs.len() == 4, "the bench needs the bundled sample runs: {:?}", app.view.failures);
+    app.settle();
     app.view.tab = Tab::ZPlane;
     app.view.output = Some(output.to_owned());
     let mut harness = Harness::builder()

@@ -10,7 +10,7 @@ use crate::core::baselines::BaselineError;
 use crate::core::baselines::hammerstein_wiener::{HwModel, HwOptions, HwOrders, fit_hammerstein_wiener};
 use crate::core::baselines::nnarx::{NnarxModel, NnarxOptions, fit_nnarx};
 use crate::core::effects::ExtendedModel;
-use crate::core::initial_state::{InitialState, fit_free_response};
+use crate::core::initial_state::InitialState;
 use crate::core::metrics::{BoxStats, percentage_error_box};
 use crate::core::monte_carlo::{MonteCarloConfig, MonteCarloResult, monte_carlo};
 use crate::core::noise_fit::{Distribution, NoiseFitReport, fit_all};
@@ -71,17 +71,11 @@ impl OutputModels {
         if let Ok(y) = self.gray_box_model().simulate_scored(run, self.initial_state) {
             out.push((GRAY_BOX, y));
         }
-        let linear = self.wiener.linear.simulate(u);
-        out.push((
-            LINEAR,
-            match estimated {
-                Some(y) => {
-                    let poles = self.wiener.linear.tf.poles().unwrap_or_default();
-                    fit_free_response(&poles, &linear, y, <[f64]>::to_vec)
-                }
-                None => linear,
-            },
-        ));
+        let linear = match measured {
+            Some(y) => self.wiener.linear.simulate_scored(u, y, self.initial_state),
+            None => self.wiener.linear.simulate(u),
+        };
+        out.push((LINEAR, linear));
         if let Some(hw) = &self.hw {
             out.push((
                 HAMMERSTEIN_WIENER,
@@ -380,6 +374,8 @@ pub struct CompareInput {
     /// The gray-box model with its effects, when it has any: the gray-box model on the runs (the
     /// input-only studies use `wiener`, as the batch does).
     pub extended: Option<crate::core::effects::ExtendedModel>,
+    /// Where every model's simulation of a scored run starts (the output's setting).
+    pub initial_state: InitialState,
 }
 
 /// One model's simulation of one run.
@@ -442,6 +438,7 @@ pub fn compare_output(
         &mut scaled(progress, 0.0, NNARX_END),
     )?;
     models.extended = input.extended.clone().filter(|m| !m.effects.is_empty());
+    models.initial_state = input.initial_state;
     let runs = input
         .scored
         .iter()

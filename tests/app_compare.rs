@@ -24,6 +24,7 @@ const MAX_FRAMES: usize = 12_000;
 fn sample_harness(tab: Tab) -> Harness<'static, App> {
     let mut app = App::startup(None);
     assert_eq!(app.session.runs.len(), 4, "the bundled sample runs load: {:?}", app.view.failures);
+    app.settle();
     app.view.tab = tab;
     let mut harness = Harness::builder()
         .with_size(egui::vec2(1400.0, 900.0))
@@ -197,7 +198,7 @@ fn removing_the_chirp_run_clears_the_measured_points() {
 /// The comparison's input for the speed output of the bundled samples, built from the app's cache.
 fn speed_input() -> CompareInput {
     let mut app = App::startup(None);
-    app.refresh();
+    app.settle();
     let ident = app.cache.ident.as_ref().unwrap();
     let output = ident.output(SPEED).unwrap();
     let live = output.live.as_ref().unwrap();
@@ -215,6 +216,7 @@ fn speed_input() -> CompareInput {
         scored,
         steady,
         extended: None,
+        initial_state: output.setup.settings.initial_state,
     }
 }
 
@@ -250,7 +252,7 @@ fn with_an_effect_applied_the_gray_box_row_is_the_model_with_its_effect() {
     let project = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/soak/project.toml");
     let mut app = App::new(jetid::ui::Session::default());
     app.apply(Command::OpenProject(project));
-    app.refresh();
+    app.settle();
     app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "thermal_soak".into() });
     app.view.output = Some(SPEED.into());
     app.view.tab = Tab::Compare;

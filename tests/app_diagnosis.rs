@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use egui::accesskit::Role as A11yRole;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+use jetid::core::diagnose::DiagnosisKind;
 use jetid::ui::{App, Command, Role, Session, Tab};
 
 const SPEED: &str = "shaft_speed_rpm";
@@ -30,6 +31,7 @@ fn open_sample(project: &str) -> Harness<'static, App> {
     assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
     app.apply(Command::SelectOutput(SPEED.into()));
     app.apply(Command::ShowTab(Tab::Diagnosis));
+    app.settle();
     let mut harness = harness(app);
     harness.run();
     finish_diagnosis(&mut harness);
@@ -119,13 +121,21 @@ fn the_bundled_sr30_runs_hide_no_effect() {
     let mut app = App::startup(None);
     app.apply(Command::SelectOutput(SPEED.into()));
     app.apply(Command::ShowTab(Tab::Diagnosis));
+    app.settle();
     let mut harness = harness(app);
     harness.run();
     finish_diagnosis(&mut harness);
     let state = &harness.state().view.views.diagnosis;
     let report = state.result(SPEED).unwrap().outcome.as_ref().unwrap();
     assert!(!report.entries.is_empty());
-    assert!(report.entries.iter().all(|d| !d.significant), "{:?}", report.entries);
+    // A structural refinement may be needed; no physical effect is.
+    let physics: Vec<&str> = report
+        .entries
+        .iter()
+        .filter(|d| d.significant && d.kind == DiagnosisKind::Physics)
+        .map(|d| d.effect.as_str())
+        .collect();
+    assert!(physics.is_empty(), "{physics:?}");
     assert!(harness.query_by_label("significant").is_none());
 }
 
@@ -144,6 +154,7 @@ fn a_run_without_the_channels_an_effect_needs_is_a_shown_error() {
     app.apply(Command::load(&bare, Role::Validation));
     app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "ambient_correction".into() });
     app.apply(Command::ShowTab(Tab::Traces));
+    app.settle();
     let mut harness = harness(app);
     harness.run();
     let live = harness.state().cache.output(SPEED).unwrap().live.as_ref().unwrap();

@@ -17,6 +17,7 @@ const THRUST: &str = "thrust_n";
 fn sample_harness(tab: Tab) -> Harness<'static, App> {
     let mut app = App::startup(None);
     assert_eq!(app.session.runs.len(), 4, "the bundled sample runs load: {:?}", app.view.failures);
+    app.settle();
     app.view.tab = tab;
     let mut harness = Harness::builder()
         .with_size(egui::vec2(1400.0, 900.0))
@@ -266,7 +267,8 @@ fn exporting_then_importing_a_model_restores_the_clusters() {
     let (poles_again, rmspe_again) = model_of(app, SPEED);
     assert!(
         poles_again.len() == poles.len()
-            && poles_again.iter().zip(&poles).all(|(a, b)| (a - b).norm() < 1e-9)
+            && poles_again.iter().zip(&poles).all(|(a, b)| (a - b).norm() < 1e-9),
+        "{poles:?} vs {poles_again:?}"
     );
     assert!((rmspe_again - rmspe).abs() < 1e-6);
 }
@@ -322,7 +324,7 @@ fn dragging_a_segment_boundary_refits_on_release_and_undoes() {
 #[test]
 fn the_saved_session_keeps_segments_settings_and_clusters() {
     let mut app = App::startup(None);
-    app.refresh();
+    app.settle();
     let mut clusters = app.cache.output(SPEED).unwrap().clusters.clone();
     clusters[0].radius *= 1.5;
     app.apply(Command::SetClusters { output: SPEED.into(), clusters: Some(clusters.clone()) });
@@ -339,7 +341,7 @@ fn a_saved_project_reads_back_with_io_project_and_opens_in_the_app() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bench.toml");
     let mut app = App::startup(None);
-    app.refresh();
+    app.settle();
     let mut clusters = app.cache.output(THRUST).unwrap().clusters.clone();
     clusters[0].radius *= 1.2;
     app.apply(Command::SetClusters { output: THRUST.into(), clusters: Some(clusters.clone()) });
@@ -364,7 +366,7 @@ fn a_saved_project_reads_back_with_io_project_and_opens_in_the_app() {
     assert_eq!(roles, vec![Role::Identification, Role::Validation, Role::Chirp, Role::Steady]);
     assert_eq!(other.session.setup.segments, Some(segments));
     assert_eq!(other.session.setup.output(THRUST).clusters, Some(clusters));
-    other.refresh();
+    other.settle();
     assert!(other.cache.output(THRUST).unwrap().live.is_ok());
 }
 
@@ -403,4 +405,81 @@ fn escape_cancels_a_cluster_drag() {
     assert_eq!(app.session.revision, revision);
     assert_eq!(clusters_of(app, SPEED), clusters);
     assert!(app.cache.preview.is_none());
+}
+
+/// Step frames (sleeping between them) until no automatic proposal is being computed.
+fn wait_for_proposals(harness: &mut Harness<'_, App>) {
+    for _ in 0..3000 {
+        if !harness.state().cache.ident.as_ref().is_some_and(|i| i.is_proposing()) {
+            harness.run();
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        harness.step();
+    }
+    panic!("the automatic proposal did not end within a minute");
+}
+
+#[test]
+fn the_proposal_runs_off_the_ui_thread_and_the_table_shows_the_models_roots_and_why() {
+    let mut app = App::startup(None);
+    app.view.tab = Tab::ZPlane;
+    app.view.output = Some(SPEED.into());
+    app.refresh();
+    // Refreshing only starts the structure search: it takes seconds, far longer than a frame.
+    assert!(app.cache.ident.as_ref().unwrap().is_proposing(), "the proposal ran on the calling thread");
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1400.0, 900.0))
+        .build_ui_state(|ui, app: &mut App| app.ui(ui), app);
+    harness.step();
+    harness.get_by_label("The automatic proposal is being computed.");
+    wait_for_proposals(&mut harness);
+
+    let app = harness.state();
+    let output = app.cache.output(SPEED).unwrap();
+    let proposal = output.proposal.proposal().expect("the proposal arrived");
+    let live = output.live.as_ref().expect("the model follows the proposal");
+    assert_eq!(output.clusters, proposal.clusters);
+    // Every model root that came from a cluster is listed with the root actually in the model
+    // (after the polish), not the cluster's centroid.
+    let poles = live.model.wiener.linear.tf.poles().unwrap();
+    let from_clusters: Vec<_> = live.model.roots.iter().filter(|g| g.cluster.is_some()).collect();
+    assert!(!from_clusters.is_empty());
+    for group in from_clusters {
+        assert!(
+            poles
+                .iter()
+                .chain(&live.model.wiener.linear.tf.zeros().unwrap())
+                .any(|p| (p - group.root).norm() < 1e-6)
+        );
+        let text = if group.pair {
+            format!("{:.4}±{:.4}i", group.root.re, group.root.im.abs())
+        } else {
+            format!("{:.4}", group.root.re)
+        };
+        harness.get_by_label(&text);
+    }
+    // Each candidate's verdict is said in words.
+    harness.get_by_label("Why the automatic proposal chose these");
+    for verdict in &proposal.verdicts {
+        harness.get_by_label(&verdict.reason);
+    }
+    harness.get_by_label(&proposal.dead_time.reason);
+}
+
+#[test]
+fn editing_the_proposed_clusters_keeps_the_proposals_dead_time_and_accepting_it_again_drops_it() {
+    let mut harness = sample_harness(Tab::ZPlane);
+    let proposed = {
+        let output = harness.state().cache.output(SPEED).unwrap();
+        output.proposal.dead_time_samples().expect("a proposal built from clusters")
+    };
+    assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, None);
+    let clusters = clusters_of(harness.state(), SPEED);
+    harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: Some(clusters) });
+    harness.run();
+    assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, Some(proposed));
+    harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: None });
+    harness.run();
+    assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, None);
 }

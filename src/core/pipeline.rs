@@ -7,7 +7,7 @@ use crate::core::arx::{self, ArxModel, ArxOrders, DeadTime, fit_arx};
 use crate::core::cluster::{
     self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots,
 };
-use crate::core::initial_state::InitialState;
+use crate::core::initial_state::{InitialState, fit_free_response};
 use crate::core::metrics::{Metrics, MetricsError, metrics};
 use crate::core::reduce::{self, IdentData, RootGroup};
 use crate::core::refine::Refinement;
@@ -375,6 +375,27 @@ pub fn predict_wiener(model: &WienerModel, run: &Run, output: &str) -> Result<Ru
     score(run, output, model.simulate(&run.input.values).1)
 }
 
+/// Simulate the Wiener model on a run to score it, started as `initial` says (see
+/// `core::initial_state`); the same numbers as the comparison's gray-box row.
+pub fn predict_scored(
+    model: &WienerModel,
+    run: &Run,
+    output: &str,
+    initial: InitialState,
+) -> Result<RunPrediction, PipelineError> {
+    let y = output_values(run, output)?;
+    let v = model.linear.simulate(&run.input.values);
+    let y_hat = match initial {
+        InitialState::Steady => v.iter().map(|x| model.map.eval(*x)).collect(),
+        InitialState::Estimated => {
+            let poles = model.linear.tf.poles().unwrap_or_default();
+            let through_map = |v: &[f64]| v.iter().map(|x| model.map.eval(*x)).collect::<Vec<f64>>();
+            through_map(&fit_free_response(&poles, &v, y, through_map))
+        }
+    };
+    score(run, output, y_hat)
+}
+
 pub fn score(run: &Run, output: &str, y_hat: Vec<f64>) -> Result<RunPrediction, PipelineError> {
     let y = output_values(run, output)?;
     let m = metrics(y, &y_hat).map_err(|source| PipelineError::Metrics { run: run.name.clone(), source })?;
@@ -386,7 +407,10 @@ pub fn score(run: &Run, output: &str, y_hat: Vec<f64>) -> Result<RunPrediction, 
 pub struct LiveResult {
     pub model: GrayBoxModel,
     pub evals: Vec<ClusterEval>,
+    /// The gray-box model on every validation run, started as `settings.initial_state` says.
     pub predictions: Vec<RunPrediction>,
+    /// The linear block alone on every validation run, started the same way.
+    pub linear: Vec<RunPrediction>,
     pub bode: Vec<BodePoint>,
 }
 
@@ -400,12 +424,44 @@ pub fn live_update(
     omegas_rad_s: &[f64],
 ) -> Result<LiveResult, PipelineError> {
     let (model, evals) = build_gray_box(fits, ident, clusters, settings)?;
+    live_result(model, evals, fits, settings, validation, omegas_rad_s)
+}
+
+/// [`live_update`] for the model of an automatic proposal (see [`build_proposed`]).
+pub fn live_update_proposed(
+    fits: &SegmentFits,
+    ident: &Run,
+    proposal: &Proposal,
+    settings: &OutputSettings,
+    validation: &[&Run],
+    omegas_rad_s: &[f64],
+) -> Result<LiveResult, PipelineError> {
+    let (model, evals) = build_proposed(fits, ident, proposal, settings)?;
+    live_result(model, evals, fits, settings, validation, omegas_rad_s)
+}
+
+fn live_result(
+    model: GrayBoxModel,
+    evals: Vec<ClusterEval>,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+    validation: &[&Run],
+    omegas_rad_s: &[f64],
+) -> Result<LiveResult, PipelineError> {
+    let initial = settings.initial_state;
     let predictions = validation
         .iter()
-        .map(|run| predict_wiener(&model.wiener, run, &fits.output))
+        .map(|run| predict_scored(&model.wiener, run, &fits.output, initial))
+        .collect::<Result<Vec<_>, _>>()?;
+    let linear = validation
+        .iter()
+        .map(|run| {
+            let y = output_values(run, &fits.output)?;
+            score(run, &fits.output, model.wiener.linear.simulate_scored(&run.input.values, y, initial))
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let bode = model.wiener.linear.tf.bode_response(omegas_rad_s);
-    Ok(LiveResult { model, evals, predictions, bode })
+    Ok(LiveResult { model, evals, predictions, linear, bode })
 }
 
 /// Segments → fits → clusters (given or automatic) → model, for one output.

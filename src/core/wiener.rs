@@ -7,6 +7,8 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use crate::core::initial_state::{InitialState, fit_free_response};
+
 use crate::core::lstsq::{LstsqError, solve_lstsq};
 use crate::core::static_map::StaticMap;
 use crate::core::tf::{DiscreteTf, TfError};
@@ -25,6 +27,20 @@ impl LinearBlock {
             *x += self.offset;
         }
         v
+    }
+
+    /// Simulate a run to score it against its measured output `y`: from the steady state of
+    /// `u[0]`, or with the free response that best fits the first seconds of `y` (see
+    /// `core::initial_state`).
+    pub fn simulate_scored(&self, u: &[f64], y: &[f64], initial: InitialState) -> Vec<f64> {
+        let v = self.simulate(u);
+        match initial {
+            InitialState::Steady => v,
+            InitialState::Estimated => {
+                let poles = self.tf.poles().unwrap_or_default();
+                fit_free_response(&poles, &v, y, <[f64]>::to_vec)
+            }
+        }
     }
 }
 

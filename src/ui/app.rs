@@ -8,6 +8,7 @@ use super::command::Command;
 use super::derived::Derived;
 use super::file_dialog::{PendingPick, PickPoll, PickPurpose};
 use super::mapping_ui::{self, MappingDialog, MappingTarget};
+use super::model_cache::IdentCache;
 use super::session::{LoadFailure, Role, SavedSession, Session, SessionRun, file_label};
 use super::setup::History;
 use super::views::{self, Tab, ViewStates};
@@ -143,7 +144,10 @@ impl App {
             }
             Command::SetClusters { output, clusters } => {
                 let status = Self::clusters_status(&output, clusters.as_ref().map(Vec::len));
-                self.edit_setup(&status, |setup| setup.output_mut(&output).clusters = clusters);
+                let proposed = self.cache.output(&output).and_then(|o| o.proposal.dead_time_samples());
+                self.edit_setup(&status, |setup| {
+                    carry_dead_time(setup.output_mut(&output), clusters, proposed)
+                });
             }
             Command::SetOutputSettings { output, settings } => {
                 let status = format!("{output}: settings changed");
@@ -321,6 +325,10 @@ impl App {
         if self.refresh() {
             ctx.request_repaint();
         }
+        if self.cache.ident.as_ref().is_some_and(IdentCache::is_proposing) {
+            // The proposal's job cannot reach the context; look for its result a few times a second.
+            ctx.request_repaint_after(PROPOSAL_POLL);
+        }
         if let Some(purpose) = self.view.dialog_requested.take() {
             self.open_picker(&ctx, purpose);
         }
@@ -353,9 +361,20 @@ impl App {
     pub fn refresh(&mut self) -> bool {
         let stale = self.cache.revision() != Some(self.session.revision);
         self.cache.refresh(&self.session);
+        let proposed = self.cache.ident.as_mut().is_some_and(IdentCache::poll_proposals);
         let drag = self.view.views.zplane.preview_request();
         let preview_changed = self.cache.set_preview(drag.as_ref().map(|(o, c)| (o.as_str(), c.as_slice())));
-        stale || preview_changed
+        stale || proposed || preview_changed
+    }
+
+    /// [`Self::refresh`], then wait for the automatic proposals computed in the background (tests,
+    /// screenshots and the headless paths; never in a frame).
+    pub fn settle(&mut self) {
+        self.refresh();
+        if let Some(ident) = self.cache.ident.as_mut() {
+            ident.wait_for_proposals();
+        }
+        self.refresh();
     }
 
     /// The output the model views show: the chosen one, else the first one identified.
@@ -422,4 +441,30 @@ fn shortcut_commands(ui: &egui::Ui) -> Vec<Command> {
 /// The hint shown when a view has nothing to draw.
 pub(super) fn hint(ui: &mut egui::Ui, text: &str) {
     ui.label(RichText::new(text).color(theme::HINT));
+}
+
+/// How often a frame looks for a finished automatic proposal while one is computed: quick enough
+/// that the model appears without a felt delay (a tenth of a second is below what a user notices
+/// after a second of waiting), slow enough to cost nothing while idle.
+const PROPOSAL_POLL: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// Set an output's clusters. Leaving the automatic proposal for edited clusters carries the
+/// proposal's dead time into the settings (unless one is set), so the edited model keeps the delay
+/// the proposal found and the saved project builds the same model in the batch; going back to the
+/// proposal drops a dead time that came from it.
+fn carry_dead_time(
+    setup: &mut super::setup::OutputSetup,
+    clusters: Option<Vec<crate::core::cluster::Cluster>>,
+    proposed: Option<usize>,
+) {
+    match (&setup.clusters, &clusters) {
+        (None, Some(_)) if setup.settings.dead_time_samples.is_none() => {
+            setup.settings.dead_time_samples = proposed;
+        }
+        (Some(_), None) if setup.settings.dead_time_samples == proposed => {
+            setup.settings.dead_time_samples = None;
+        }
+        _ => {}
+    }
+    setup.clusters = clusters;
 }

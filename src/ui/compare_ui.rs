@@ -20,6 +20,7 @@ use super::model_ui;
 use super::session::{Role, Session};
 use super::theme;
 use crate::batch_compare::{CompareInput, OutputComparison, compare_output, compare_stage};
+use crate::core::initial_state::InitialState;
 use crate::core::pipeline::SegmentFits;
 use crate::core::run::Run;
 use crate::core::wiener::WienerModel;
@@ -33,6 +34,7 @@ pub struct CompareKey {
     effects: Vec<crate::core::effects::EffectRecord>,
     fits: Arc<SegmentFits>,
     runs: Vec<(Role, Arc<Run>)>,
+    initial_state: InitialState,
 }
 
 impl CompareKey {
@@ -40,6 +42,7 @@ impl CompareKey {
         self.wiener == other.wiener
             && self.effects == other.effects
             && Arc::ptr_eq(&self.fits, &other.fits)
+            && self.initial_state == other.initial_state
             && self.runs.len() == other.runs.len()
             && self.runs.iter().zip(&other.runs).all(|(a, b)| a.0 == b.0 && Arc::ptr_eq(&a.1, &b.1))
     }
@@ -191,7 +194,8 @@ fn current_input(
     let wiener = live.model.wiener.clone();
     let extended = live.effects.model.clone().filter(|m| !m.effects.is_empty());
     let effects = extended.as_ref().map(|m| m.records()).unwrap_or_default();
-    let key = CompareKey { wiener: wiener.clone(), effects, fits: Arc::clone(fits), runs };
+    let initial_state = out.setup.settings.initial_state;
+    let key = CompareKey { wiener: wiener.clone(), effects, fits: Arc::clone(fits), runs, initial_state };
     let input = CompareInput {
         output: output.to_owned(),
         ident: Arc::clone(&ident.run),
@@ -200,6 +204,7 @@ fn current_input(
         scored,
         steady,
         extended,
+        initial_state,
     };
     Ok((key, input))
 }

@@ -105,7 +105,7 @@ pub(super) fn apply_effects(
     }
     for (scored, run) in live.runs.iter_mut().zip(runs) {
         let prediction = model
-            .simulate(run)
+            .simulate_scored(run, settings.initial_state)
             .map_err(|e| e.to_string())
             .and_then(|y_hat| pipeline::score(run, &output, y_hat).map_err(|e| e.to_string()));
         match prediction {

@@ -19,7 +19,8 @@ use super::jobs::Job;
 use super::model_ui::{self, error_ui, hint};
 use super::session::Session;
 use super::theme;
-use crate::core::diagnose::{self, DiagnosisReport};
+use crate::core::diagnose::{self, DiagnosisKind, DiagnosisReport};
+use crate::core::effects::BLOCK_IDS;
 use crate::io::report::HistoryStep;
 
 /// The two halves of the view.
@@ -201,6 +202,16 @@ fn which_effect_ui(
             return commands;
         }
     };
+    if let Some(note) = &report.structure_note {
+        egui::Frame::group(ui.style()).show(ui, |ui| {
+            ui.set_width(ui.available_width());
+            ui.label(RichText::new("Model structure first").strong().color(theme::WARNING));
+            ui.label(format!(
+                "{note}. Change the model's structure first (the clusters on the z-plane, the map's \
+                 order, or the scheduled time constant below) before blaming a physical effect."
+            ));
+        });
+    }
     egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
         for (rank, entry) in report.entries.iter().enumerate() {
             if let Some(command) = entry_ui(ui, output, rank, entry, applied) {
@@ -282,7 +293,10 @@ fn job_status_ui(
                     "Each effect is added to the current model, refitted on the identification run and \
                      scored on the validation runs. Significant: a one-sided Diebold–Mariano test on \
                      |% error| against the refitted current model gives p < {} and the validation RMSPE \
-                     falls by at least {:.0} %.",
+                     falls by at least {:.0} %. Structural refinements (one more pole, pole pair or zero, \
+                     the map's order, a scheduled time constant) are tried too; a physical effect counts \
+                     only when it also beats the best of them by the same rule and its own evidence shows \
+                     its signature.",
                     diagnose::SIGNIFICANCE_LEVEL,
                     100.0 * diagnose::MIN_RELATIVE_REDUCTION
                 ),
@@ -304,6 +318,7 @@ fn entry_ui(
         ui.set_width(ui.available_width());
         ui.horizontal(|ui| {
             ui.label(RichText::new(format!("{}. {}", rank + 1, entry.effect)).strong().monospace());
+            ui.label(RichText::new(entry.kind.label()).small().color(theme::HINT));
             ui.label(
                 RichText::new(format!(
                     "RMSPE {:.3} % → {:.3} %  ({:+.1} %)",
@@ -314,14 +329,25 @@ fn entry_ui(
                 .monospace(),
             );
             ui.label(RichText::new(format!("p = {}", p_text(entry.test.p_value))).monospace());
-            if entry.significant {
-                ui.label(RichText::new("significant").color(theme::OK).strong());
-            } else {
-                ui.label(RichText::new("not significant").color(theme::HINT));
+            match (entry.significant, entry.kind) {
+                (true, DiagnosisKind::Physics) => {
+                    ui.label(RichText::new("significant").color(theme::OK).strong());
+                }
+                (true, DiagnosisKind::Structure) => {
+                    ui.label(RichText::new("structure needed").color(theme::WARNING).strong());
+                }
+                (false, _) => {
+                    ui.label(RichText::new("not significant").color(theme::HINT));
+                }
             }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 if applied.contains(&entry.effect) {
                     ui.label(RichText::new("in the model").color(theme::OK));
+                } else if !BLOCK_IDS.contains(&entry.effect.as_str()) {
+                    ui.label(RichText::new("edit the clusters").color(theme::HINT)).on_hover_text(
+                        "A change of the linear block or the map is made on the z-plane (add or move a \
+                         cluster) or in the output's settings, not added as a block",
+                    );
                 } else if ui
                     .button("Apply")
                     .on_hover_text(format!("Add {} to the model of {output} (undo: Ctrl+Z)", entry.effect))
@@ -336,6 +362,18 @@ fn entry_ui(
         });
         ui.label(RichText::new(&entry.physics).italics());
         hint(ui, &entry.evidence);
+        if let Some(rival) = &entry.rival {
+            hint(
+                ui,
+                &format!(
+                    "against the best structural refinement ({}, {:.3} %): p = {}, {:+.1} %",
+                    rival.id,
+                    rival.rmspe_pct,
+                    p_text(rival.test.p_value),
+                    -100.0 * rival.reduction
+                ),
+            );
+        }
     });
     command
 }

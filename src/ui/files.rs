@@ -95,7 +95,7 @@ impl App {
                 .outputs
                 .iter()
                 .filter(|o| ident.output(&o.name).is_some())
-                .map(|o| (o.name.clone(), o.clusters.clone()))
+                .map(|o| (o.name.clone(), o.clusters.clone(), o.wiener.linear.tf.input_delay()))
                 .collect();
             if shared.is_empty() {
                 let in_file: Vec<&str> = file.outputs.iter().map(|o| o.name.as_str()).collect();
@@ -109,15 +109,19 @@ impl App {
         });
         match clusters {
             Ok(clusters) => {
-                let names: Vec<String> = clusters.iter().map(|(name, _)| name.clone()).collect();
+                let names: Vec<String> = clusters.iter().map(|(name, _, _)| name.clone()).collect();
                 let status = format!(
                     "Imported the clusters of {} from {}; the model is fitted again on the session's runs",
                     names.join(", "),
                     file_label(path)
                 );
                 self.edit_setup(&status, |setup| {
-                    for (name, clusters) in clusters {
-                        setup.output_mut(&name).clusters = Some(clusters);
+                    // The model's input dead time comes with its clusters: it is part of the
+                    // structure the clusters were chosen with.
+                    for (name, clusters, dead_time) in clusters {
+                        let output = setup.output_mut(&name);
+                        output.clusters = Some(clusters);
+                        output.settings.dead_time_samples = Some(dead_time);
                     }
                 });
                 self.view.status = Some(status);

@@ -11,6 +11,7 @@ use anyhow::{Result, anyhow, bail};
 
 pub mod app;
 pub mod bode_ui;
+pub mod cluster_table_ui;
 pub mod command;
 pub mod compare_plots;
 pub mod compare_table;

@@ -3,6 +3,10 @@
 //! redone only when the run, the segments or the orders change), the automatic cluster proposal,
 //! and the live path (clusters → reduced model → static map → validation runs → Bode).
 //!
+//! The automatic proposal is a structure search (cross-validated across segments) that takes longer
+//! than a frame, so it runs on a worker thread ([`Proposed`]); the model views say so meanwhile,
+//! and the model follows it when it arrives. Edited clusters do not wait for it.
+//!
 //! While a cluster is dragged, [`Preview`] runs the live path on the dragged clusters every frame
 //! without polishing the centroids (`refine = false`); the committed clusters are polished.
 //!
@@ -12,14 +16,16 @@ use std::sync::Arc;
 
 use crate::core::cluster::{self, Cluster, ClusterEval};
 use crate::core::pipeline::{
-    self, GrayBoxModel, OutputSettings, RunPrediction, SegmentFits, fit_segments_for, live_update,
-    segments_for,
+    self, GrayBoxModel, LiveResult, OutputSettings, RunPrediction, SegmentFits, fit_segments_for,
+    live_update, live_update_proposed, segments_for,
 };
 use crate::core::run::Run;
 use crate::core::segment::{Segment, SegmentSettings};
+use crate::core::structure::Proposal;
 use crate::core::tf::{BodePoint, log_space};
 
 use super::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
+use super::jobs::Job;
 use super::session::{Role, Session};
 use super::setup::OutputSetup;
 
@@ -78,6 +84,28 @@ impl IdentCache {
 
     pub fn output(&self, name: &str) -> Option<&OutputCache> {
         self.outputs.iter().find(|o| o.name == name)
+    }
+
+    /// Take every automatic proposal whose job has ended and rebuild its output's model; true when
+    /// any did (call every frame).
+    pub fn poll_proposals(&mut self) -> bool {
+        let mut any = false;
+        for output in &mut self.outputs {
+            any |= output.poll_proposal();
+        }
+        any
+    }
+
+    /// Block until every automatic proposal has ended (tests and screenshots, never in a frame).
+    pub fn wait_for_proposals(&mut self) {
+        for output in &mut self.outputs {
+            output.wait_for_proposal();
+        }
+    }
+
+    /// True while a proposal is computed on a worker thread.
+    pub fn is_proposing(&self) -> bool {
+        self.outputs.iter().any(|o| o.proposal.is_running())
     }
 
     /// True when the segments were detected (the user has not moved them).
@@ -178,6 +206,50 @@ impl LiveModel {
     }
 }
 
+/// The automatic proposal of one output: the structure search's result, or its job while it runs.
+pub enum Proposed {
+    Running(Job<Arc<Proposal>>),
+    Ready(Arc<Proposal>),
+    Failed(String),
+}
+
+impl Proposed {
+    /// Start the structure search for `fits` on a worker thread.
+    fn start(fits: &Arc<SegmentFits>, run: &Arc<Run>, settings: &OutputSettings) -> Self {
+        let (fits, run, settings) = (Arc::clone(fits), Arc::clone(run), settings.clone());
+        Self::Running(Job::spawn(
+            format!("Proposing clusters for {}", fits.output),
+            || {},
+            move |_| pipeline::propose(&fits, &run, &settings).map(Arc::new).map_err(|e| e.to_string()),
+        ))
+    }
+
+    pub fn proposal(&self) -> Option<&Proposal> {
+        match self {
+            Self::Ready(p) => Some(p),
+            _ => None,
+        }
+    }
+
+    pub fn is_running(&self) -> bool {
+        matches!(self, Self::Running(_))
+    }
+
+    /// The job, while it runs (for its label and elapsed time).
+    pub fn job(&self) -> Option<&Job<Arc<Proposal>>> {
+        match self {
+            Self::Running(job) => Some(job),
+            _ => None,
+        }
+    }
+
+    /// The input dead time the proposal's model carries, samples (`None`: no proposal, or its model
+    /// was fitted directly).
+    pub fn dead_time_samples(&self) -> Option<usize> {
+        self.proposal().filter(|p| p.direct.is_none()).map(|p| p.dead_time.in_model())
+    }
+}
+
 #[derive(Clone, PartialEq)]
 struct FitsKey {
     segments: Vec<Segment>,
@@ -197,7 +269,7 @@ pub struct OutputCache {
     /// Bode of every segment's ARX model at `omegas_rad_s`, in segment order.
     pub segment_bode: Vec<Vec<BodePoint>>,
     /// The automatic proposal for the current fits.
-    pub automatic: Result<Vec<Cluster>, String>,
+    pub proposal: Proposed,
     /// The clusters in use: the user's, else the automatic proposal.
     pub clusters: Vec<Cluster>,
     pub evals: Result<Vec<ClusterEval>, String>,
@@ -221,7 +293,7 @@ impl OutputCache {
             fits: Err("not computed yet".into()),
             omegas_rad_s: Vec::new(),
             segment_bode: Vec::new(),
-            automatic: Err("not computed yet".into()),
+            proposal: Proposed::Failed("not computed yet".into()),
             clusters: Vec::new(),
             evals: Err("not computed yet".into()),
             scored: Vec::new(),
@@ -271,28 +343,83 @@ impl OutputCache {
             return;
         }
         if refit || setup.settings.cluster != self.setup.settings.cluster {
-            self.automatic = match &self.fits {
-                Ok(fits) => pipeline::propose(fits, run, &setup.settings)
-                    .map(|p| p.clusters)
-                    .map_err(|e| e.to_string()),
-                Err(err) => Err(err.clone()),
+            self.proposal = match &self.fits {
+                Ok(fits) => Proposed::start(fits, run, &setup.settings),
+                Err(err) => Proposed::Failed(err.clone()),
             };
         }
-        self.clusters = match &setup.clusters {
-            Some(clusters) => clusters.clone(),
-            None => self.automatic.clone().unwrap_or_default(),
-        };
         self.source = Some(Arc::clone(run));
         self.fits_key = key;
         self.scored = scored;
         self.setup = setup;
-        let (evals, mut live) = self.evaluate(run, &self.clusters, &self.setup.settings);
+        self.rebuild();
+    }
+
+    /// The clusters in use, their evaluation and the committed model (with its effects), from the
+    /// current fits, setup and proposal.
+    fn rebuild(&mut self) {
+        let Some(run) = self.source.clone() else { return };
+        let (clusters, (evals, mut live)) = match (&self.setup.clusters, &self.proposal) {
+            (Some(clusters), _) => (clusters.clone(), self.evaluate(&run, clusters, &self.setup.settings)),
+            (None, Proposed::Ready(proposal)) => {
+                (proposal.clusters.clone(), self.evaluate_proposal(&run, proposal))
+            }
+            (None, Proposed::Running(_)) => {
+                let why = "the automatic proposal is being computed".to_owned();
+                (Vec::new(), (Ok(Vec::new()), Err(why)))
+            }
+            (None, Proposed::Failed(err)) => {
+                let why = format!("the automatic cluster proposal failed: {err}");
+                (Vec::new(), (Ok(Vec::new()), Err(why)))
+            }
+        };
         if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
             let runs: Vec<Arc<Run>> = self.scored.iter().map(|s| Arc::clone(&s.run)).collect();
-            diagnosis_model::apply_effects(live, &self.setup.effects, run, fits, &self.setup.settings, &runs);
+            diagnosis_model::apply_effects(
+                live,
+                &self.setup.effects,
+                &run,
+                fits,
+                &self.setup.settings,
+                &runs,
+            );
         }
+        self.clusters = clusters;
         self.evals = evals;
         self.live = live;
+    }
+
+    /// Take the proposal when its job has ended, and rebuild the model when it follows it.
+    fn poll_proposal(&mut self) -> bool {
+        let Some(result) = self.proposal.job().and_then(Job::poll) else { return false };
+        self.proposal = match result {
+            Ok(proposal) => Proposed::Ready(proposal),
+            Err(err) => Proposed::Failed(err),
+        };
+        self.rebuild();
+        true
+    }
+
+    fn wait_for_proposal(&mut self) {
+        let Proposed::Running(job) = std::mem::replace(&mut self.proposal, Proposed::Failed(String::new()))
+        else {
+            return;
+        };
+        self.proposal = match job.wait() {
+            Ok(proposal) => Proposed::Ready(proposal),
+            Err(err) => Proposed::Failed(err),
+        };
+        self.rebuild();
+    }
+
+    /// The settings a drag of the clusters in use is previewed with: while the clusters follow the
+    /// proposal, with its dead time (committing the edit carries it into the settings).
+    fn preview_settings(&self) -> OutputSettings {
+        let carried = match self.setup.clusters {
+            None => self.setup.settings.dead_time_samples.or_else(|| self.proposal.dead_time_samples()),
+            Some(_) => self.setup.settings.dead_time_samples,
+        };
+        OutputSettings { refine: false, dead_time_samples: carried, ..self.setup.settings.clone() }
     }
 
     /// What a diagnosis of the committed model needs; an error when there is no model or no
@@ -332,15 +459,30 @@ impl OutputCache {
             Err(err) => return (Err(err.clone()), Err(err.clone())),
         };
         if clusters.is_empty() {
-            let why = match (&self.setup.clusters, &self.automatic) {
-                (None, Err(err)) => format!("the automatic cluster proposal failed: {err}"),
-                _ => "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned(),
-            };
+            let why = "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned();
             return (Ok(Vec::new()), Err(why));
         }
         let evals = cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
             .map_err(|e| e.to_string());
         (evals, self.live_path(fits, run, clusters, settings))
+    }
+
+    /// The model of the automatic proposal (its clusters with its dead time, or its direct fit).
+    fn evaluate_proposal(
+        &self,
+        run: &Run,
+        proposal: &Proposal,
+    ) -> (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>) {
+        let fits = match &self.fits {
+            Ok(fits) => fits,
+            Err(err) => return (Err(err.clone()), Err(err.clone())),
+        };
+        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
+        let settings = &self.setup.settings;
+        match live_update_proposed(fits, run, proposal, settings, &runs, &self.omegas_rad_s) {
+            Ok(result) => (Ok(result.evals.clone()), Ok(self.live_model(result, settings))),
+            Err(err) => (Ok(Vec::new()), Err(err.to_string())),
+        }
     }
 
     fn live_path(
@@ -353,29 +495,32 @@ impl OutputCache {
         let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
         let result = live_update(fits, run, clusters, settings, &runs, &self.omegas_rad_s)
             .map_err(|e| e.to_string())?;
+        Ok(self.live_model(result, settings))
+    }
+
+    fn live_model(&self, result: LiveResult, settings: &OutputSettings) -> LiveModel {
         let scored = self
             .scored
             .iter()
-            .zip(result.predictions)
-            .map(|(source, gray_box)| ScoredRun {
+            .zip(result.predictions.into_iter().zip(result.linear))
+            .map(|(source, (gray_box, linear))| ScoredRun {
                 index: source.index,
                 name: source.run.name.clone(),
                 role: source.role,
-                linear: pipeline::predict_linear(&result.model.wiener.linear, &source.run, &self.name)
-                    .map_err(|e| e.to_string()),
+                linear: Ok(linear),
                 gray_box,
                 without_effects: None,
                 effects_error: None,
             })
             .collect();
-        Ok(LiveModel {
+        LiveModel {
             id: diagnosis_model::next_model_id(),
             effects: EffectsOutcome { requested: self.setup.effects.clone(), ..EffectsOutcome::default() },
             model: result.model,
             bode: result.bode,
             runs: scored,
             polish_requested: settings.refine,
-        })
+        }
     }
 }
 
@@ -391,8 +536,7 @@ impl Preview {
     /// The live path on `clusters` for `output`, without polishing (fast enough for every frame).
     pub fn compute(ident: &IdentCache, output: &str, clusters: Vec<Cluster>) -> Option<Self> {
         let cache = ident.output(output)?;
-        let settings = OutputSettings { refine: false, ..cache.setup.settings.clone() };
-        let (evals, mut live) = cache.evaluate(&ident.run, &clusters, &settings);
+        let (evals, mut live) = cache.evaluate(&ident.run, &clusters, &cache.preview_settings());
         if let Ok(live) = &mut live {
             live.effects.left_out_for_preview = !live.effects.requested.is_empty();
         }

@@ -33,7 +33,7 @@ pub fn screenshot_app(project: Option<&Path>, add_effects: &[String]) -> Result<
             app
         }
     };
-    app.refresh();
+    app.settle();
     let outputs: Vec<String> = app.cache.output_names().into_iter().map(ToOwned::to_owned).collect();
     for effect in add_effects {
         for output in &outputs {
@@ -43,7 +43,7 @@ pub fn screenshot_app(project: Option<&Path>, add_effects: &[String]) -> Result<
     if let Some(error) = app.view.errors.first() {
         return Err(anyhow!("{error}"));
     }
-    app.refresh();
+    app.settle();
     Ok(app)
 }
 
@@ -103,7 +103,9 @@ impl eframe::App for ScreenshotApp {
             return;
         }
         self.frames += 1;
-        self.idle_frames = if self.app.view.views.compare.any_running() { 0 } else { self.idle_frames + 1 };
+        let proposing = self.app.cache.ident.as_ref().is_some_and(|i| i.is_proposing());
+        self.idle_frames =
+            if self.app.view.views.compare.any_running() || proposing { 0 } else { self.idle_frames + 1 };
         if let Ok(image) = self.image_rx.try_recv() {
             let outcome = write_png(&self.out, &image);
             self.finish(&ctx, outcome);

@@ -6,13 +6,15 @@ use egui::{RichText, Sense};
 use egui_plot::{PlotBounds, PlotTransform};
 use num_complex::Complex64;
 
+use super::cluster_table_ui;
 use super::command::Command;
 use super::derived::{Derived, LiveView};
-use super::model_ui::{self, complex_text, roots_text};
+use super::model_cache::Proposed;
+use super::model_ui::{self, roots_text};
 use super::setup::History;
 use super::theme;
 use super::zplane_plot;
-use crate::core::cluster::{Cluster, ClusterEval, RootKind};
+use crate::core::cluster::{Cluster, RootKind};
 
 /// Width of the column beside the plot (overview, live strip, cluster table).
 const SIDE_WIDTH: f32 = 560.0;
@@ -160,7 +162,7 @@ pub fn zplane_ui(
                 ui.separator();
                 legend_ui(ui, &view);
                 ui.separator();
-                cluster_table_ui(ui, &view, state);
+                cluster_table_ui::cluster_table_ui(ui, &view, state);
             });
         });
     });
@@ -204,11 +206,19 @@ fn toolbar_ui(
         let automatic = view.output.setup.clusters.is_none();
         let accept = ui
             .add_enabled(!automatic, egui::Button::new("Accept automatic proposal"))
-            .on_hover_text(match &view.output.automatic {
-                Ok(proposal) => {
-                    format!("Replace the clusters by the {} proposed from the segment roots", proposal.len())
+            .on_hover_text(match &view.output.proposal {
+                Proposed::Ready(proposal) if proposal.direct.is_some() => {
+                    "Replace the clusters by the automatic proposal: roots fitted directly (no cluster \
+                     met the aggregation condition)"
+                        .to_owned()
                 }
-                Err(err) => format!("The proposal failed: {err}"),
+                Proposed::Ready(proposal) => format!(
+                    "Replace the clusters by the {} proposed from the segment roots, with the proposal's \
+                     dead time",
+                    proposal.clusters.len()
+                ),
+                Proposed::Running(_) => "The automatic proposal is being computed".to_owned(),
+                Proposed::Failed(err) => format!("The proposal failed: {err}"),
             });
         if accept.clicked() {
             state.selected = None;
@@ -352,50 +362,4 @@ fn live_strip_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
     if live.runs.is_empty() {
         model_ui::hint(ui, "No validation or chirp run to score the model on.");
     }
-}
-
-fn cluster_table_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewState) {
-    let evals: &[ClusterEval] = match view.evals {
-        Ok(evals) => evals,
-        Err(err) => {
-            model_ui::error_ui(ui, &format!("The clusters could not be evaluated: {err}"));
-            return;
-        }
-    };
-    if evals.is_empty() {
-        model_ui::hint(ui, "No clusters. Add one, or accept the automatic proposal.");
-        return;
-    }
-    egui::ScrollArea::both().id_salt("cluster_table").auto_shrink([false, true]).show(ui, |ui| {
-        egui::Grid::new("cluster_table_grid").striped(true).num_columns(9).spacing([10.0, 4.0]).show(
-            ui,
-            |ui| {
-                for title in ["", "members", "radius", "spread", "centroid", "ωn [rad/s]", "τ [s]", "status"]
-                {
-                    ui.label(RichText::new(title).strong());
-                }
-                ui.end_row();
-                for (i, eval) in evals.iter().enumerate() {
-                    let kind = if eval.cluster.kind == RootKind::Pole { "p" } else { "z" };
-                    let colour = if eval.valid { theme::CLUSTER_VALID } else { theme::CLUSTER_INVALID };
-                    let name = RichText::new(format!("{kind}{}", i + 1)).color(colour).strong();
-                    if ui.add(egui::Button::selectable(state.selected == Some(i), name)).clicked() {
-                        state.selected = Some(i);
-                    }
-                    ui.label(format!("{} / {}", eval.segments_found, eval.segments_needed));
-                    ui.label(format!("{:.4}", eval.cluster.radius));
-                    ui.label(format!("{:.4}", eval.spread));
-                    ui.label(RichText::new(complex_text(eval.centroid)).monospace());
-                    ui.label(format!("{:.3}", eval.natural_freq_rad_s));
-                    ui.label(eval.time_constant_secs.map_or_else(|| "–".to_owned(), |t| format!("{t:.3}")));
-                    let status = ui.add(
-                        egui::Label::new(RichText::new(model_ui::status_text(eval)).color(colour))
-                            .sense(Sense::hover()),
-                    );
-                    status.on_hover_text(model_ui::status_detail(eval));
-                    ui.end_row();
-                }
-            },
-        );
-    });
 }

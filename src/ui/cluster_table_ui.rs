@@ -51,7 +51,7 @@ fn clusters_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewSta
     let dt = dt_secs(view);
     let segments = view.output.fits.as_ref().map_or(0, |f| f.roots.len());
     egui::Grid::new("cluster_table_grid").striped(true).num_columns(9).spacing([10.0, 4.0]).show(ui, |ui| {
-        for title in ["", "members", "radius", "root in the model", "ωn [rad/s]", "ζ", "τ [s]", "status"] {
+        for title in ["", "members", "radius", "model root", "ωn [rad/s]", "ζ", "τ [s]", "status"] {
             ui.label(RichText::new(title).strong());
         }
         ui.end_row();
@@ -76,7 +76,7 @@ fn clusters_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewSta
             let rim = roots.iter().any(|g| g.cluster == Some(i) && g.at_rim());
             let (text, detail, colour) = if rim {
                 (
-                    "valid, root at the rim".to_owned(),
+                    "valid, at rim".to_owned(),
                     "The polish pushed the model's root to the circle's rim: the data want it further \
                      out. Move or widen the circle to let it go."
                         .to_owned(),
@@ -116,7 +116,7 @@ fn free_roots_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
     ui.label(RichText::new("Roots fitted directly (no cluster)").strong());
     let dt = dt_secs(view);
     egui::Grid::new("free_roots_grid").striped(true).num_columns(5).spacing([10.0, 4.0]).show(ui, |ui| {
-        for title in ["", "root in the model", "ωn [rad/s]", "ζ", "τ [s]"] {
+        for title in ["", "model root", "ωn [rad/s]", "ζ", "τ [s]"] {
             ui.label(RichText::new(title).strong());
         }
         ui.end_row();
@@ -158,41 +158,37 @@ fn proposal_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
 }
 
 fn reasons_ui(ui: &mut egui::Ui, proposal: &Proposal) {
-    egui::Grid::new("proposal_reasons_grid").striped(true).num_columns(3).spacing([8.0, 3.0]).show(
-        ui,
-        |ui| {
-            for verdict in &proposal.verdicts {
-                let (word, colour) =
-                    if verdict.kept { ("kept", theme::CLUSTER_VALID) } else { ("dropped", theme::HINT) };
-                ui.label(RichText::new(word).color(colour).strong());
-                let kind = if verdict.cluster.kind == RootKind::Pole { "pole" } else { "zero" };
-                let what = root_words(
-                    verdict.cluster.centre,
-                    !verdict.cluster.is_real_axis(),
-                    verdict.natural_freq_rad_s,
-                    verdict.damping,
-                );
-                ui.label(format!(
-                    "{kind} {what}, {}/{} segments",
-                    verdict.segments_found, verdict.segments_total
-                ));
-                ui.add(egui::Label::new(RichText::new(&verdict.reason).color(theme::HINT)).wrap());
-                ui.end_row();
-            }
-            let dead_time = &proposal.dead_time;
-            let (word, colour) =
-                if dead_time.kept { ("kept", theme::CLUSTER_VALID) } else { ("dropped", theme::HINT) };
-            ui.label(RichText::new(word).color(colour).strong());
-            ui.label(format!(
-                "dead time {:.2} s ({} samples)",
-                dead_time.samples as f64 * dead_time.dt_secs,
-                dead_time.samples
-            ));
-            ui.add(egui::Label::new(RichText::new(&dead_time.reason).color(theme::HINT)).wrap());
-            ui.end_row();
-        },
+    for verdict in &proposal.verdicts {
+        let kind = if verdict.cluster.kind == RootKind::Pole { "pole" } else { "zero" };
+        let what = root_words(
+            verdict.cluster.centre,
+            !verdict.cluster.is_real_axis(),
+            verdict.natural_freq_rad_s,
+            verdict.damping,
+        );
+        let what = format!("{kind} {what}, {}/{} segments", verdict.segments_found, verdict.segments_total);
+        reason_ui(ui, verdict.kept, &what, &verdict.reason);
+    }
+    let dead_time = &proposal.dead_time;
+    let what = format!(
+        "input dead time {:.2} s ({} samples)",
+        dead_time.samples as f64 * dead_time.dt_secs,
+        dead_time.samples
     );
+    reason_ui(ui, dead_time.kept, &what, &dead_time.reason);
     if let Some(direct) = &proposal.direct {
         ui.add(egui::Label::new(RichText::new(&direct.note).color(theme::WARNING)).wrap());
     }
+}
+
+/// One candidate: kept or dropped and what it is on one line, why below it.
+fn reason_ui(ui: &mut egui::Ui, kept: bool, what: &str, reason: &str) {
+    let (word, colour) = if kept { ("kept", theme::CLUSTER_VALID) } else { ("dropped", theme::HINT) };
+    ui.horizontal(|ui| {
+        ui.label(RichText::new(word).color(colour).strong());
+        ui.label(what);
+    });
+    ui.indent(what, |ui| {
+        ui.add(egui::Label::new(RichText::new(reason).color(theme::HINT).small()).wrap());
+    });
 }

@@ -202,7 +202,10 @@ fn which_effect_ui(
             return commands;
         }
     };
-    if let Some(note) = &report.structure_note {
+    let physics_found = report.entries.iter().any(|e| e.significant && e.kind == DiagnosisKind::Physics);
+    if let Some(note) = report.structure_note.as_ref().filter(|_| physics_found) {
+        hint(ui, &format!("The structure may also improve: {note}."));
+    } else if let Some(note) = &report.structure_note {
         egui::Frame::group(ui.style()).show(ui, |ui| {
             ui.set_width(ui.available_width());
             ui.label(RichText::new("Model structure first").strong().color(theme::WARNING));
@@ -363,16 +366,14 @@ fn entry_ui(
         ui.label(RichText::new(&entry.physics).italics());
         hint(ui, &entry.evidence);
         if let Some(rival) = &entry.rival {
-            hint(
-                ui,
-                &format!(
-                    "against the best structural refinement ({}, {:.3} %): p = {}, {:+.1} %",
-                    rival.id,
-                    rival.rmspe_pct,
-                    p_text(rival.test.p_value),
-                    -100.0 * rival.reduction
-                ),
-            );
+            let versus = format!("the best structural refinement, {} ({:.3} %)", rival.id, rival.rmspe_pct);
+            let p = p_text(rival.test.p_value);
+            let text = if rival.reduction > 0.0 {
+                format!("beats {versus} by {:.1} % (p = {p})", 100.0 * rival.reduction)
+            } else {
+                format!("loses to {versus}: its error is {:.1} % higher (p = {p})", -100.0 * rival.reduction)
+            };
+            hint(ui, &text);
         }
     });
     command

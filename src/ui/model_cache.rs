@@ -401,6 +401,9 @@ impl OutputCache {
     }
 
     fn wait_for_proposal(&mut self) {
+        if !self.proposal.is_running() {
+            return;
+        }
         let Proposed::Running(job) = std::mem::replace(&mut self.proposal, Proposed::Failed(String::new()))
         else {
             return;

@@ -81,3 +81,11 @@ fn drag_and_release(bencher: divan::Bencher, output: &str) {
         harness.step();
     });
 }
+
+/// One frame of the z-plane with nothing changing: what drawing the view costs (the share of
+/// `frame_while_dragging` that is not the live path).
+#[divan::bench(args = OUTPUTS, sample_count = 60)]
+fn frame_idle(bencher: divan::Bencher, output: &str) {
+    let (mut harness, _, _) = setup(output);
+    bencher.bench_local(|| harness.step());
+}

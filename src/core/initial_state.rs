@@ -54,12 +54,15 @@ impl InitialState {
 pub fn free_modes(poles: &[Complex64], n: usize) -> Vec<Vec<f64>> {
     let mut modes = Vec::new();
     for p in poles.iter().filter(|p| p.im >= 0.0 && p.norm() < 1.0) {
+        // pᵏ by repeated multiplication (this runs on every frame of a drag): for |p| < 1 the
+        // rounding errors shrink with the powers, so the recurrence is as accurate as powi.
+        let powers = std::iter::successors(Some(Complex64::new(1.0, 0.0)), |z| Some(z * p)).take(n);
         if p.im.abs() <= 1e-9 * (1.0 + p.norm()) {
-            modes.push((0..n).map(|k| p.re.powi(k as i32)).collect());
+            modes.push(std::iter::successors(Some(1.0), |x| Some(x * p.re)).take(n).collect());
         } else {
-            let (r, theta) = (p.norm(), p.arg());
-            modes.push((0..n).map(|k| r.powi(k as i32) * (theta * k as f64).cos()).collect());
-            modes.push((0..n).map(|k| r.powi(k as i32) * (theta * k as f64).sin()).collect());
+            let (re, im): (Vec<f64>, Vec<f64>) = powers.map(|z| (z.re, z.im)).unzip();
+            modes.push(re);
+            modes.push(im);
         }
     }
     modes

@@ -40,19 +40,22 @@ fn run(name: &str, u: Vec<f64>, y: Vec<f64>) -> Run {
     }
 }
 
+/// The identification staircase of the paper-like tests: (fuel flow, seconds) per step.
+const IDENT_STEPS: [(f64, f64); 9] = [
+    (2.6, 60.0),
+    (3.1, 40.0),
+    (2.8, 40.0),
+    (3.6, 40.0),
+    (4.2, 40.0),
+    (3.4, 40.0),
+    (5.43, 40.0),
+    (6.4, 40.0),
+    (4.6, 40.0),
+];
+
 #[test]
 fn paper_wiener_system_is_identified_to_under_0_2_pct() {
-    let u_ident = staircase(&[
-        (2.6, 60.0),
-        (3.1, 40.0),
-        (2.8, 40.0),
-        (3.6, 40.0),
-        (4.2, 40.0),
-        (3.4, 40.0),
-        (5.43, 40.0),
-        (6.4, 40.0),
-        (4.6, 40.0),
-    ]);
+    let u_ident = staircase(&IDENT_STEPS);
     let y_ident = paper_speed(&u_ident);
     let ident = run("ident", noisy(&u_ident, 0.000327, 1), noisy(&y_ident, 5.07, 2));
     let settings = OutputSettings::for_output("shaft_speed_rpm");
@@ -91,17 +94,7 @@ fn paper_wiener_system_is_identified_to_under_0_2_pct() {
 /// output error, the proposal says so in words, and the model still follows the engine.
 #[test]
 fn without_any_cluster_the_model_is_fitted_directly_and_says_so() {
-    let u_ident = staircase(&[
-        (2.6, 60.0),
-        (3.1, 40.0),
-        (2.8, 40.0),
-        (3.6, 40.0),
-        (4.2, 40.0),
-        (3.4, 40.0),
-        (5.43, 40.0),
-        (6.4, 40.0),
-        (4.6, 40.0),
-    ]);
+    let u_ident = staircase(&IDENT_STEPS);
     let ident = run("ident", noisy(&u_ident, 0.000327, 1), noisy(&paper_speed(&u_ident), 5.07, 2));
     let mut settings = OutputSettings::for_output("shaft_speed_rpm");
     settings.cluster.max_radius = 1e-4;

@@ -7,7 +7,7 @@
 use egui::Pos2;
 use egui_kittest::Harness;
 use egui_plot::PlotPoint;
-use jetid::core::cluster::Cluster;
+use jetid::core::identification::cluster::Cluster;
 use jetid::ui::{App, Command, Tab};
 use num_complex::Complex64;
 

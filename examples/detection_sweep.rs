@@ -5,12 +5,14 @@
 //! validation run as the RMS of (truth with effect − truth without) over the sensor's noise σ.
 //!
 //! `cargo run --release --example detection_sweep`
-use jetid::core::arx::ArxOrders;
 use jetid::core::diagnose::diagnose;
 use jetid::core::effects::{ExtendedModel, FitData, refit};
-use jetid::core::pipeline::{OutputSettings, SegmentFits, fit_segments_for, identify_output, segments_for};
+use jetid::core::identification::arx::ArxOrders;
+use jetid::core::identification::pipeline::{
+    OutputSettings, SegmentFits, fit_segments_for, identify_output, segments_for,
+};
+use jetid::core::identification::segment::SegmentSettings;
 use jetid::core::run::Run;
-use jetid::core::segment::SegmentSettings;
 use jetid::sim::{Effect, SensorNoise, SimConfig, SimOutput, TestKind, simulate};
 
 const SPEED: &str = "shaft_speed_rpm";

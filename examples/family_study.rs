@@ -5,12 +5,12 @@
 //!
 //! `cargo run --release --example family_study -- [FIRST_ENGINE] [ENGINES] [EFFECT_SPEC]`
 use anyhow::{Context, Result};
-use jetid::core::cluster::RootKind;
-use jetid::core::metrics::metrics;
-use jetid::core::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
-use jetid::core::reduce::{IdentData, count_of};
-use jetid::core::segment::SegmentSettings;
-use jetid::core::structure::direct_fit_of_order;
+use jetid::core::identification::cluster::RootKind;
+use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::reduce::{IdentData, count_of};
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::structure::direct_fit_of_order;
+use jetid::core::numerics::metrics::metrics;
 use jetid::sim::{EngineFamily, SimConfig, TestKind, simulate};
 
 fn main() -> Result<()> {
@@ -47,7 +47,7 @@ fn main() -> Result<()> {
             };
             let elapsed = start.elapsed().as_secs_f64();
             let truth = &validation.truth.output(output).context("truth")?.values;
-            let score = |w: &jetid::core::wiener::WienerModel| -> Result<f64> {
+            let score = |w: &jetid::core::identification::wiener::WienerModel| -> Result<f64> {
                 let p = predict_wiener(w, &validation.measured, output)?;
                 Ok(metrics(truth, &p.y_hat)?.rmspe_pct)
             };
@@ -58,7 +58,7 @@ fn main() -> Result<()> {
             let data = IdentData::new(&identified.fits, &ident, &settings)?.with_delay(delay);
             let direct =
                 direct_fit_of_order(&data, np, std::slice::from_ref(groups)).context("direct fit")?;
-            let direct_model = jetid::core::wiener::WienerModel {
+            let direct_model = jetid::core::identification::wiener::WienerModel {
                 linear: direct.assembled.wiener.linear.clone(),
                 map: direct.assembled.wiener.map.clone(),
             };

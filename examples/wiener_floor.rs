@@ -7,11 +7,11 @@
 //!
 //! `cargo run --release --example wiener_floor`
 use anyhow::{Context, Result};
-use jetid::core::lm::{LmOptions, levenberg_marquardt};
-use jetid::core::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
-use jetid::core::segment::SegmentSettings;
-use jetid::core::static_map::fit_static_map;
-use jetid::core::wiener::fit_linear_block;
+use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::static_map::fit_static_map;
+use jetid::core::identification::wiener::fit_linear_block;
+use jetid::core::numerics::lm::{LmOptions, levenberg_marquardt};
 use jetid::io::csv_run::{LoadOptions, load_run};
 use jetid::sim::designs::TestKind;
 use jetid::sim::{SimConfig, simulate};
@@ -28,7 +28,7 @@ fn main() -> Result<()> {
     let segments = segments_for(&ident, None, &SegmentSettings::default())?;
     let model = identify_output(&ident, output, &settings, &segments, None)?.model;
     let pipeline = predict_wiener(&model.wiener, &val, output)?;
-    let pipeline_rmspe = jetid::core::metrics::metrics(y, &pipeline.y_hat)?.rmspe_pct;
+    let pipeline_rmspe = jetid::core::numerics::metrics::metrics(y, &pipeline.y_hat)?.rmspe_pct;
     let poles = model.wiener.linear.tf.poles()?;
     let real = poles.iter().find(|p| p.im.abs() < 1e-9).context("a real pole")?;
     let pair = poles.iter().find(|p| p.im > 1e-9).context("a complex pair")?;

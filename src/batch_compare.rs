@@ -10,15 +10,15 @@ use crate::core::baselines::BaselineError;
 use crate::core::baselines::hammerstein_wiener::{HwModel, HwOptions, HwOrders, fit_hammerstein_wiener};
 use crate::core::baselines::nnarx::{NnarxModel, NnarxOptions, fit_nnarx};
 use crate::core::effects::ExtendedModel;
-use crate::core::initial_state::InitialState;
-use crate::core::metrics::{BoxStats, percentage_error_box};
+use crate::core::identification::initial_state::InitialState;
+use crate::core::identification::pipeline::{Identified, SegmentFits};
+use crate::core::identification::wiener::WienerModel;
 use crate::core::monte_carlo::{MonteCarloConfig, MonteCarloResult, monte_carlo};
-use crate::core::noise_fit::{Distribution, NoiseFitReport, fit_all};
-use crate::core::pipeline::{Identified, SegmentFits};
+use crate::core::numerics::metrics::{BoxStats, percentage_error_box};
+use crate::core::numerics::noise_fit::{Distribution, NoiseFitReport, fit_all};
+use crate::core::numerics::spectral::{EmpiricalResponse, LowFrequencyLevel, WelchOptions, welch_response};
+use crate::core::numerics::tf::log_space;
 use crate::core::run::Run;
-use crate::core::spectral::{EmpiricalResponse, LowFrequencyLevel, WelchOptions, welch_response};
-use crate::core::tf::log_space;
-use crate::core::wiener::WienerModel;
 
 /// Model names as report.json spells them (CONTRACT.md).
 pub const GRAY_BOX: &str = "gray_box";
@@ -384,7 +384,7 @@ pub struct ModelRun {
     /// Report name: [`GRAY_BOX`], [`LINEAR`], [`HAMMERSTEIN_WIENER`] or [`NNARX`].
     pub model: &'static str,
     pub y_hat: Vec<f64>,
-    pub metrics: Result<crate::core::metrics::Metrics, String>,
+    pub metrics: Result<crate::core::numerics::metrics::Metrics, String>,
 }
 
 /// Every model on one scored run.
@@ -490,7 +490,8 @@ fn models_on_run(models: &OutputModels, run: &Run, output: &str) -> Vec<ModelRun
         .simulate_run(run)
         .into_iter()
         .map(|(model, y_hat)| {
-            let metrics = crate::core::metrics::metrics(&y.values, &y_hat).map_err(|e| e.to_string());
+            let metrics =
+                crate::core::numerics::metrics::metrics(&y.values, &y_hat).map_err(|e| e.to_string());
             ModelRun { model, y_hat, metrics }
         })
         .collect()

@@ -5,11 +5,11 @@ use std::path::Path;
 use std::collections::BTreeMap;
 
 use crate::batch_compare::{FrequencyComparison, GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, OutputModels};
-use crate::core::metrics::BoxStats;
+use crate::core::identification::pipeline::Identified;
 use crate::core::monte_carlo::MonteCarloResult;
-use crate::core::pipeline::Identified;
+use crate::core::numerics::metrics::BoxStats;
+use crate::core::numerics::tf::{BodePoint, log_space};
 use crate::core::run::Run;
-use crate::core::tf::{BodePoint, log_space};
 use crate::io::figures::{self, BodeCurve, EmpiricalBode};
 
 /// Draw the figures of one output into `dir`; returns the file names written and notes on failures.
@@ -185,7 +185,7 @@ pub fn monte_carlo_figures(
     for (model, r) in results {
         let name = format!("{output}_monte_carlo_{model}.png");
         let (mean, std) = match r.normal_fit {
-            crate::core::noise_fit::Distribution::Normal { mean, std } => (mean, std),
+            crate::core::numerics::noise_fit::Distribution::Normal { mean, std } => (mean, std),
             _ => (r.mean_difference, r.std_difference),
         };
         let result = figures::histogram_png(

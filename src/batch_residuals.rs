@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use crate::batch_compare::OutputModels;
-use crate::core::noise_fit::{Distribution, Family, NoiseFitReport};
+use crate::core::numerics::noise_fit::{Distribution, Family, NoiseFitReport};
 use crate::core::residuals::{ResidualSettings, SigmaSource, analyse_residuals, summary};
 use crate::core::run::Run;
 use crate::io::report::ResidualReport;

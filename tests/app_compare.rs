@@ -12,7 +12,7 @@ use std::time::Duration;
 use jetid::batch_compare::{
     Cancelled, CompareInput, GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, compare_output, compare_stage,
 };
-use jetid::core::metrics::metrics;
+use jetid::core::numerics::metrics::metrics;
 use jetid::ui::compare_table::{MODELS, table1_columns};
 use jetid::ui::compare_ui::CompareStatus;
 use jetid::ui::{App, Command, Role, Tab};

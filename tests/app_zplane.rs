@@ -7,7 +7,7 @@ use egui::{Key, Modifiers, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use egui_plot::{PlotPoint, PlotTransform};
-use jetid::core::cluster::{Cluster, RootKind};
+use jetid::core::identification::cluster::{Cluster, RootKind};
 use jetid::ui::{App, Command, Role, Tab};
 use num_complex::Complex64;
 

@@ -6,9 +6,9 @@ use std::path::Path;
 use jetid::core::baselines::{
     BaselineError, HwModel, HwOptions, HwOrders, NnarxModel, NnarxOptions, fit_hammerstein_wiener, fit_nnarx,
 };
-use jetid::core::metrics::metrics;
+use jetid::core::numerics::metrics::metrics;
+use jetid::core::numerics::tf::DiscreteTf;
 use jetid::core::run::Run;
-use jetid::core::tf::DiscreteTf;
 use jetid::io::csv_run::{LoadOptions, load_run};
 use num_complex::Complex64;
 use rand::{Rng, SeedableRng};

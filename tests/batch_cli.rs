@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use jetid::core::pipeline::{OutputSettings, identify_output, segments_for};
-use jetid::core::segment::SegmentSettings;
+use jetid::core::identification::pipeline::{OutputSettings, identify_output, segments_for};
+use jetid::core::identification::segment::SegmentSettings;
 use jetid::io::csv_run::{LoadOptions, load_run};
 
 fn jetid(args: &[&str]) -> Output {
@@ -103,7 +103,7 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
     let measured = load_run(&val, &LoadOptions::default()).unwrap();
     let y = &measured.output("shaft_speed_rpm").unwrap().values;
     let y_hat = &predicted.output("shaft_speed_rpm").unwrap().values;
-    let m = jetid::core::metrics::metrics(y, y_hat).unwrap();
+    let m = jetid::core::numerics::metrics::metrics(y, y_hat).unwrap();
     let batch = report["outputs"]["shaft_speed_rpm"]["models"]["gray_box"]["validation"]["rmspe_pct"]
         .as_f64()
         .unwrap();
@@ -375,7 +375,7 @@ fn add_effect_lowers_the_error_and_predict_honours_it() {
     assert!(o.status.success(), "{}", stderr(&o));
     let y = load_run(&val, &LoadOptions::default()).unwrap();
     let y_hat = load_run(&pred, &LoadOptions::default()).unwrap();
-    let m = jetid::core::metrics::metrics(
+    let m = jetid::core::numerics::metrics::metrics(
         &y.output("shaft_speed_rpm").unwrap().values,
         &y_hat.output("shaft_speed_rpm").unwrap().values,
     )

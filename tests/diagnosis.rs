@@ -17,12 +17,12 @@ use jetid::core::diagnose::{DiagnoseError, DiagnosisKind, DiagnosisReport, apply
 use jetid::core::effects::{
     AmbientCorrection, BLOCK_IDS, EFFECT_IDS, EffectBlock, EffectError, ExtendedModel, FitData, refit,
 };
-use jetid::core::metrics::metrics;
-use jetid::core::pipeline::{
+use jetid::core::identification::pipeline::{
     OutputSettings, SegmentFits, build_gray_box, fit_segments, identify_output, segments_for,
 };
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::numerics::metrics::metrics;
 use jetid::core::run::Run;
-use jetid::core::segment::SegmentSettings;
 use jetid::sim::{Effect, SimConfig, SimOutput, TestKind, simulate};
 use std::collections::BTreeMap;
 

@@ -16,15 +16,17 @@
 //!   by its spectral evidence), and nothing stops dead.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use jetid::core::cluster::RootKind;
 use jetid::core::diagnose::{DiagnosisKind, DiagnosisReport, diagnose};
 use jetid::core::effects::ExtendedModel;
-use jetid::core::metrics::metrics;
-use jetid::core::pipeline::{Identified, OutputSettings, identify_output, predict_wiener, segments_for};
-use jetid::core::reduce::{IdentData, count_of};
+use jetid::core::identification::cluster::RootKind;
+use jetid::core::identification::pipeline::{
+    Identified, OutputSettings, identify_output, predict_wiener, segments_for,
+};
+use jetid::core::identification::reduce::{IdentData, count_of};
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::structure::direct_fit_of_order;
+use jetid::core::numerics::metrics::metrics;
 use jetid::core::run::Run;
-use jetid::core::segment::SegmentSettings;
-use jetid::core::structure::direct_fit_of_order;
 use jetid::sim::{DrawnEngine, Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};
 
 const SPEED: &str = "shaft_speed_rpm";
@@ -88,7 +90,7 @@ fn the_automatic_speed_model_is_within_1_3_times_a_direct_fit_on_20_engines() {
         let b = bench(seed, &[]);
         let (identified, settings) = identify(&b, SPEED);
         let truth = &b.validation.truth.output(SPEED).unwrap().values;
-        let score = |w: &jetid::core::wiener::WienerModel| {
+        let score = |w: &jetid::core::identification::wiener::WienerModel| {
             metrics(truth, &predict_wiener(w, &b.validation.measured, SPEED).unwrap().y_hat)
                 .unwrap()
                 .rmspe_pct

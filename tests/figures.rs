@@ -5,9 +5,11 @@
 
 use std::path::{Path, PathBuf};
 
-use jetid::core::cluster::{Cluster, ClusterSettings, RootKind, SegmentRoots, evaluate_clusters};
-use jetid::core::metrics::percentage_error_box;
-use jetid::core::tf::{DiscreteTf, log_space};
+use jetid::core::identification::cluster::{
+    Cluster, ClusterSettings, RootKind, SegmentRoots, evaluate_clusters,
+};
+use jetid::core::numerics::metrics::percentage_error_box;
+use jetid::core::numerics::tf::{DiscreteTf, log_space};
 use jetid::io::figures::{
     BodeCurve, EmpiricalBode, FigureError, bode_png, boxplot_png, histogram_png, static_map_png, traces_png,
     zplane_png,

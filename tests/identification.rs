@@ -1,11 +1,11 @@
 //! The gray-box pipeline on systems with known truth.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use jetid::core::cluster::RootKind;
-use jetid::core::metrics::metrics;
-use jetid::core::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::cluster::RootKind;
+use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::numerics::metrics::metrics;
+use jetid::core::numerics::tf::DiscreteTf;
 use jetid::core::run::{Channel, Run};
-use jetid::core::segment::SegmentSettings;
-use jetid::core::tf::DiscreteTf;
 use num_complex::Complex64;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};

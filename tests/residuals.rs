@@ -5,14 +5,14 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use jetid::core::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::wiener::WienerModel;
 use jetid::core::residuals::{
     ExclusionReason, OperatingBands, Regime, ResidualAnalysis, ResidualError, ResidualSettings, SigmaSource,
     analyse_residuals, summary,
 };
 use jetid::core::run::{Channel, Run};
-use jetid::core::segment::SegmentSettings;
-use jetid::core::wiener::WienerModel;
 use jetid::io::csv_run::{LoadOptions, load_run};
 use jetid::sim::{DT_SECS, Effect, SimConfig, SimOutput, TestKind, simulate};
 use rand::SeedableRng;

@@ -6,12 +6,12 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use jetid::core::monte_carlo::{InputNoise, MonteCarloConfig, MonteCarloError, RunKind, monte_carlo};
-use jetid::core::noise_fit::{Distribution, Family, NoiseFitError, fit, fit_all};
-use jetid::core::spectral::{
+use jetid::core::numerics::noise_fit::{Distribution, Family, NoiseFitError, fit, fit_all};
+use jetid::core::numerics::spectral::{
     LowFrequencyLevel, SegmentLength, SpectralError, WelchOptions, bode_cutoff_rad_s, cutoff_rad_s,
     welch_response,
 };
-use jetid::core::tf::{DiscreteTf, log_space};
+use jetid::core::numerics::tf::{DiscreteTf, log_space};
 use jetid::io::csv_run::{LoadOptions, load_run};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

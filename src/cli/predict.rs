@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use crate::core::initial_state::InitialState;
+use crate::core::identification::initial_state::InitialState;
 use crate::core::run::{Channel, Run};
 use crate::io::csv_run::{LoadOptions, load_run, write_run};
 use crate::io::model_file::read_model;

@@ -47,8 +47,8 @@ use crate::core::effects::{
     AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, StructuralChange, TransportDelay,
     apply_effect, evidence, physics, refine_structure, refit,
 };
-use crate::core::initial_state::InitialState;
-use crate::core::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::initial_state::InitialState;
+use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
 /// Largest one-sided p-value of a significant effect.

@@ -1,25 +1,9 @@
 //! The headless core: pure numerics. No egui, no files, no threads.
-pub mod arx;
 pub mod baselines;
-pub mod cluster;
-pub mod cluster_proposal;
 pub mod diagnose;
 pub mod effects;
-pub mod initial_state;
-pub mod lm;
-pub mod lstsq;
-pub mod metrics;
+pub mod identification;
 pub mod monte_carlo;
-pub mod noise_fit;
-pub mod pipeline;
-pub mod poly;
-pub mod reduce;
-pub mod refine;
+pub mod numerics;
 pub mod residuals;
 pub mod run;
-pub mod segment;
-pub mod spectral;
-pub mod static_map;
-pub mod structure;
-pub mod tf;
-pub mod wiener;

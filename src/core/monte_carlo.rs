@@ -8,7 +8,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::core::noise_fit::{self, Distribution, MIN_SAMPLES, NoiseFitError};
+use crate::core::numerics::noise_fit::{self, Distribution, MIN_SAMPLES, NoiseFitError};
 
 /// How a draw `x` of the fitted input distribution becomes the noisy input sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

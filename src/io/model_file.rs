@@ -5,10 +5,10 @@ use anyhow::{Context, Result, bail};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::cluster::Cluster;
-use crate::core::pipeline::GrayBoxModel;
-use crate::core::refine::Refinement;
-use crate::core::wiener::WienerModel;
+use crate::core::identification::cluster::Cluster;
+use crate::core::identification::pipeline::GrayBoxModel;
+use crate::core::identification::refine::Refinement;
+use crate::core::identification::wiener::WienerModel;
 use crate::io::atomic::write_atomic;
 
 pub const MODEL_FORMAT_VERSION: u32 = 1;
@@ -120,7 +120,7 @@ pub fn read_model(path: &Path) -> Result<ModelFile> {
     }
     for out in &model.outputs {
         // Re-check what the constructor checks, so a hand-edited file cannot panic the simulation.
-        crate::core::tf::DiscreteTf::new(
+        crate::core::numerics::tf::DiscreteTf::new(
             out.wiener.linear.tf.num_zinv.clone(),
             out.wiener.linear.tf.den_zinv.clone(),
             out.wiener.linear.tf.dt_secs,

@@ -33,11 +33,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::core::arx::ArxOrders;
-use crate::core::cluster::Cluster;
-use crate::core::initial_state::InitialState;
-use crate::core::pipeline::{OutputSettings, PolishRegion};
-use crate::core::segment::{Segment, segment_label};
+use crate::core::identification::arx::ArxOrders;
+use crate::core::identification::cluster::Cluster;
+use crate::core::identification::initial_state::InitialState;
+use crate::core::identification::pipeline::{OutputSettings, PolishRegion};
+use crate::core::identification::segment::{Segment, segment_label};
 use crate::io::csv_run::LoadOptions;
 
 /// How to read runs: the command line's `--map`, `--sample-time`, `--window`, `--quality`, `--resample`.

@@ -454,7 +454,7 @@ const PROPOSAL_POLL: std::time::Duration = std::time::Duration::from_millis(100)
 /// proposal drops a dead time that came from it.
 fn carry_dead_time(
     setup: &mut super::setup::OutputSetup,
-    clusters: Option<Vec<crate::core::cluster::Cluster>>,
+    clusters: Option<Vec<crate::core::identification::cluster::Cluster>>,
     proposed: Option<usize>,
 ) {
     match (&setup.clusters, &clusters) {

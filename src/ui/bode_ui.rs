@@ -8,7 +8,7 @@ use super::model_cache::EmpiricalPoint;
 use super::model_ui;
 use super::plot_util;
 use super::theme;
-use crate::core::tf::BodePoint;
+use crate::core::numerics::tf::BodePoint;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
 /// The legend entry of the chirp's measured points.

@@ -9,9 +9,9 @@ use super::model_cache::Proposed;
 use super::model_ui::{self, complex_text, hint};
 use super::theme;
 use super::zplane_ui::ZPlaneViewState;
-use crate::core::cluster::{ClusterEval, RootKind};
-use crate::core::reduce::RootGroup;
-use crate::core::structure::{Proposal, root_words};
+use crate::core::identification::cluster::{ClusterEval, RootKind};
+use crate::core::identification::reduce::RootGroup;
+use crate::core::identification::structure::{Proposal, root_words};
 
 /// The cluster table, then the free roots of the model (a direct fit), then the proposal's reasons.
 pub fn cluster_table_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewState) {

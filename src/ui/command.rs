@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use super::session::Role;
 use super::views::Tab;
-use crate::core::cluster::Cluster;
-use crate::core::pipeline::OutputSettings;
-use crate::core::segment::Segment;
+use crate::core::identification::cluster::Cluster;
+use crate::core::identification::pipeline::OutputSettings;
+use crate::core::identification::segment::Segment;
 use crate::io::csv_run::LoadOptions;
 
 #[derive(Clone, Debug, PartialEq)]

@@ -7,7 +7,7 @@ use super::theme;
 use crate::batch_compare::{
     GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, OutputComparison, PAPER_MONTE_CARLO_STD,
 };
-use crate::core::noise_fit::Distribution;
+use crate::core::numerics::noise_fit::Distribution;
 use crate::io::report::{PAPER_TABLE1, paper_output_name};
 
 /// The models in the order of the table's rows.
@@ -60,7 +60,7 @@ impl Table1Column {
 pub fn table1_columns(comparison: &OutputComparison) -> Vec<Table1Column> {
     let mut columns = Vec::new();
     for run in &comparison.runs {
-        let value = |model: &str, pick: fn(&crate::core::metrics::Metrics) -> f64| {
+        let value = |model: &str, pick: fn(&crate::core::numerics::metrics::Metrics) -> f64| {
             run.models.iter().find(|m| m.model == model).and_then(|m| m.metrics.as_ref().ok()).map(pick)
         };
         let group = run_title(run);

@@ -20,10 +20,10 @@ use super::model_ui;
 use super::session::{Role, Session};
 use super::theme;
 use crate::batch_compare::{CompareInput, OutputComparison, compare_output, compare_stage};
-use crate::core::initial_state::InitialState;
-use crate::core::pipeline::SegmentFits;
+use crate::core::identification::initial_state::InitialState;
+use crate::core::identification::pipeline::SegmentFits;
+use crate::core::identification::wiener::WienerModel;
 use crate::core::run::Run;
-use crate::core::wiener::WienerModel;
 
 /// What a comparison is computed for: the committed gray-box model, the segment fits it came from
 /// and the runs (with their roles) it is compared on. Runs and fits are compared by pointer.

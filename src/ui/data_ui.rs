@@ -74,7 +74,7 @@ pub fn data_ui(
 
 fn segments_header_ui(
     ui: &mut egui::Ui,
-    segments: &Result<Vec<crate::core::segment::Segment>, String>,
+    segments: &Result<Vec<crate::core::identification::segment::Segment>, String>,
     automatic: bool,
 ) -> Option<Command> {
     let mut command = None;

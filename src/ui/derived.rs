@@ -7,7 +7,7 @@ use egui_plot::PlotPoint;
 
 use super::model_cache::{IdentCache, LiveModel, OutputCache, Preview};
 use super::session::Session;
-use crate::core::cluster::{Cluster, ClusterEval};
+use crate::core::identification::cluster::{Cluster, ClusterEval};
 use crate::core::run::{Channel, Run};
 
 /// Which part of a run a channel is.

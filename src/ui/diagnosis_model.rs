@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::core::diagnose;
 use crate::core::effects::ExtendedModel;
-use crate::core::pipeline::{self, OutputSettings, SegmentFits};
+use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits};
 use crate::core::run::Run;
 use crate::io::report::HistoryStep;
 

@@ -14,15 +14,15 @@
 //! [`diagnosis_model`](super::diagnosis_model)); a preview shows it without them.
 use std::sync::Arc;
 
-use crate::core::cluster::{self, Cluster, ClusterEval};
-use crate::core::pipeline::{
+use crate::core::identification::cluster::{self, Cluster, ClusterEval};
+use crate::core::identification::pipeline::{
     self, GrayBoxModel, LiveResult, OutputSettings, RunPrediction, SegmentFits, fit_segments_for,
     live_update, live_update_proposed, segments_for,
 };
+use crate::core::identification::segment::{Segment, SegmentSettings};
+use crate::core::identification::structure::Proposal;
+use crate::core::numerics::tf::{BodePoint, log_space};
 use crate::core::run::Run;
-use crate::core::segment::{Segment, SegmentSettings};
-use crate::core::structure::Proposal;
-use crate::core::tf::{BodePoint, log_space};
 
 use super::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
 use super::jobs::Job;
@@ -253,7 +253,7 @@ impl Proposed {
 #[derive(Clone, PartialEq)]
 struct FitsKey {
     segments: Vec<Segment>,
-    orders: crate::core::arx::ArxOrders,
+    orders: crate::core::identification::arx::ArxOrders,
 }
 
 /// Everything identified for one output.

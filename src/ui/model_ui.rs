@@ -7,8 +7,8 @@ use super::command::Command;
 use super::derived::{Derived, LiveView};
 use super::model_cache::ScoredRun;
 use super::theme;
-use crate::core::cluster::{ClusterEval, ClusterStatus};
-use crate::core::metrics::Metrics;
+use crate::core::identification::cluster::{ClusterEval, ClusterStatus};
+use crate::core::numerics::metrics::Metrics;
 
 /// "Output: [shaft_speed_rpm] [thrust_n]"; each output has its own segments fits and clusters.
 pub fn output_bar_ui(ui: &mut egui::Ui, cache: &Derived, selected: &str) -> Option<Command> {

@@ -6,7 +6,7 @@ use egui_plot::{LineStyle, PlotPoint, PlotUi, Span, Text, VLine};
 
 use super::command::Command;
 use super::theme;
-use crate::core::segment::Segment;
+use crate::core::identification::segment::Segment;
 
 /// Pointer distance (screen points) that grabs a boundary.
 const GRAB: f32 = 6.0;

@@ -5,9 +5,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::core::cluster::Cluster;
-use crate::core::pipeline::OutputSettings;
-use crate::core::segment::Segment;
+use crate::core::identification::cluster::Cluster;
+use crate::core::identification::pipeline::OutputSettings;
+use crate::core::identification::segment::Segment;
 
 /// Segments, and per output its settings, clusters and effects.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -8,7 +8,7 @@ use super::derived::Derived;
 use super::model_ui;
 use super::plot_util;
 use super::theme;
-use crate::core::pipeline::OutputSettings;
+use crate::core::identification::pipeline::OutputSettings;
 
 const CURVE_POINTS: usize = 200;
 const TABLE_WIDTH: f32 = 330.0;
@@ -72,7 +72,7 @@ fn side_ui(
     ui: &mut egui::Ui,
     output: &str,
     settings: &OutputSettings,
-    model: &crate::core::pipeline::GrayBoxModel,
+    model: &crate::core::identification::pipeline::GrayBoxModel,
 ) -> Option<Command> {
     let mut command = None;
     let map = &model.wiener.map;

@@ -16,8 +16,8 @@ use super::derived::LiveView;
 use super::plot_util;
 use super::theme;
 use super::zplane_ui::{ClusterDrag, Handle, ZPlaneViewState, ZoomView};
-use crate::core::cluster::{Cluster, RootKind};
-use crate::core::pipeline::SegmentFits;
+use crate::core::identification::cluster::{Cluster, RootKind};
+use crate::core::identification::pipeline::SegmentFits;
 
 /// Angle rays at these frequencies (rad/s), where below the Nyquist frequency.
 const RAY_OMEGAS_RAD_S: [f64; 9] = [0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 20.0, 25.0];

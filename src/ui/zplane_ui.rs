@@ -14,7 +14,7 @@ use super::model_ui::{self, roots_text};
 use super::setup::History;
 use super::theme;
 use super::zplane_plot;
-use crate::core::cluster::{Cluster, RootKind};
+use crate::core::identification::cluster::{Cluster, RootKind};
 
 /// Width of the column beside the plot (overview, live strip, cluster table).
 const SIDE_WIDTH: f32 = 560.0;
@@ -249,8 +249,10 @@ fn toolbar_ui(
              (not while dragging)",
         );
         if polish.changed() {
-            let settings =
-                crate::core::pipeline::OutputSettings { refine, ..view.output.setup.settings.clone() };
+            let settings = crate::core::identification::pipeline::OutputSettings {
+                refine,
+                ..view.output.setup.settings.clone()
+            };
             commands.push(Command::SetOutputSettings { output: output.to_owned(), settings });
         }
     });

@@ -19,9 +19,9 @@ use serde::{Deserialize, Serialize};
 
 use super::lm_progress::{LmSettings, minimise};
 use super::{BaselineError, Scaling, check_signals, report};
-use crate::core::lstsq::solve_lstsq;
-use crate::core::poly;
-use crate::core::tf::DiscreteTf;
+use crate::core::numerics::lstsq::solve_lstsq;
+use crate::core::numerics::poly;
+use crate::core::numerics::tf::DiscreteTf;
 
 /// Poles at or beyond this modulus are inadmissible during the search.
 const MAX_POLE_MODULUS: f64 = 0.9999;
@@ -158,7 +158,7 @@ impl HwModel {
 
 impl HwModel {
     /// Output-error simulation with the linear block's free response that best fits the first
-    /// seconds of the measured `y` (see `core::initial_state`).
+    /// seconds of the measured `y` (see `core::identification::initial_state`).
     pub fn simulate_estimated(&self, u: &[f64], y: &[f64]) -> Vec<f64> {
         let u_n = self.input_scaling.normalise_all(u);
         let w: Vec<f64> = u_n.iter().map(|x| self.input_poly.eval(*x)).collect();
@@ -170,7 +170,7 @@ impl HwModel {
                 .map(|x| self.output_scaling.physical_from_normalised(self.output_poly.eval(*x)))
                 .collect()
         };
-        let v = crate::core::initial_state::fit_free_response(&poles, &v, y, output);
+        let v = crate::core::identification::initial_state::fit_free_response(&poles, &v, y, output);
         output(&v)
     }
 }

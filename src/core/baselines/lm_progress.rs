@@ -1,10 +1,10 @@
 //! Levenberg–Marquardt for `min ‖r(θ)‖²` with a forward-difference Jacobian, like
-//! [`crate::core::lm`], but reporting after every iteration so a long fit can show progress and be
+//! [`crate::core::numerics::lm`], but reporting after every iteration so a long fit can show progress and be
 //! cancelled. Each step solves the damped problem `[J; √λ·D] δ = [−r; 0]` by least squares (SVD).
 use faer::Mat;
 
 use super::BaselineError;
-use crate::core::lstsq::solve_lstsq;
+use crate::core::numerics::lstsq::solve_lstsq;
 
 pub(super) struct LmSettings {
     pub max_iterations: usize,

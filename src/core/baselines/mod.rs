@@ -8,9 +8,9 @@
 //! `&mut |_| true`.
 use serde::{Deserialize, Serialize};
 
-use crate::core::lstsq::LstsqError;
-use crate::core::poly::PolyError;
-use crate::core::tf::TfError;
+use crate::core::numerics::lstsq::LstsqError;
+use crate::core::numerics::poly::PolyError;
+use crate::core::numerics::tf::TfError;
 
 pub mod hammerstein_wiener;
 mod lm_progress;

@@ -4,9 +4,9 @@ use num_complex::Complex64;
 use super::Evidence;
 use super::stats::{ResidualTrace, diff};
 use super::{EffectError, ParamSpec};
-use crate::core::lstsq::solve_lstsq;
-use crate::core::tf::DiscreteTf;
-use crate::core::wiener::unit_gain_tf;
+use crate::core::identification::wiener::unit_gain_tf;
+use crate::core::numerics::lstsq::solve_lstsq;
+use crate::core::numerics::tf::DiscreteTf;
 
 /// Acceleration and deceleration differ (acceleration schedule, combustor): the slowest real pole
 /// of G(z), the spool, has its time constant multiplied by `decel_factor` while the response falls.

@@ -6,7 +6,7 @@
 //! static map of the model's order is fitted to the steady-state points (pre-step baseline and
 //! settled tail of every segment). Levenberg–Marquardt then moves the poles, zeros and the effects'
 //! continuous parameters together to minimise the simulation error on the identification range
-//! (variable projection, as `core::refine` does for the base model). Discrete choices — the delay
+//! (variable projection, as `core::identification::refine` does for the base model). Discrete choices — the delay
 //! in samples, the starting point of every other parameter — are screened on that same error first.
 use num_complex::Complex64;
 
@@ -18,11 +18,11 @@ use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ScheduledTimeConstant, SensorDynamics,
     StaticMapOrder, ThermalSoak, TransportDelay, check_id,
 };
-use crate::core::pipeline::{OutputSettings, SegmentFits};
-use crate::core::refine::RootParams;
+use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::refine::RootParams;
+use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+use crate::core::numerics::tf::DiscreteTf;
 use crate::core::run::{Channel, Run};
-use crate::core::tf::DiscreteTf;
-use crate::core::wiener::{LinearBlock, WienerModel, unit_gain_tf};
 
 /// Starting points refined by Levenberg–Marquardt after screening.
 pub(super) const REFINED_STARTS: usize = 2;

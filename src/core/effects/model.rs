@@ -7,11 +7,11 @@ use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectRecord, SensorDynamics,
     TransportDelay, check_id,
 };
-use crate::core::initial_state::{InitialState, fit_free_response};
-use crate::core::pipeline::GrayBoxModel;
+use crate::core::identification::initial_state::{InitialState, fit_free_response};
+use crate::core::identification::pipeline::GrayBoxModel;
+use crate::core::identification::static_map::StaticMap;
+use crate::core::identification::wiener::{LinearBlock, WienerModel};
 use crate::core::run::Run;
-use crate::core::static_map::StaticMap;
-use crate::core::wiener::{LinearBlock, WienerModel};
 
 /// The gray-box model of one output with the effects added to it.
 ///
@@ -108,7 +108,8 @@ impl ExtendedModel {
     /// Poles and zeros of the linear block.
     pub fn roots(&self) -> Result<(Vec<Complex64>, Vec<Complex64>), EffectError> {
         let tf = &self.wiener.linear.tf;
-        let bad = |e: crate::core::poly::PolyError| EffectError::BadBaseModel { reason: e.to_string() };
+        let bad =
+            |e: crate::core::numerics::poly::PolyError| EffectError::BadBaseModel { reason: e.to_string() };
         Ok((tf.poles().map_err(bad)?, tf.zeros().map_err(bad)?))
     }
 
@@ -119,7 +120,7 @@ impl ExtendedModel {
 
     /// Simulate a run to score it: from the steady state of its first input, or with the linear
     /// block's free response that best fits the first seconds of the measured output (see
-    /// `core::initial_state`). A run without the model's output is simulated from the steady state.
+    /// `core::identification::initial_state`). A run without the model's output is simulated from the steady state.
     pub fn simulate_scored(&self, run: &Run, initial: InitialState) -> Result<Vec<f64>, EffectError> {
         let measured = run.output(&self.output).map(|c| c.values.as_slice());
         let (InitialState::Estimated, Some(y)) = (initial, measured) else { return self.simulate(run) };
@@ -252,8 +253,8 @@ mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
     use crate::core::effects::{EFFECT_IDS, ThermalSoak, TransportDelay};
+    use crate::core::identification::wiener::unit_gain_tf;
     use crate::core::run::Channel;
-    use crate::core::wiener::unit_gain_tf;
 
     fn model() -> ExtendedModel {
         let tf = unit_gain_tf(&[Complex64::new(0.9, 0.0)], &[], 0.1).unwrap();

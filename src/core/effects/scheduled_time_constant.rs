@@ -113,7 +113,7 @@ pub fn respond(
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use crate::core::wiener::unit_gain_tf;
+    use crate::core::identification::wiener::unit_gain_tf;
     use num_complex::Complex64;
 
     #[test]

@@ -1,6 +1,6 @@
 //! Levenberg–Marquardt for the effect fits, with the Jacobian factored once per iteration.
 //!
-//! `core::lm` solves every damped step as a fresh (n + p) × p SVD problem; the effect fits have
+//! `core::numerics::lm` solves every damped step as a fresh (n + p) × p SVD problem; the effect fits have
 //! thousands of residuals and at most ten parameters and try several damping values per iteration,
 //! so here the Jacobian is reduced to its p × p triangular factor by Householder QR once per
 //! iteration, and each damped step `[R; √λ·D] δ = [−Qᵀr; 0]` is a small 2p × p Householder problem.

@@ -2,8 +2,8 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, plateaus};
-use crate::core::lstsq::solve_lstsq;
-use crate::core::static_map::StaticMap;
+use crate::core::identification::static_map::StaticMap;
+use crate::core::numerics::lstsq::solve_lstsq;
 
 /// A kink in the static map: a bleed valve that opens or a limiter that acts above an operating
 /// point adds `slope_change · max(0, v − knot_v)` to the polynomial `f(v)`. The knot is fitted on

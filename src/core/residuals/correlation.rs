@@ -4,7 +4,7 @@ use faer::Mat;
 use serde::{Deserialize, Serialize};
 
 use super::signal::{autocorrelation_pair, centred, moving_average, normal_two_sided_p, pearson};
-use crate::core::lstsq::solve_lstsq;
+use crate::core::numerics::lstsq::solve_lstsq;
 
 /// Two-sided 99 % point of the standard normal distribution.
 pub const Z_99: f64 = 2.576;

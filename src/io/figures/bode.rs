@@ -9,7 +9,7 @@ use super::{
     Area, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, check_len, desc_font, draw_note,
     label_font, padded_range, palette, render, tick_label, titled_with_legend,
 };
-use crate::core::tf::BodePoint;
+use crate::core::numerics::tf::BodePoint;
 
 /// Empirical points with at least this coherence are drawn filled, the others hollow and grey.
 pub const GOOD_COHERENCE: f64 = 0.8;

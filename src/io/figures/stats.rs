@@ -12,7 +12,7 @@ use super::{
     FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, desc_font, draw_note, font, label_font,
     padded_range, palette, render, sig, tick_label, titled_with_legend,
 };
-use crate::core::metrics::BoxStats;
+use crate::core::numerics::metrics::BoxStats;
 
 const NORMAL_CURVE_POINTS: usize = 200;
 /// Half the width of a box, in category units (one category is 1 wide).

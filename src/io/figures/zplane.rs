@@ -12,7 +12,7 @@ use super::{
     Area, CHART_MARGIN, DrawResult, FigureError, LIGHT_LINES, X_LABEL_AREA, Y_LABEL_AREA, chart_builder,
     desc_font, font, label_font, palette, render, sig, tick_label, titled_with_legend,
 };
-use crate::core::cluster::{ClusterEval, RootKind, SegmentRoots};
+use crate::core::identification::cluster::{ClusterEval, RootKind, SegmentRoots};
 
 type Complex64 = Complex<f64>;
 

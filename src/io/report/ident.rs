@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::pipeline::Identified;
-use crate::core::reduce::RootGroup;
+use crate::core::identification::pipeline::Identified;
+use crate::core::identification::reduce::RootGroup;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SegmentSummary {

@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
-use crate::core::metrics::Metrics;
+use crate::core::numerics::metrics::Metrics;
 use crate::io::atomic::write_atomic;
 
 mod ident;
@@ -62,7 +62,7 @@ pub struct OutputReport {
     pub error_history: Vec<HistoryStep>,
     /// model → run → box-plot statistics of the percentage error 100·(y − ŷ)/y.
     #[serde(default)]
-    pub error_boxes: BTreeMap<String, BTreeMap<String, crate::core::metrics::BoxStats>>,
+    pub error_boxes: BTreeMap<String, BTreeMap<String, crate::core::numerics::metrics::BoxStats>>,
     /// −3 dB cut-off on the chirp run (rad/s): "measured" and each model's, from the same estimator.
     #[serde(default)]
     pub cutoff_rad_s: BTreeMap<String, Option<f64>>,

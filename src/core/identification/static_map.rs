@@ -6,7 +6,7 @@
 //! high powers of v ≈ 10⁵ rpm stay well conditioned; [`StaticMap::beta`] gives the plain coefficients.
 use serde::{Deserialize, Serialize};
 
-use crate::core::lstsq::{LstsqError, solve_lstsq};
+use crate::core::numerics::lstsq::{LstsqError, solve_lstsq};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StaticMap {

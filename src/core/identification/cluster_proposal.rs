@@ -33,7 +33,7 @@
 //! property of the engine than its absence is. A cluster accepted below the output's own condition
 //! records the m it was accepted at ([`Cluster::min_segments`]), so it stays valid when it is
 //! evaluated again. Whether a candidate cluster enters the model is decided afterwards, by what it
-//! does to the simulation error (`core::reduce`), not here.
+//! does to the simulation error (`core::identification::reduce`), not here.
 
 use nalgebra::Complex;
 
@@ -322,7 +322,7 @@ mod tests {
             .collect()
     }
 
-    /// The clusters held by every segment (the relaxed ones are candidates for `core::structure`).
+    /// The clusters held by every segment (the relaxed ones are candidates for `core::identification::structure`).
     fn full(clusters: &[Cluster]) -> Vec<&Cluster> {
         clusters.iter().filter(|c| c.min_segments.is_none()).collect()
     }

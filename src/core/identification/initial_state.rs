@@ -17,7 +17,7 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::lstsq::solve_lstsq;
+use crate::core::numerics::lstsq::solve_lstsq;
 
 /// Gauss–Newton iterations; the problem is linear for a linear output stage and mildly nonlinear
 /// through a monotone static map, so a few suffice (the loop stops once the step is negligible).
@@ -125,7 +125,7 @@ where
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use crate::core::wiener::unit_gain_tf;
+    use crate::core::identification::wiener::unit_gain_tf;
 
     /// A block started away from its steady state is matched: the estimated start recovers the
     /// measured transient, which a steady start misses.

@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::tf::BodePoint;
+use crate::core::numerics::tf::BodePoint;
 
 /// The shortest segment Welch's method will use.
 pub const MIN_SEGMENT_LEN: usize = 16;

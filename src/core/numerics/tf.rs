@@ -2,7 +2,7 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::poly;
+use crate::core::numerics::poly;
 
 /// `G(z) = (b0 + b1 z⁻¹ + … + bm z⁻ᵐ) / (1 + a1 z⁻¹ + … + an z⁻ⁿ)`.
 ///

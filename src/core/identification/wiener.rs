@@ -7,11 +7,11 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::initial_state::{InitialState, fit_free_response};
+use crate::core::identification::initial_state::{InitialState, fit_free_response};
 
-use crate::core::lstsq::{LstsqError, solve_lstsq};
-use crate::core::static_map::StaticMap;
-use crate::core::tf::{DiscreteTf, TfError};
+use crate::core::identification::static_map::StaticMap;
+use crate::core::numerics::lstsq::{LstsqError, solve_lstsq};
+use crate::core::numerics::tf::{DiscreteTf, TfError};
 
 /// `v = G(z) u + offset`, simulated from the steady state of the first input sample.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -31,7 +31,7 @@ impl LinearBlock {
 
     /// Simulate a run to score it against its measured output `y`: from the steady state of
     /// `u[0]`, or with the free response that best fits the first seconds of `y` (see
-    /// `core::initial_state`).
+    /// `core::identification::initial_state`).
     pub fn simulate_scored(&self, u: &[f64], y: &[f64], initial: InitialState) -> Vec<f64> {
         let v = self.simulate(u);
         match initial {

@@ -7,9 +7,9 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::lstsq::{LstsqError, solve_lstsq};
-use crate::core::tf::{DiscreteTf, TfError};
-use crate::core::{poly, tf};
+use crate::core::numerics::lstsq::{LstsqError, solve_lstsq};
+use crate::core::numerics::tf::{DiscreteTf, TfError};
+use crate::core::numerics::{poly, tf};
 
 /// Model orders: `na` poles, `nb` zeros, `nk` samples of input delay.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -3,20 +3,22 @@
 //! validation → Bode → metrics) can run on every drag.
 use serde::{Deserialize, Serialize};
 
-use crate::core::arx::{self, ArxModel, ArxOrders, DeadTime, fit_arx};
-use crate::core::cluster::{
+use crate::core::identification::arx::{self, ArxModel, ArxOrders, DeadTime, fit_arx};
+use crate::core::identification::cluster::{
     self, Cluster, ClusterError, ClusterEval, ClusterSettings, RootKind, SegmentRoots,
 };
-use crate::core::initial_state::{InitialState, fit_free_response};
-use crate::core::metrics::{Metrics, MetricsError, metrics};
-use crate::core::reduce::{self, IdentData, RootGroup};
-use crate::core::refine::Refinement;
+use crate::core::identification::initial_state::{InitialState, fit_free_response};
+use crate::core::identification::reduce::{self, IdentData, RootGroup};
+use crate::core::identification::refine::Refinement;
+use crate::core::identification::segment::{
+    Segment, SegmentError, SegmentSettings, auto_segments, check_segments,
+};
+use crate::core::identification::static_map::{OrderSuggestion, StaticMap, StaticMapError};
+use crate::core::identification::structure::{self, Proposal};
+use crate::core::identification::wiener::{LinearBlock, WienerError, WienerModel};
+use crate::core::numerics::metrics::{Metrics, MetricsError, metrics};
+use crate::core::numerics::tf::BodePoint;
 use crate::core::run::Run;
-use crate::core::segment::{Segment, SegmentError, SegmentSettings, auto_segments, check_segments};
-use crate::core::static_map::{OrderSuggestion, StaticMap, StaticMapError};
-use crate::core::structure::{self, Proposal};
-use crate::core::tf::BodePoint;
-use crate::core::wiener::{LinearBlock, WienerError, WienerModel};
 
 /// Settings for identifying one output.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -29,7 +31,7 @@ pub struct OutputSettings {
     pub max_static_order: usize,
     /// Length of the settled tail of each segment that gives its steady-state point.
     pub settle_secs: f64,
-    /// Polish the cluster centroids by simulation error (see `core::reduce`).
+    /// Polish the cluster centroids by simulation error (see `core::identification::reduce`).
     pub refine: bool,
     /// Where the polish may move a root that came from a cluster.
     pub polish: PolishRegion,
@@ -37,9 +39,9 @@ pub struct OutputSettings {
     /// [`arx::estimate_dead_time`]); when false, `orders.nk` is used.
     pub estimate_dead_time: bool,
     /// Input dead time of the reduced model built from given clusters, samples (the automatic
-    /// proposal chooses its own, see `core::structure`); `None` is none.
+    /// proposal chooses its own, see `core::identification::structure`); `None` is none.
     pub dead_time_samples: Option<usize>,
-    /// Where scored simulations (validation, chirp, diagnosis) start (see `core::initial_state`).
+    /// Where scored simulations (validation, chirp, diagnosis) start (see `core::identification::initial_state`).
     pub initial_state: InitialState,
 }
 
@@ -327,7 +329,7 @@ fn model_of_groups(
 }
 
 /// The automatic proposal for these fits: candidate clusters, which of them the model keeps and
-/// why, or the direct fit when none gives a model (see `core::structure`).
+/// why, or the direct fit when none gives a model (see `core::identification::structure`).
 pub fn propose(
     fits: &SegmentFits,
     ident: &Run,
@@ -376,7 +378,7 @@ pub fn predict_wiener(model: &WienerModel, run: &Run, output: &str) -> Result<Ru
 }
 
 /// Simulate the Wiener model on a run to score it, started as `initial` says (see
-/// `core::initial_state`); the same numbers as the comparison's gray-box row.
+/// `core::identification::initial_state`); the same numbers as the comparison's gray-box row.
 pub fn predict_scored(
     model: &WienerModel,
     run: &Run,

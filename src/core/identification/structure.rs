@@ -1,6 +1,6 @@
 //! Which roots the reduced model gets: the automatic proposal an engineer would sign.
 //!
-//! **Candidates.** The cluster proposal (`core::cluster_proposal`) finds every isolated, tight
+//! **Candidates.** The cluster proposal (`core::identification::cluster_proposal`) finds every isolated, tight
 //! gathering of segment roots, relaxing the aggregation condition step by step from all J segments
 //! to a majority; each candidate records the m of J segments it holds.
 //!
@@ -8,7 +8,7 @@
 //! forward selection with cross-validation across segments. The model starts with the pole
 //! candidate that alone fits the identification range best (a linear block needs a pole). Then every
 //! remaining candidate is tried beside the roots already kept, each trial polished inside its
-//! cluster (`core::reduce`); the few that fit all the data best are cross-validated: for each
+//! cluster (`core::identification::reduce`); the few that fit all the data best are cross-validated: for each
 //! segment, the model is fitted without that segment's step response and simulated through it. The
 //! trial that lowers the held-out error most is kept when it passes the parsimony rule below; this
 //! repeats until none passes. A zero is only tried while the model has more poles than zeros.
@@ -35,10 +35,14 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::arx;
-use crate::core::cluster::{self, Cluster, ClusterEval, RootKind, SegmentRoots, natural_freq_and_damping};
-use crate::core::pipeline::{OutputSettings, PipelineError, SegmentFits};
-use crate::core::reduce::{IdentData, Polished, RootGroup, assemble_groups, count_of, polish, rms};
+use crate::core::identification::arx;
+use crate::core::identification::cluster::{
+    self, Cluster, ClusterEval, RootKind, SegmentRoots, natural_freq_and_damping,
+};
+use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits};
+use crate::core::identification::reduce::{
+    IdentData, Polished, RootGroup, assemble_groups, count_of, polish, rms,
+};
 use crate::core::run::Run;
 
 /// Smallest share of the held-out RMS error a root must remove to enter the model.
@@ -272,7 +276,9 @@ pub fn cross_validate(data: &IdentData, groups: &[RootGroup], order: usize) -> O
         .map(|seg| {
             let fold = data.holding_out(seg.step_at, seg.end);
             let residual = if data.settings.refine {
-                crate::core::reduce::polish_with(&fold, groups, order, FOLD_ITERATIONS)?.assembled.residual
+                crate::core::identification::reduce::polish_with(&fold, groups, order, FOLD_ITERATIONS)?
+                    .assembled
+                    .residual
             } else {
                 assemble_groups(&fold, groups, Some(order)).ok()?.residual
             };
@@ -289,7 +295,7 @@ pub fn fitted(data: &IdentData, groups: &[RootGroup]) -> Option<Polished> {
     let start = assemble_groups(data, groups, data.settings.static_order).ok()?;
     let order = start.wiener.map.order();
     if !data.settings.refine {
-        let refinement = crate::core::refine::Refinement {
+        let refinement = crate::core::identification::refine::Refinement {
             poles_before: Vec::new(),
             zeros_before: Vec::new(),
             rms_before: start.rms(),
@@ -612,7 +618,9 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
 /// explain): the whole delays next to it screened on the identification error with the roots as they
 /// are, the best few polished with the roots.
 fn with_dead_time(data: &IdentData, groups: &[RootGroup], excess: usize) -> Option<(Polished, usize)> {
-    let max = ((crate::core::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).max(1);
+    let max = ((crate::core::identification::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round()
+        as usize)
+        .max(1);
     let mut screened: Vec<(f64, usize)> = (excess.saturating_sub(1).max(1)..=(excess + 1).min(max))
         .filter_map(|d| {
             assemble_groups(&data.with_delay(d), groups, data.settings.static_order)
@@ -644,7 +652,7 @@ fn group_delay_secs(g: &RootGroup, dt_secs: f64) -> f64 {
 
 /// The input delay at which short-B ARX models fit a model's own simulated step responses best (the
 /// same estimator that timed the data, [`arx::estimate_dead_time`]): how late the model itself starts.
-fn apparent_nk(data: &IdentData, assembled: &crate::core::reduce::Assembled) -> usize {
+fn apparent_nk(data: &IdentData, assembled: &crate::core::identification::reduce::Assembled) -> usize {
     let simulated: Vec<f64> = data.y.iter().zip(&assembled.residual).map(|(y, r)| y + r).collect();
     let deviations: Vec<(Vec<f64>, Vec<f64>)> = data
         .fits
@@ -661,7 +669,9 @@ fn apparent_nk(data: &IdentData, assembled: &crate::core::reduce::Assembled) -> 
             Some((u.iter().map(|x| x - u0).collect(), y.iter().map(|x| x - y0).collect()))
         })
         .collect();
-    let max = ((crate::core::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).clamp(1, 50);
+    let max = ((crate::core::identification::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round()
+        as usize)
+        .clamp(1, 50);
     arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
 }
 

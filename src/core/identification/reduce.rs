@@ -3,7 +3,7 @@
 //!
 //! **Root groups.** The reduced linear block is a list of [`RootGroup`]s: one real root, or one
 //! conjugate pair, each taken from a valid cluster (its centroid) or free (the direct output-error
-//! fit of `core::structure`). For given roots the Wiener model is [`assemble`]d the one way the
+//! fit of `core::identification::structure`). For given roots the Wiener model is [`assemble`]d the one way the
 //! whole crate uses: the unit-gain response is simulated, gain and offset come from least squares
 //! on the identification range, and the static map is fitted to the steady-state points (the
 //! pre-step baseline and the settled tail of every segment), its order chosen by leave-one-out
@@ -22,13 +22,13 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::cluster::{ClusterEval, RootKind, natural_freq_and_damping};
-use crate::core::lm::{LmOptions, levenberg_marquardt};
-use crate::core::pipeline::{OutputSettings, PipelineError, SegmentFits, output_values};
-use crate::core::refine::Refinement;
+use crate::core::identification::cluster::{ClusterEval, RootKind, natural_freq_and_damping};
+use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits, output_values};
+use crate::core::identification::refine::Refinement;
+use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
+use crate::core::identification::wiener::{WienerModel, fit_linear_block_excluding};
+use crate::core::numerics::lm::{LmOptions, levenberg_marquardt};
 use crate::core::run::Run;
-use crate::core::static_map::{OrderSuggestion, fit_static_map, suggest_order};
-use crate::core::wiener::{WienerModel, fit_linear_block_excluding};
 
 /// Roots must stay inside this modulus while polishing (a stable, not quite integrating block).
 const MAX_POLE_MODULUS: f64 = 0.999;
@@ -88,10 +88,10 @@ impl RootGroup {
     }
 
     /// The group with its circle dropped when the polish may move it freely.
-    pub fn within(self, region: crate::core::pipeline::PolishRegion) -> Self {
+    pub fn within(self, region: crate::core::identification::pipeline::PolishRegion) -> Self {
         match region {
-            crate::core::pipeline::PolishRegion::WithinClusters => self,
-            crate::core::pipeline::PolishRegion::Free => Self { region: None, ..self },
+            crate::core::identification::pipeline::PolishRegion::WithinClusters => self,
+            crate::core::identification::pipeline::PolishRegion::Free => Self { region: None, ..self },
         }
     }
 

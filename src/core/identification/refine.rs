@@ -1,5 +1,5 @@
 //! Roots as parameters of a polish, and the record of what a polish did. The polish itself is in
-//! `core::reduce` (the reduced model, each root kept inside its cluster) and `core::effects` (the
+//! `core::identification::reduce` (the reduced model, each root kept inside its cluster) and `core::effects` (the
 //! model with its effect blocks).
 //!
 //! Why polish: a high-order ARX fitted to data with output noise is biased, so cluster centroids sit

@@ -3,7 +3,7 @@
 //! (SVD), not the normal equations.
 use faer::Mat;
 
-use crate::core::lstsq::{LstsqError, solve_lstsq};
+use crate::core::numerics::lstsq::{LstsqError, solve_lstsq};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct LmOptions {

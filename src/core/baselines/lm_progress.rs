@@ -5,6 +5,7 @@ use faer::Mat;
 
 use super::BaselineError;
 use crate::core::numerics::lstsq::solve_lstsq;
+use crate::core::numerics::stats::sum_of_squares as cost_of;
 
 pub(super) struct LmSettings {
     pub max_iterations: usize,
@@ -18,10 +19,6 @@ pub(super) struct LmOutcome {
     pub theta: Vec<f64>,
     pub cost: f64,
     pub iterations: usize,
-}
-
-fn cost_of(r: &[f64]) -> f64 {
-    r.iter().map(|x| x * x).sum()
 }
 
 /// Forward-difference Jacobian (backward where the forward point is inadmissible; a zero column

@@ -5,6 +5,7 @@
 //! so here the Jacobian is reduced to its p × p triangular factor by Householder QR once per
 //! iteration, and each damped step `[R; √λ·D] δ = [−Qᵀr; 0]` is a small 2p × p Householder problem.
 //! No normal equations are formed.
+use crate::core::numerics::stats::sum_of_squares as cost_of;
 
 /// Options of [`minimise`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,10 +80,6 @@ fn back_substitute(r: &[Vec<f64>], c: &[f64]) -> Vec<f64> {
         x[i] = (c.get(i).copied().unwrap_or(0.0) - s) / pivot;
     }
     x
-}
-
-fn cost_of(r: &[f64]) -> f64 {
-    r.iter().map(|x| x * x).sum()
 }
 
 /// Minimise `‖r(θ)‖²` from `theta0`; `residual` returns `None` where θ is not admissible. Returns

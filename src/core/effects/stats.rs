@@ -35,10 +35,7 @@ impl ResidualTrace {
     }
 }
 
-/// Arithmetic mean; 0 when empty.
-pub fn mean(x: &[f64]) -> f64 {
-    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
-}
+pub use crate::core::numerics::stats::mean;
 
 /// Pearson correlation; 0 when either signal is constant.
 pub fn correlation(a: &[f64], b: &[f64]) -> f64 {

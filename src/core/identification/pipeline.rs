@@ -17,6 +17,7 @@ use crate::core::identification::static_map::{OrderSuggestion, StaticMap, Static
 use crate::core::identification::structure::{self, Proposal};
 use crate::core::identification::wiener::{LinearBlock, WienerError, WienerModel};
 use crate::core::numerics::metrics::{Metrics, MetricsError, metrics};
+use crate::core::numerics::stats::mean;
 use crate::core::numerics::tf::BodePoint;
 use crate::core::run::Run;
 
@@ -158,10 +159,6 @@ pub fn segments_for(
         }
         None => auto_segments(&run.input.values, run.dt_secs, settings).map_err(wrap),
     }
-}
-
-fn mean(x: &[f64]) -> f64 {
-    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }
 
 /// Fit one ARX model per segment on deviations from the segment's starting steady state.

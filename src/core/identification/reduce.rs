@@ -28,6 +28,7 @@ use crate::core::identification::refine::Refinement;
 use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
 use crate::core::identification::wiener::{WienerModel, fit_linear_block_excluding};
 use crate::core::numerics::lm::{LmOptions, levenberg_marquardt};
+use crate::core::numerics::stats::mean;
 use crate::core::run::Run;
 
 /// Roots must stay inside this modulus while polishing (a stable, not quite integrating block).
@@ -282,10 +283,6 @@ impl Assembled {
 /// Root-mean-square of a residual (0 for an empty one).
 pub fn rms(residual: &[f64]) -> f64 {
     (residual.iter().map(|r| r * r).sum::<f64>() / residual.len().max(1) as f64).sqrt()
-}
-
-fn mean(x: &[f64]) -> f64 {
-    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }
 
 /// Gain, offset and static map for these roots (see the module documentation). `static_order`

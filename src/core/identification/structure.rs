@@ -43,6 +43,7 @@ use crate::core::identification::pipeline::{OutputSettings, PipelineError, Segme
 use crate::core::identification::reduce::{
     IdentData, Polished, RootGroup, assemble_groups, count_of, polish, rms,
 };
+use crate::core::numerics::stats::mean;
 use crate::core::run::Run;
 
 /// Smallest share of the held-out RMS error a root must remove to enter the model.
@@ -673,10 +674,6 @@ fn apparent_nk(data: &IdentData, assembled: &crate::core::identification::reduce
         as usize)
         .clamp(1, 50);
     arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
-}
-
-fn mean(x: &[f64]) -> f64 {
-    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }
 
 /// Time constants (s) a free real pole is started from: geometric from two samples to half the

@@ -4,6 +4,7 @@
 use faer::Mat;
 
 use crate::core::numerics::lstsq::{LstsqError, solve_lstsq};
+use crate::core::numerics::stats::sum_of_squares as cost_of;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct LmOptions {
@@ -35,10 +36,6 @@ pub enum LmError {
     BadStart,
     #[error(transparent)]
     Lstsq(#[from] LstsqError),
-}
-
-fn cost_of(r: &[f64]) -> f64 {
-    r.iter().map(|x| x * x).sum()
 }
 
 /// Minimise `‖r(θ)‖²` from `theta0`. `residual` returns `None` where θ is not admissible (e.g. an

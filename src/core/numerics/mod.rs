@@ -8,4 +8,5 @@ pub mod metrics;
 pub mod noise_fit;
 pub mod poly;
 pub mod spectral;
+pub mod stats;
 pub mod tf;

@@ -8,6 +8,7 @@ use std::f64::consts::PI;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use crate::core::numerics::stats::{hann, mean};
 use crate::core::numerics::tf::BodePoint;
 
 /// The shortest segment Welch's method will use.
@@ -350,10 +351,6 @@ fn check_grid(omegas_rad_s: &[f64], nyquist_rad_s: f64) -> Result<(), SpectralEr
     }
 }
 
-fn mean(x: &[f64]) -> f64 {
-    x.iter().sum::<f64>() / x.len().max(1) as f64
-}
-
 fn remove_record_offset(u: &[f64], y: &[f64], offset: Offset) -> (Vec<f64>, Vec<f64>) {
     let (u0, y0) = match offset {
         Offset::SegmentMean => (0.0, 0.0),
@@ -401,11 +398,6 @@ fn hold_ends(x: &[f64], segment_len: usize, step: usize, front: bool, back: bool
     out.extend_from_slice(x);
     out.extend(std::iter::repeat_n(mean(&x[x.len() - m..]), back_len));
     out
-}
-
-/// Periodic Hann window of length `len`.
-fn hann(len: usize) -> Vec<f64> {
-    (0..len).map(|k| 0.5 - 0.5 * (2.0 * PI * k as f64 / len as f64).cos()).collect()
 }
 
 /// The windowed segments' DTFTs at each grid frequency, averaged into auto- and cross-spectra.

@@ -2,10 +2,7 @@
 //! FFT-based autocorrelations, and the normal tail probability.
 use num_complex::Complex64;
 
-/// Mean of `x`; 0 for an empty slice.
-pub(super) fn mean(x: &[f64]) -> f64 {
-    if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
-}
+pub(super) use crate::core::numerics::stats::mean;
 
 /// `x` minus its mean.
 pub(super) fn centred(x: &[f64]) -> Vec<f64> {

@@ -4,6 +4,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::signal::{fft_in_place, median};
+use crate::core::numerics::stats::hann;
 
 /// The residual spectrum and its largest peak.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -24,11 +25,6 @@ pub struct ResidualSpectrum {
     pub peak_omega_rad_s: f64,
     /// Peak PSD over the median PSD of the bins above 0 Hz (≈ 1–3 for white noise).
     pub peak_prominence: f64,
-}
-
-/// Hann window of `len` samples (periodic form, as for spectral analysis).
-fn hann(len: usize) -> Vec<f64> {
-    (0..len).map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / len as f64).cos()).collect()
 }
 
 /// Welch PSD of `x` with segments of `segment_len` samples, shortened to the largest power of two

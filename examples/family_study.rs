@@ -6,10 +6,10 @@
 //! `cargo run --release --example family_study -- [FIRST_ENGINE] [ENGINES] [EFFECT_SPEC]`
 use anyhow::{Context, Result};
 use jetid::core::identification::cluster::RootKind;
+use jetid::core::identification::direct_fit::direct_fit_of_order;
 use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
 use jetid::core::identification::reduce::{IdentData, count_of};
 use jetid::core::identification::segment::SegmentSettings;
-use jetid::core::identification::structure::direct_fit_of_order;
 use jetid::core::numerics::metrics::metrics;
 use jetid::sim::{EngineFamily, SimConfig, TestKind, simulate};
 

@@ -7,6 +7,8 @@
 pub mod arx;
 pub mod cluster;
 pub mod cluster_proposal;
+pub mod cross_validation;
+pub mod direct_fit;
 pub mod initial_state;
 pub mod pipeline;
 pub mod reduce;

@@ -36,13 +36,13 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::identification::arx;
-use crate::core::identification::cluster::{
-    self, Cluster, ClusterEval, RootKind, SegmentRoots, natural_freq_and_damping,
+use crate::core::identification::cluster::{self, Cluster, ClusterEval, RootKind};
+use crate::core::identification::cross_validation::{
+    Gain, Noise, cross_validate, fitted, fmt_error, model_error_reduction,
 };
+use crate::core::identification::direct_fit::{DirectFit, direct_fit};
 use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits};
-use crate::core::identification::reduce::{
-    IdentData, Polished, RootGroup, assemble_groups, count_of, polish, rms,
-};
+use crate::core::identification::reduce::{IdentData, Polished, RootGroup, assemble_groups, count_of};
 use crate::core::numerics::stats::mean;
 use crate::core::run::Run;
 
@@ -55,10 +55,8 @@ const CROSS_VALIDATED_TRIALS: usize = 3;
 /// A trial is cross-validated only when its fit on all the data removes at least this share of
 /// [`MIN_RELATIVE_REDUCTION`]: held-out improvements run below in-sample ones.
 const SCREEN_SHARE: f64 = 0.5;
-/// Most poles the direct fit grows to.
-pub const MAX_DIRECT_POLES: usize = 4;
 /// Starting points kept after screening a grid, to be polished.
-const REFINED_GUESSES: usize = 2;
+pub(super) const REFINED_GUESSES: usize = 2;
 
 /// What became of one candidate cluster, in words and numbers.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -134,13 +132,6 @@ impl DeadTimeVerdict {
     }
 }
 
-/// Free roots fitted directly by output error, and why they were needed.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct DirectFit {
-    pub groups: Vec<RootGroup>,
-    pub note: String,
-}
-
 impl Proposal {
     /// One sentence per candidate, and the direct fit's note.
     pub fn sentences(&self) -> Vec<String> {
@@ -173,139 +164,6 @@ pub fn root_words(z: Complex64, pair: bool, omega_rad_s: f64, zeta: f64) -> Stri
     } else {
         format!("real root at {:.3}", z.re)
     }
-}
-
-/// A trial structure against the current one, over the held-out segments of a cross-validation.
-struct Gain {
-    /// Share of the held-out model error (above the noise) the trial removes.
-    reduction: f64,
-    /// Held-out errors without and with the trial (output units, pooled over the segments).
-    without: f64,
-    with: f64,
-    /// Segments whose held-out error the trial lowers, and how many segments there are.
-    wins: usize,
-    folds: usize,
-    /// Mean per-segment relative improvement over its standard error.
-    standard_errors: f64,
-}
-
-impl Gain {
-    /// From the per-segment held-out mean squared errors of the two structures; `noise` is the
-    /// measurement noise, which no structure can remove.
-    fn of(without: &[f64], with: &[f64], noise: Noise) -> Self {
-        let d: Vec<f64> = without.iter().zip(with).map(|(a, b)| (a - b) / a.max(f64::MIN_POSITIVE)).collect();
-        let n = d.len().max(1) as f64;
-        let mean = d.iter().sum::<f64>() / n;
-        let sd = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
-        let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
-        let (without, with) = (pooled(without), pooled(with));
-        Self {
-            reduction: model_error_reduction(without, with, noise),
-            without: without.sqrt(),
-            with: with.sqrt(),
-            wins: d.iter().filter(|x| **x > 0.0).count(),
-            folds: d.len(),
-            standard_errors: mean / (sd / n.sqrt()).max(f64::MIN_POSITIVE),
-        }
-    }
-
-    fn passes(&self) -> bool {
-        self.reduction >= MIN_RELATIVE_REDUCTION && self.standard_errors >= MIN_STANDARD_ERRORS
-    }
-
-    fn words(&self) -> String {
-        format!(
-            "held-out error from {} to {} (model error above noise {:+.0} %), lower on {} of {} segments \
-             ({:.1} standard errors); a root must remove {:.0} % of the model error and more than {} \
-             standard error",
-            fmt_error(self.without),
-            fmt_error(self.with),
-            -100.0 * self.reduction,
-            self.wins,
-            self.folds,
-            self.standard_errors,
-            100.0 * MIN_RELATIVE_REDUCTION,
-            MIN_STANDARD_ERRORS
-        )
-    }
-}
-
-fn fmt_error(x: f64) -> String {
-    if x.abs() >= 100.0 { format!("{x:.0}") } else { format!("{x:.3}") }
-}
-
-/// The measurement noise's variance σ² as read from the data, and how uncertain that reading is.
-#[derive(Clone, Copy, Debug)]
-struct Noise {
-    var: f64,
-    /// Two standard errors of `var`: σ is read by a median (of absolute first differences), whose
-    /// asymptotic efficiency for Gaussian noise is about 37 %, so SE(σ̂) ≈ 1.16 σ/√N and
-    /// SE(σ̂²) ≈ 2.33 σ²/√N over N samples.
-    uncertainty: f64,
-}
-
-impl Noise {
-    fn of(data: &IdentData) -> Self {
-        let var = data.noise_sigma().powi(2);
-        Self { var, uncertainty: 2.0 * 2.33 * var / (data.y.len().max(1) as f64).sqrt() }
-    }
-}
-
-/// Share of the model error — the held-out mean squared error above the measurement noise's
-/// variance — that a trial removes, as a share of RMS: 1 − √((with − σ²)/(without − σ²)). Zero when
-/// the model error is within the noise reading's own uncertainty: the model is at the noise level
-/// and nothing is left that a root could remove.
-fn model_error_reduction(without_mse: f64, with_mse: f64, noise: Noise) -> f64 {
-    let excess = without_mse - noise.var;
-    if excess <= noise.uncertainty {
-        return 0.0;
-    }
-    let left = (with_mse - noise.var).max(0.0);
-    1.0 - (left / excess).sqrt()
-}
-
-/// Iterations of a cross-validation fold's polish, warm-started from the roots polished on all data.
-const FOLD_ITERATIONS: usize = 12;
-
-/// The held-out error of a set of root groups, segment by segment: for each segment the model is
-/// fitted (polished from `groups`, the static map of `order` refitted) on the identification range
-/// without that segment's response, then simulated through it. Mean squared error per segment.
-pub fn cross_validate(data: &IdentData, groups: &[RootGroup], order: usize) -> Option<Vec<f64>> {
-    data.fits
-        .segments
-        .iter()
-        .map(|seg| {
-            let fold = data.holding_out(seg.step_at, seg.end);
-            let residual = if data.settings.refine {
-                crate::core::identification::reduce::polish_with(&fold, groups, order, FOLD_ITERATIONS)?
-                    .assembled
-                    .residual
-            } else {
-                assemble_groups(&fold, groups, Some(order)).ok()?.residual
-            };
-            let out = fold.held_out.clone()?;
-            let held: Vec<f64> = residual.get(out)?.to_vec();
-            Some(rms(&held).powi(2))
-        })
-        .collect()
-}
-
-/// A model of a set of root groups, polished (when the settings ask for it) with the static-map
-/// order leave-one-out chooses for its starting roots.
-pub fn fitted(data: &IdentData, groups: &[RootGroup]) -> Option<Polished> {
-    let start = assemble_groups(data, groups, data.settings.static_order).ok()?;
-    let order = start.wiener.map.order();
-    if !data.settings.refine {
-        let refinement = crate::core::identification::refine::Refinement {
-            poles_before: Vec::new(),
-            zeros_before: Vec::new(),
-            rms_before: start.rms(),
-            rms_after: start.rms(),
-            iterations: 0,
-        };
-        return Some(Polished { groups: groups.to_vec(), assembled: start, refinement });
-    }
-    polish(data, groups, order)
 }
 
 /// The automatic proposal: candidate clusters, the forward selection and, when no cluster gives a
@@ -674,123 +532,4 @@ fn apparent_nk(data: &IdentData, assembled: &crate::core::identification::reduce
         as usize)
         .clamp(1, 50);
     arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
-}
-
-/// Time constants (s) a free real pole is started from: geometric from two samples to half the
-/// longest segment, the range a step response of these segments can show.
-pub fn real_pole_guesses(dt_secs: f64, span_secs: f64) -> Vec<Complex64> {
-    geometric(2.0 * dt_secs, (0.5 * span_secs).max(4.0 * dt_secs), 10)
-        .into_iter()
-        .map(|tau| Complex64::new((-dt_secs / tau).exp(), 0.0))
-        .collect()
-}
-
-/// Pole pairs a free pair is started from: natural frequencies geometric from the slowest a segment
-/// shows to the π/2 rad/sample limit the cluster analysis keeps (above it ARX noise roots ring), each
-/// at light, medium and heavy damping.
-pub fn pair_guesses(dt_secs: f64, span_secs: f64) -> Vec<Complex64> {
-    let lo = 4.0 / span_secs.max(4.0 * dt_secs);
-    let hi = 0.9 * std::f64::consts::FRAC_PI_2 / dt_secs;
-    let mut out = Vec::new();
-    for omega in geometric(lo.min(0.5 * hi), hi, 8) {
-        for zeta in [0.3, 0.6, 0.9] {
-            let s = Complex64::new(-zeta * omega, omega * (1.0 - zeta * zeta).sqrt());
-            out.push((s * dt_secs).exp());
-        }
-    }
-    out
-}
-
-fn geometric(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    let ratio = (hi / lo).max(1.0).powf(1.0 / (n.max(2) - 1) as f64);
-    (0..n).map(|k| lo * ratio.powi(k as i32)).collect()
-}
-
-/// Longest segment after its step, s.
-fn longest_segment_secs(fits: &SegmentFits) -> f64 {
-    fits.segments.iter().map(|s| s.end.saturating_sub(s.step_at)).max().unwrap_or(0) as f64 * fits.dt_secs
-}
-
-/// The best model with one more free real pole or pole pair beside `groups`: every guess screened
-/// on the identification error with the current roots as they are, the best few polished.
-pub fn add_free_pole(data: &IdentData, groups: &[RootGroup], max_poles: usize) -> Option<Polished> {
-    let span = longest_segment_secs(data.fits);
-    let dt = data.fits.dt_secs;
-    let room = max_poles.saturating_sub(count_of(groups, RootKind::Pole));
-    let reals = real_pole_guesses(dt, span).into_iter().map(|z| RootGroup::free_real(RootKind::Pole, z.re));
-    let pairs = pair_guesses(dt, span).into_iter().map(|z| RootGroup::free_pair(RootKind::Pole, z));
-    let guesses = reals.chain(pairs).filter(|g| g.count() <= room);
-    let mut screened: Vec<(f64, Vec<RootGroup>)> = guesses
-        .filter_map(|g| {
-            let mut trial = groups.to_vec();
-            trial.push(g);
-            assemble_groups(data, &trial, data.settings.static_order).ok().map(|a| (a.rms(), trial))
-        })
-        .collect();
-    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
-    screened
-        .into_iter()
-        .take(REFINED_GUESSES)
-        .filter_map(|(_, trial)| fitted(data, &trial))
-        .min_by(|a, b| a.assembled.rms().total_cmp(&b.assembled.rms()))
-}
-
-/// The direct output-error fit of free roots when no cluster gives a model.
-fn direct_fit(data: &IdentData, roots: &[SegmentRoots]) -> Result<DirectFit, PipelineError> {
-    let candidates = roots.len();
-    let Some(mut current) = add_free_pole(data, &[], 1) else {
-        return Err(PipelineError::NoModel {
-            reason: "not even a single real pole can be fitted to the identification run: check that \
-                     the output responds to the input (column mapping) and that the run holds steps"
-                .to_owned(),
-        });
-    };
-    let mut steps = vec![format!("1 real pole (RMS error {})", fmt_error(current.assembled.rms()))];
-    let cv_of = |p: &Polished| cross_validate(data, &p.groups, p.assembled.wiener.map.order());
-    let mut current_cv = cv_of(&current);
-    while count_of(&current.groups, RootKind::Pole) < MAX_DIRECT_POLES {
-        let Some(trial) = add_free_pole(data, &current.groups, MAX_DIRECT_POLES) else { break };
-        let (Some(cur), Some(cv)) = (current_cv.as_deref(), cv_of(&trial)) else { break };
-        let gain = Gain::of(cur, &cv, Noise::of(data));
-        if !gain.passes() {
-            break;
-        }
-        let added = trial.groups.last().map_or("a pole".to_owned(), |g| {
-            let (omega, zeta) = natural_freq_and_damping(g.root, data.fits.dt_secs);
-            root_words(g.root, g.pair, omega, zeta)
-        });
-        steps.push(format!("+ {added}: {}", gain.words()));
-        current = trial;
-        current_cv = Some(cv);
-    }
-    let note = format!(
-        "no pole gathers in a majority of the {candidates} segment models, so the cluster method has nothing \
-         to build on; the linear block was fitted directly by output error instead: {}. Look at the \
-         z-plane: the segment models disagree (closed-loop data, steps too small to excite the \
-         dynamics, or ARX orders that do not suit this engine).",
-        steps.join(", ")
-    );
-    Ok(DirectFit { groups: current.groups, note })
-}
-
-/// The best free-root output-error fit with exactly `n_poles` poles: grown greedily from the grids
-/// (one real pole or pair at a time, each step's best polished), and from each of `starts` with its
-/// roots freed. A yardstick for the cluster-based model, which cannot beat it on the identification
-/// data with the same roots.
-pub fn direct_fit_of_order(data: &IdentData, n_poles: usize, starts: &[Vec<RootGroup>]) -> Option<Polished> {
-    let mut results: Vec<Polished> = Vec::new();
-    let mut grown: Vec<RootGroup> = Vec::new();
-    while count_of(&grown, RootKind::Pole) < n_poles {
-        let Some(next) = add_free_pole(data, &grown, n_poles) else { break };
-        grown = next.groups.clone();
-        if count_of(&grown, RootKind::Pole) == n_poles {
-            results.push(next);
-        }
-    }
-    for start in starts {
-        let freed: Vec<RootGroup> =
-            start.iter().map(|g| RootGroup { region: None, cluster: None, ..g.clone() }).collect();
-        results.extend(fitted(data, &freed));
-    }
-    results.into_iter().min_by(|a, b| a.assembled.rms().total_cmp(&b.assembled.rms()))
 }

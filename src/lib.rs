@@ -3,9 +3,6 @@
 //! `core` is the headless numerics; `sim` the turbojet simulator; `io` files; `batch` the headless
 //! pipeline; `cli` the command line; `ui` the desktop app (feature `gui`).
 pub mod batch;
-pub mod batch_compare;
-pub mod batch_figures;
-pub mod batch_residuals;
 pub mod cli;
 pub mod core;
 pub mod io;

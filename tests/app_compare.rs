@@ -9,13 +9,16 @@ use egui_kittest::kittest::Queryable;
 use std::sync::Arc;
 use std::time::Duration;
 
-use jetid::batch_compare::{
-    Cancelled, CompareInput, GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, compare_output, compare_stage,
-};
+use jetid::core::compare::{Cancelled, CompareInput, ModelKind, compare_output, compare_stage};
 use jetid::core::numerics::metrics::metrics;
 use jetid::ui::compare_table::{MODELS, table1_columns};
 use jetid::ui::compare_ui::CompareStatus;
 use jetid::ui::{App, Command, Role, Tab};
+
+const GRAY_BOX: ModelKind = ModelKind::GrayBox;
+const LINEAR: ModelKind = ModelKind::Linear;
+const HAMMERSTEIN_WIENER: ModelKind = ModelKind::HammersteinWiener;
+const NNARX: ModelKind = ModelKind::Nnarx;
 
 const SPEED: &str = "shaft_speed_rpm";
 /// Frames stepped (with a short sleep each) before a job is declared stuck: minutes, not a timing goal.
@@ -88,12 +91,12 @@ fn showing_compare_starts_a_job_with_progress_and_fills_table_1() {
     assert_eq!(comparison.runs.len(), 2);
     for name in [GRAY_BOX, LINEAR, HAMMERSTEIN_WIENER, NNARX] {
         assert!(comparison.runs.iter().all(|r| r.models.iter().any(|m| m.model == name)), "{name}");
-        let mc = comparison.monte_carlo.get(name).expect("a Monte Carlo study");
+        let mc = comparison.monte_carlo.get(name.report_name()).expect("a Monte Carlo study");
         assert!(mc.std_difference > 0.0 && mc.std_difference.is_finite());
         assert_eq!(mc.histogram.counts.iter().sum::<usize>(), mc.differences.len());
     }
     let freq = comparison.frequency.as_ref().expect("the chirp's frequency comparison");
-    assert!(freq.responses.contains_key("measured") && freq.responses.contains_key(NNARX));
+    assert!(freq.responses.contains_key("measured") && freq.responses.contains_key(NNARX.report_name()));
     assert!(comparison.noise.as_ref().is_some_and(|n| n.used.is_some()));
     // The table is on screen with the paper's values beside ours.
     assert!(harness.query_all_by_label("Hammerstein–Wiener").count() >= 1);

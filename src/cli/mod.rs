@@ -2,8 +2,11 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::{Args, Parser, Subcommand};
+use clap::{Parser, Subcommand};
 
+pub use batch_args::BatchArgs;
+
+pub mod batch_args;
 pub mod inspect;
 pub mod predict;
 pub mod simulate;
@@ -29,43 +32,6 @@ pub struct Cli {
     pub command: Option<Command>,
 }
 
-#[derive(Debug, Args, Default, Clone)]
-pub struct BatchArgs {
-    /// Project file (default: the bundled sample project).
-    pub project: Option<PathBuf>,
-    /// Identification run.
-    #[arg(long)]
-    pub ident: Option<PathBuf>,
-    /// Validation run (repeatable).
-    #[arg(long = "validate")]
-    pub validate: Vec<PathBuf>,
-    /// Frequency-domain validation (chirp) run.
-    #[arg(long)]
-    pub chirp: Option<PathBuf>,
-    /// Steady-state run for the noise fit.
-    #[arg(long)]
-    pub steady: Option<PathBuf>,
-    /// Output column to model (repeatable; default: all outputs present).
-    #[arg(long = "output")]
-    pub outputs: Vec<String>,
-    /// Apply an effect from the catalog, parameters fitted (repeatable).
-    #[arg(long = "add-effect")]
-    pub add_effects: Vec<String>,
-    /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
-    #[arg(long = "map")]
-    pub maps: Vec<String>,
-    /// Start from the clusters of a saved model.json (e.g. one exported from the app) instead of
-    /// the automatic proposal, for every output the model holds.
-    #[arg(long = "clusters", value_name = "MODEL.json")]
-    pub clusters_from: Option<PathBuf>,
-    /// Sample time in seconds, for files without a time column.
-    #[arg(long)]
-    pub sample_time: Option<f64>,
-    /// Where results go.
-    #[arg(long, default_value = "jetid-out")]
-    pub out: PathBuf,
-}
-
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run the bundled turbojet simulator and write a run file.
@@ -82,7 +48,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Simulate(args)) => simulate::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Predict(args)) => predict::run(&args),
-        None if cli.batch => crate::batch::run(&cli.batch_args),
+        None if cli.batch => {
+            let project = cli.batch_args.project()?;
+            crate::batch::run(project, &cli.batch_args.out)
+        }
         #[cfg(feature = "gui")]
         None if let Some(out) = &cli.screenshot => {
             // `--output NAME` picks the output the model views show (default: the first).

@@ -1,5 +1,6 @@
 //! The headless core: pure numerics. No egui, no files, no threads.
 pub mod baselines;
+pub mod compare;
 pub mod diagnose;
 pub mod effects;
 pub mod identification;

@@ -4,12 +4,10 @@
 use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, MarkerShape, Plot, PlotPoints, Points};
 
 use super::bode_ui::{log_grid, log_label};
-use super::compare_table::{
-    MODELS, model_colour, model_title, paper_monte_carlo_std, run_title, significant_digits,
-};
+use super::compare_table::{MODELS, model_colour, paper_monte_carlo_std, run_title, significant_digits};
 use super::plot_util;
 use super::theme;
-use crate::batch_compare::{FrequencyComparison, OutputComparison};
+use crate::core::compare::{FrequencyComparison, ModelKind, OutputComparison};
 use crate::core::monte_carlo::MonteCarloResult;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
@@ -82,8 +80,8 @@ fn traces_ui(
             for model in MODELS.iter().rev() {
                 let Some(run) = shown.models.iter().find(|m| m.model == *model) else { continue };
                 let mut line =
-                    Line::new(model_title(model), series(&run.y_hat)).color(model_colour(model)).width(1.3);
-                if *model == crate::batch_compare::LINEAR {
+                    Line::new(model.label(), series(&run.y_hat)).color(model_colour(*model)).width(1.3);
+                if *model == ModelKind::Linear {
                     line = line.style(LineStyle::Dashed { length: 8.0 });
                 }
                 plot_ui.line(line);
@@ -136,11 +134,11 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
             }
             // The gray-box model last, on top.
             for model in MODELS.iter().rev() {
-                let Some(response) = freq.responses.get(*model) else { continue };
+                let Some(response) = freq.responses.get(model.report_name()) else { continue };
                 let values = if phase { &response.phase_deg } else { &response.mag_db };
                 let points: PlotPoints<'_> =
                     response.omega_rad_s.iter().zip(values).map(|(w, y)| [w.log10(), *y]).collect();
-                plot_ui.line(Line::new(model_title(model), points).color(model_colour(model)).width(1.5));
+                plot_ui.line(Line::new(model.label(), points).color(model_colour(*model)).width(1.5));
             }
         });
     }
@@ -164,20 +162,20 @@ pub fn monte_carlo_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &s
         ))
         .strong(),
     );
-    let shown: Vec<(&str, &MonteCarloResult)> =
-        MODELS.iter().filter_map(|m| comparison.monte_carlo.get(*m).map(|r| (*m, r))).collect();
+    let shown: Vec<(ModelKind, &MonteCarloResult)> =
+        MODELS.iter().filter_map(|m| comparison.monte_carlo.get(m.report_name()).map(|r| (*m, r))).collect();
     ui.columns(shown.len(), |columns| {
         for (ui, (model, result)) in columns.iter_mut().zip(&shown) {
-            histogram_ui(ui, &comparison.output, model, result);
+            histogram_ui(ui, &comparison.output, *model, result);
         }
     });
 }
 
-fn histogram_ui(ui: &mut egui::Ui, output: &str, model: &str, result: &MonteCarloResult) {
+fn histogram_ui(ui: &mut egui::Ui, output: &str, model: ModelKind, result: &MonteCarloResult) {
     let colour = model_colour(model);
     let paper = paper_monte_carlo_std(output, model).map_or(String::new(), |s| format!(" (paper {s})"));
     let std = significant_digits(result.std_difference, 4);
-    let title = format!("{}: std {std}{paper}", model_title(model));
+    let title = format!("{}: std {std}{paper}", model.label());
     ui.add(egui::Label::new(egui::RichText::new(title).color(colour)).truncate());
     let histogram = &result.histogram;
     let total = histogram.counts.iter().sum::<usize>().max(1) as f64;
@@ -197,14 +195,14 @@ fn histogram_ui(ui: &mut egui::Ui, output: &str, model: &str, result: &MonteCarl
             [x, result.normal_fit.pdf(x)]
         })
         .collect();
-    Plot::new(("compare_mc", output, model))
+    Plot::new(("compare_mc", output, model.report_name()))
         .height(HISTOGRAM_HEIGHT)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
         .show_axes([true, false])
         .allow_scroll(false)
         .show(ui, |plot_ui| {
-            plot_ui.bar_chart(BarChart::new(model_title(model), bars).color(colour.gamma_multiply(0.6)));
+            plot_ui.bar_chart(BarChart::new(model.label(), bars).color(colour.gamma_multiply(0.6)));
             plot_ui.line(Line::new("normal fit", pdf).color(theme::REDUCED).width(1.5));
         });
 }

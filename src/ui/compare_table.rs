@@ -4,38 +4,28 @@
 use egui::{Color32, RichText};
 
 use super::theme;
-use crate::batch_compare::{
-    GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, OutputComparison, PAPER_MONTE_CARLO_STD,
-};
+use crate::core::compare::{ModelKind, OutputComparison, PaperOutput, PaperRow, RunComparison};
 use crate::core::numerics::noise_fit::Distribution;
-use crate::io::report::{PAPER_TABLE1, paper_output_name};
 
 /// The models in the order of the table's rows.
-pub const MODELS: [&str; 4] = [GRAY_BOX, LINEAR, HAMMERSTEIN_WIENER, NNARX];
+pub const MODELS: [ModelKind; 4] = ModelKind::ALL;
 
-/// The model's name for people (and the paper's Table 1).
-pub fn model_title(model: &str) -> &str {
+pub fn model_colour(model: ModelKind) -> Color32 {
     match model {
-        GRAY_BOX => "gray-box",
-        LINEAR => "linear",
-        HAMMERSTEIN_WIENER => "Hammerstein–Wiener",
-        NNARX => "NNARX",
-        other => other,
+        ModelKind::GrayBox => theme::MODEL,
+        ModelKind::Linear => theme::LINEAR,
+        ModelKind::HammersteinWiener => theme::HAMMERSTEIN_WIENER,
+        ModelKind::Nnarx => theme::NNARX,
     }
 }
 
-pub fn model_colour(model: &str) -> Color32 {
-    match model {
-        GRAY_BOX => theme::MODEL,
-        LINEAR => theme::LINEAR,
-        HAMMERSTEIN_WIENER => theme::HAMMERSTEIN_WIENER,
-        NNARX => theme::NNARX,
-        _ => theme::HINT,
+/// A curve keyed by report name ("measured" or a model's): its label and colour.
+pub fn curve_style(name: &str) -> (&str, Color32) {
+    match ModelKind::from_report_name(name) {
+        Some(kind) => (kind.label(), model_colour(kind)),
+        None => (name, theme::EMPIRICAL),
     }
 }
-
-/// A row of the paper's Table 1 (see [`PAPER_TABLE1`]).
-type PaperRow = (&'static str, &'static str, f64, f64, f64, f64);
 
 /// One column of Table 1: a value per model of [`MODELS`] (`None`: not available).
 #[derive(Clone, Debug, PartialEq)]
@@ -60,7 +50,7 @@ impl Table1Column {
 pub fn table1_columns(comparison: &OutputComparison) -> Vec<Table1Column> {
     let mut columns = Vec::new();
     for run in &comparison.runs {
-        let value = |model: &str, pick: fn(&crate::core::numerics::metrics::Metrics) -> f64| {
+        let value = |model: ModelKind, pick: fn(&crate::core::numerics::metrics::Metrics) -> f64| {
             run.models.iter().find(|m| m.model == model).and_then(|m| m.metrics.as_ref().ok()).map(pick)
         };
         let group = run_title(run);
@@ -71,11 +61,8 @@ pub fn table1_columns(comparison: &OutputComparison) -> Vec<Table1Column> {
         });
         columns.push(Table1Column { group, what: "SE", values: MODELS.map(|m| value(m, |x| x.se)) });
     }
-    if let Some(paper_output) = paper_output_name(&comparison.output) {
-        let paper = |model: &str| {
-            PAPER_TABLE1.iter().find(|(o, m, ..)| *o == paper_output && *m == model_title(model))
-        };
-        // The paper's row is (output, model, RMSPE, SE, RMSPE chirp, SE chirp).
+    if let Some(paper_output) = PaperOutput::of(&comparison.output) {
+        let paper = |model: ModelKind| model.paper_table1(paper_output);
         let picks = [
             ("paper", "RMSPE %", 0),
             ("paper", "SE", 1),
@@ -83,7 +70,7 @@ pub fn table1_columns(comparison: &OutputComparison) -> Vec<Table1Column> {
             ("paper chirp", "SE", 3),
         ];
         for (group, what, k) in picks {
-            let pick = |t: &PaperRow| [t.2, t.3, t.4, t.5].get(k).copied();
+            let pick = |t: PaperRow| [t.rmspe_pct, t.se, t.rmspe_chirp_pct, t.se_chirp].get(k).copied();
             columns.push(Table1Column {
                 group: group.to_owned(),
                 what,
@@ -95,7 +82,7 @@ pub fn table1_columns(comparison: &OutputComparison) -> Vec<Table1Column> {
 }
 
 /// The run's name, with "(chirp)" when the name does not say so.
-pub fn run_title(run: &crate::batch_compare::RunComparison) -> String {
+pub fn run_title(run: &RunComparison) -> String {
     if run.is_chirp && !run.run.name.to_lowercase().contains("chirp") {
         format!("{} (chirp)", run.run.name)
     } else {
@@ -142,7 +129,7 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
                 }
                 ui.end_row();
                 for (row, model) in MODELS.iter().enumerate() {
-                    ui.label(RichText::new(model_title(model)).color(model_colour(model)));
+                    ui.label(RichText::new(model.label()).color(model_colour(*model)));
                     for column in &columns {
                         let text = column.values.get(row).copied().flatten().map_or("–".to_owned(), significant);
                         let best = column.best() == Some(row);
@@ -153,7 +140,7 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
                 }
             },
         );
-        if paper_output_name(&comparison.output).is_some() {
+        if PaperOutput::of(&comparison.output).is_some() {
             super::model_ui::hint(
                 ui,
                 "The paper's values are from its SR-30 bench data (a mean over its validation test); ours from \
@@ -168,13 +155,13 @@ pub fn summary_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
     if let Some(freq) = &comparison.frequency {
         ui.label(RichText::new(format!("−3 dB cut-off on '{}' [rad/s]", freq.run)).strong());
         let mut names: Vec<&String> = freq.cutoff_rad_s.keys().collect();
-        names.sort_by_key(|n| (n.as_str() != "measured", MODELS.iter().position(|m| m == n)));
+        names.sort_by_key(|n| (n.as_str() != "measured", ModelKind::from_report_name(n)));
         ui.horizontal_wrapped(|ui| {
             for name in names {
                 let cut = freq.cutoff_rad_s.get(name).copied().flatten();
                 let text = cut.map_or("not in band".to_owned(), |c| format!("{c:.3}"));
-                let colour = if name == "measured" { theme::EMPIRICAL } else { model_colour(name) };
-                ui.label(RichText::new(format!("{} {text}", model_title(name))).color(colour));
+                let (label, colour) = curve_style(name);
+                ui.label(RichText::new(format!("{label} {text}")).color(colour));
             }
         });
         ui.add_space(6.0);
@@ -204,10 +191,8 @@ pub fn summary_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
 }
 
 /// The paper's Monte Carlo standard deviation for `model` on `output`, when it has one.
-pub fn paper_monte_carlo_std(output: &str, model: &str) -> Option<f64> {
-    let paper = paper_output_name(output)?;
-    let row = PAPER_MONTE_CARLO_STD.iter().find(|(m, ..)| *m == model)?;
-    Some(if paper == "thrust" { row.2 } else { row.1 })
+pub fn paper_monte_carlo_std(output: &str, model: ModelKind) -> Option<f64> {
+    model.paper_monte_carlo_std(PaperOutput::of(output)?)
 }
 
 /// "normal (mean = 5.43, std = 0.00327)".

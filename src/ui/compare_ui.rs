@@ -19,7 +19,7 @@ use super::jobs::{CANCELLED, Job};
 use super::model_ui;
 use super::session::{Role, Session};
 use super::theme;
-use crate::batch_compare::{CompareInput, OutputComparison, compare_output, compare_stage};
+use crate::core::compare::{CompareInput, OutputComparison, compare_output, compare_stage};
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::SegmentFits;
 use crate::core::identification::wiener::WienerModel;

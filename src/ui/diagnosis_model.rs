@@ -16,10 +16,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::core::diagnose;
+use crate::core::diagnose::HistoryStep;
 use crate::core::effects::ExtendedModel;
 use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits};
 use crate::core::run::Run;
-use crate::io::report::HistoryStep;
 
 use super::model_cache::LiveModel;
 use super::session::Role;
@@ -67,10 +67,10 @@ pub(super) fn apply_effects(
     runs: &[Arc<Run>],
 ) {
     let mut outcome = EffectsOutcome { requested: ids.to_vec(), ..EffectsOutcome::default() };
-    if let Some(rmspe_pct) = live.mean_validation_rmspe() {
-        outcome.history.push(HistoryStep { step: "base".into(), rmspe_pct });
-    }
     if ids.is_empty() {
+        if let Some(rmspe_pct) = live.mean_validation_rmspe() {
+            outcome.history.push(HistoryStep { step: "base".into(), rmspe_pct });
+        }
         live.effects = outcome;
         return;
     }
@@ -82,27 +82,16 @@ pub(super) fn apply_effects(
         .filter(|(scored, _)| scored.role == Role::Validation)
         .map(|(_, run)| run.as_ref())
         .collect();
-    let mut model = ExtendedModel::from_gray_box(&live.model);
-    let mut history_ok = !validation.is_empty();
-    for id in ids {
-        model = match diagnose::apply(&model, id, ident, fits, settings) {
-            Ok(next) => next,
-            Err(err) => {
-                outcome.problems.push(format!("the effect {id} could not be added: {err}"));
-                live.effects = outcome;
-                return;
-            }
-        };
-        if history_ok {
-            match diagnose::validation_rmspe(&model, &validation, settings.initial_state) {
-                Ok(rmspe_pct) => outcome.history.push(HistoryStep { step: format!("+{id}"), rmspe_pct }),
-                Err(err) => {
-                    outcome.problems.push(format!("no validation error after +{id}: {err}"));
-                    history_ok = false;
-                }
-            }
-        }
+    let base = ExtendedModel::from_gray_box(&live.model);
+    let sequence = diagnose::apply_in_order(&base, ids, ident, fits, settings, &validation);
+    outcome.history = sequence.history;
+    outcome.problems = sequence.history_gaps;
+    if let Some((id, err)) = sequence.failed {
+        outcome.problems.push(format!("the effect {id} could not be added: {err}"));
+        live.effects = outcome;
+        return;
     }
+    let model = sequence.model;
     for (scored, run) in live.runs.iter_mut().zip(runs) {
         let prediction = model
             .simulate_scored(run, settings.initial_state)

@@ -19,9 +19,9 @@ use super::jobs::Job;
 use super::model_ui::{self, error_ui, hint};
 use super::session::Session;
 use super::theme;
+use crate::core::diagnose::HistoryStep;
 use crate::core::diagnose::{self, DiagnosisKind, DiagnosisReport};
 use crate::core::effects::BLOCK_IDS;
-use crate::io::report::HistoryStep;
 
 /// The two halves of the view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

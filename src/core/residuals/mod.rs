@@ -17,6 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::core::numerics::noise_fit::{Distribution, Family, fit};
 use crate::core::run::{Channel, Run};
 
 mod correlation;
@@ -304,6 +305,32 @@ fn scan_candidates<'a>(
         }
     }
     (candidates, excluded)
+}
+
+/// Fewest samples of a steady run that give a noise σ: the relative standard error of σ̂ is about
+/// 1/√(2n), so below 10 samples it exceeds 22 % and the band would say more than the data does.
+const MIN_STEADY_SAMPLES: usize = 10;
+
+/// The measurement-noise σ of `output` from a steady run: the maximum-likelihood normal fit of the
+/// recorded output (its standard deviation about the mean), `None` when the run lacks the output,
+/// is shorter than [`MIN_STEADY_SAMPLES`] or does not vary. The batch and the app both use it.
+pub fn steady_noise_sigma(steady: &Run, output: &str) -> Option<f64> {
+    let values = &steady.output(output)?.values;
+    if values.len() < MIN_STEADY_SAMPLES {
+        return None;
+    }
+    match fit(Family::Normal, values).ok()? {
+        Distribution::Normal { std, .. } if std.is_finite() && std > 0.0 => Some(std),
+        _ => None,
+    }
+}
+
+impl ResidualSettings {
+    /// The default settings for a model that reads `model_channels` besides the input (they are
+    /// left out of the channel scan).
+    pub fn for_model_channels(model_channels: &[&str]) -> Self {
+        Self { model_channels: model_channels.iter().map(|c| (*c).to_owned()).collect(), ..Self::default() }
+    }
 }
 
 /// Analyse the residual of `output` on `run` given the model's simulation `y_hat`.

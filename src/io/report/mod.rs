@@ -6,6 +6,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
+use crate::core::compare::{ModelKind, PaperOutput};
+use crate::core::diagnose::HistoryStep;
 use crate::core::numerics::metrics::Metrics;
 use crate::io::atomic::write_atomic;
 
@@ -14,16 +16,6 @@ use ident::ident_section;
 pub use ident::{CandidateSummary, ClusterSummary, IdentSummary, RootSummary, SegmentSummary};
 
 pub const REPORT_FORMAT_VERSION: u32 = 1;
-
-/// The paper's Table 1 (RMSPE %, SE; time-domain validation / chirp), for comparison.
-pub const PAPER_TABLE1: [(&str, &str, f64, f64, f64, f64); 6] = [
-    ("shaft speed", "gray-box", 1.3429, 26.613, 2.0327, 11.641),
-    ("shaft speed", "Hammerstein–Wiener", 5.5167, 121.06, 8.5607, 47.835),
-    ("shaft speed", "NNARX", 3.1928, 52.280, 3.8578, 27.555),
-    ("thrust", "gray-box", 4.3739, 0.0580, 6.4324, 0.0309),
-    ("thrust", "Hammerstein–Wiener", 8.0221, 0.1431, 14.838, 0.0552),
-    ("thrust", "NNARX", 7.4271, 0.1466, 17.136, 0.0489),
-];
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosisEntry {
@@ -43,12 +35,6 @@ pub struct DiagnosisEntry {
 
 fn physics_kind() -> String {
     "physics".to_owned()
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct HistoryStep {
-    pub step: String,
-    pub rmspe_pct: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -126,13 +112,7 @@ pub fn write_report_json(path: &Path, report: &Report) -> Result<()> {
 }
 
 fn model_title(name: &str) -> &str {
-    match name {
-        "gray_box" => "gray-box (Wiener)",
-        "linear" => "linear (reduced TF alone)",
-        "hammerstein_wiener" => "Hammerstein–Wiener",
-        "nnarx" => "NNARX",
-        other => other,
-    }
+    ModelKind::from_report_name(name).map_or(name, |kind| kind.title())
 }
 
 fn metrics_table(out: &mut String, report: &OutputReport) {
@@ -173,16 +153,6 @@ fn role_mean(
     (!vals.is_empty()).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
 }
 
-pub fn paper_output_name(output: &str) -> Option<&'static str> {
-    if output.contains("speed") || output.contains("rpm") {
-        Some("shaft speed")
-    } else if output.contains("thrust") {
-        Some("thrust")
-    } else {
-        None
-    }
-}
-
 /// Our Table 1 (mean over the validation runs; the chirp run) beside the paper's.
 fn table1_section(out: &mut String, report: &Report) {
     let _ = writeln!(
@@ -197,23 +167,20 @@ fn table1_section(out: &mut String, report: &Report) {
     let cell = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.4}"));
     let mut cutoffs = Vec::new();
     for (name, o) in &report.outputs {
-        for (model, paper_model) in [
-            ("gray_box", "gray-box"),
-            ("hammerstein_wiener", "Hammerstein–Wiener"),
-            ("nnarx", "NNARX"),
-            ("linear", ""),
-        ] {
+        // The paper's models first, the linear block last.
+        for kind in [ModelKind::GrayBox, ModelKind::HammersteinWiener, ModelKind::Nnarx, ModelKind::Linear] {
+            let model = kind.report_name();
             if !o.models.contains_key(model) {
                 continue;
             }
-            let paper = paper_output_name(name)
-                .and_then(|p| PAPER_TABLE1.iter().find(|(po, pm, ..)| *po == p && *pm == paper_model));
-            let (pa, pb, pc, pd) =
-                paper.map_or((None, None, None, None), |t| (Some(t.2), Some(t.3), Some(t.4), Some(t.5)));
+            let paper = PaperOutput::of(name).and_then(|p| kind.paper_table1(p));
+            let (pa, pb, pc, pd) = paper.map_or((None, None, None, None), |t| {
+                (Some(t.rmspe_pct), Some(t.se), Some(t.rmspe_chirp_pct), Some(t.se_chirp))
+            });
             let _ = writeln!(
                 out,
                 "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                model_title(model),
+                kind.title(),
                 cell(role_mean(report, o, model, false, |m| m.rmspe_pct)),
                 cell(role_mean(report, o, model, false, |m| m.se)),
                 cell(role_mean(report, o, model, true, |m| m.rmspe_pct)),

@@ -2,22 +2,11 @@
 //! scored run (report.json `residuals`, report.md "Where it fails") and one picture per run.
 use std::path::Path;
 
-use crate::batch_compare::OutputModels;
-use crate::core::numerics::noise_fit::{Distribution, Family, NoiseFitReport};
+use crate::core::compare::OutputModels;
+use crate::core::effects::ExtendedModel;
 use crate::core::residuals::{ResidualSettings, SigmaSource, analyse_residuals, summary};
 use crate::core::run::Run;
 use crate::io::report::ResidualReport;
-
-/// The measurement-noise σ of `output` from the steady run's normal fit, when there is one.
-pub fn noise_sigma(
-    noise: Option<&std::collections::BTreeMap<String, NoiseFitReport>>,
-    output: &str,
-) -> Option<f64> {
-    match noise?.get(output)?.get(Family::Normal)?.distribution {
-        Distribution::Normal { std, .. } if std.is_finite() && std > 0.0 => Some(std),
-        _ => None,
-    }
-}
 
 /// The residual analysis of the final gray-box model (with its effects) on every run; the figures go
 /// to `out_dir` and their file names are returned with the reports. A run that cannot be analysed
@@ -30,14 +19,8 @@ pub fn residual_reports(
     sigma: Option<f64>,
     notes: &mut Vec<String>,
 ) -> (Vec<ResidualReport>, Vec<String>) {
-    let settings = ResidualSettings {
-        model_channels: models
-            .extended
-            .as_ref()
-            .map(|m| m.required_channels().iter().map(|c| (*c).to_owned()).collect())
-            .unwrap_or_default(),
-        ..ResidualSettings::default()
-    };
+    let channels = models.extended.as_ref().map(ExtendedModel::required_channels).unwrap_or_default();
+    let settings = ResidualSettings::for_model_channels(&channels);
     let mut reports = Vec::new();
     let mut figures = Vec::new();
     for run in runs.iter().filter(|r| r.output(output).is_some()) {

@@ -51,6 +51,9 @@ use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
+mod history;
+pub use history::{EffectSequence, HistoryStep, apply_in_order};
+
 /// Largest one-sided p-value of a significant effect.
 pub const SIGNIFICANCE_LEVEL: f64 = 0.01;
 /// Smallest share of the validation RMSPE a significant effect must remove.

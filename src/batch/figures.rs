@@ -4,7 +4,7 @@ use std::path::Path;
 
 use std::collections::BTreeMap;
 
-use crate::batch_compare::{FrequencyComparison, GRAY_BOX, HAMMERSTEIN_WIENER, LINEAR, NNARX, OutputModels};
+use crate::core::compare::{FrequencyComparison, ModelKind, OutputModels};
 use crate::core::identification::pipeline::Identified;
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::core::numerics::metrics::BoxStats;
@@ -91,7 +91,7 @@ pub fn output_figures(
     for run in validation {
         let Some(y) = run.output(output) else { continue };
         let traces: Vec<(String, Vec<f64>)> =
-            models.simulate_run(run).into_iter().map(|(n, y)| (model_label(n).to_owned(), y)).collect();
+            models.simulate_run(run).into_iter().map(|(kind, y)| (kind.label().to_owned(), y)).collect();
         let name = format!("{output}_traces_{}.png", run.name);
         keep(
             name.clone(),
@@ -122,7 +122,7 @@ pub fn output_figures(
                     .zip(&r.phase_deg)
                     .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
                     .collect(),
-                emphasis: name.as_str() == GRAY_BOX,
+                emphasis: name.as_str() == ModelKind::GrayBox.report_name(),
             })
             .collect();
         let empirical = EmpiricalBode {
@@ -164,15 +164,9 @@ pub fn output_figures(
     (written, notes)
 }
 
-/// Model names as people read them.
-pub fn model_label(name: &str) -> &str {
-    match name {
-        GRAY_BOX => "gray-box",
-        LINEAR => "linear",
-        HAMMERSTEIN_WIENER => "Hammerstein–Wiener",
-        NNARX => "NNARX",
-        other => other,
-    }
+/// The name people read for a model keyed by its report name.
+fn model_label(name: &str) -> &str {
+    ModelKind::from_report_name(name).map_or(name, |kind| kind.label())
 }
 
 /// One histogram per model of the Monte Carlo differences, with the fitted normal.

@@ -1,0 +1,44 @@
+//! Stage 4 of the batch: which missing effect or structure would help the final model most.
+use anyhow::Result;
+
+use crate::core::diagnose;
+use crate::core::effects::ExtendedModel;
+use crate::core::identification::pipeline::Identified;
+use crate::io::project::Project;
+use crate::io::report::DiagnosisEntry;
+
+use super::load::Runs;
+
+/// The diagnosis of `current` (report.json `diagnosis`, best first) and, in words, the candidates
+/// not tried and the structure note.
+pub fn diagnose_output(
+    project: &Project,
+    runs: &Runs,
+    identified: &Identified,
+    current: &ExtendedModel,
+    output: &str,
+) -> Result<(Vec<DiagnosisEntry>, Vec<String>)> {
+    let validation = runs.validation_of(output);
+    let settings = project.settings_for(output);
+    let report = diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &settings)?;
+    let skipped = report
+        .skipped
+        .iter()
+        .map(|s| format!("diagnosis of '{output}': {} not tried: {}", s.effect, s.reason))
+        .chain(report.structure_note.iter().map(|n| format!("diagnosis of '{output}': {n}")))
+        .collect();
+    let entries = report
+        .entries
+        .iter()
+        .map(|d| DiagnosisEntry {
+            effect: d.effect.clone(),
+            kind: d.kind.label().to_owned(),
+            significant: d.significant,
+            rmspe_before_pct: d.rmspe_before_pct,
+            rmspe_after_pct: d.rmspe_after_pct,
+            evidence: d.evidence.clone(),
+            p_value: Some(d.test.p_value),
+        })
+        .collect();
+    Ok((entries, skipped))
+}

@@ -1,0 +1,31 @@
+//! Stage 3 of the batch: the project's effects (`--add-effect`, `add_effects`) added in order.
+use anyhow::{Context, Result};
+
+use crate::core::diagnose::{EffectSequence, apply_in_order};
+use crate::core::effects::ExtendedModel;
+use crate::core::identification::pipeline::Identified;
+use crate::io::project::Project;
+
+use super::load::Runs;
+
+/// The gray-box model of `output` with the project's effects, each refitted on the identification
+/// data, and the validation error after each step. An effect that cannot be added fails the batch;
+/// a step without a validation error is a note.
+pub fn apply_effects(
+    project: &Project,
+    runs: &Runs,
+    identified: &Identified,
+    output: &str,
+    notes: &mut Vec<String>,
+) -> Result<EffectSequence> {
+    let base = ExtendedModel::from_gray_box(&identified.model);
+    let settings = project.settings_for(output);
+    let validation = runs.validation_of(output);
+    let mut sequence =
+        apply_in_order(&base, &project.add_effects, &runs.ident, &identified.fits, &settings, &validation);
+    if let Some((id, err)) = sequence.failed.take() {
+        return Err(err).with_context(|| format!("adding the effect '{id}' to '{output}'"));
+    }
+    notes.extend(sequence.history_gaps.iter().map(|gap| format!("'{output}': {gap}")));
+    Ok(sequence)
+}

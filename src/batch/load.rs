@@ -1,0 +1,129 @@
+//! Stage 1 of the batch: the project's runs loaded and checked, the outputs to model chosen, saved
+//! clusters taken over.
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, bail};
+
+use crate::core::run::Run;
+use crate::io::csv_run::load_run;
+use crate::io::project::{Project, RunSource};
+
+/// The loaded runs of a project, by role.
+pub struct Runs {
+    pub ident: Run,
+    /// Where each further identification run starts when several were joined.
+    pub ident_junctions: Vec<usize>,
+    pub validate: Vec<Run>,
+    pub chirp: Option<Run>,
+    pub steady: Option<Run>,
+}
+
+impl Runs {
+    /// Runs the models are scored on: validation runs, then the chirp run.
+    pub fn scored(&self) -> Vec<&Run> {
+        self.validate.iter().chain(&self.chirp).collect()
+    }
+
+    /// The validation runs that record `output`.
+    pub fn validation_of(&self, output: &str) -> Vec<&Run> {
+        self.validate.iter().filter(|r| r.output(output).is_some()).collect()
+    }
+
+    /// The role of every run, as report.json `runs` has them.
+    pub fn roles(&self) -> BTreeMap<String, String> {
+        let mut roles = BTreeMap::new();
+        roles.insert("identification".to_owned(), self.ident.name.clone());
+        for (i, r) in self.validate.iter().enumerate() {
+            roles.insert(format!("validation {}", i + 1), r.name.clone());
+        }
+        if let Some(r) = &self.chirp {
+            roles.insert("chirp".into(), r.name.clone());
+        }
+        if let Some(r) = &self.steady {
+            roles.insert("steady".into(), r.name.clone());
+        }
+        roles
+    }
+}
+
+fn load_source(source: &RunSource) -> Result<Run> {
+    let opts = source.load.to_options()?;
+    Ok(load_run(&source.path, &opts)?)
+}
+
+/// Load every run of the project; runs sampled differently from the identification run are refused
+/// (the models are discrete-time).
+pub fn load_runs(project: &Project) -> Result<Runs> {
+    if project.ident.is_empty() {
+        bail!("the project names no identification run (give one with --ident FILE)");
+    }
+    let parts = project.ident.iter().map(load_source).collect::<Result<Vec<_>>>()?;
+    let (ident, ident_junctions) =
+        crate::core::run::join_runs(&parts).context("joining the identification runs")?;
+    if let Some(name) = &project.steps_from
+        && ident.channel(name).is_none()
+    {
+        bail!(
+            "steps_from = \"{name}\": the identification run '{}' has no such channel (map it with aux={name})",
+            ident.name
+        );
+    }
+    let validate = project.validate.iter().map(load_source).collect::<Result<Vec<_>>>()?;
+    let chirp = project.chirp.as_ref().map(load_source).transpose()?;
+    let steady = project.steady.as_ref().map(load_source).transpose()?;
+    for run in validate.iter().chain(&chirp).chain(&steady) {
+        let ratio = run.dt_secs / ident.dt_secs;
+        if (ratio - 1.0).abs() > 0.02 {
+            bail!(
+                "run '{}' is sampled every {:.5} s but the identification run every {:.5} s; models are discrete-time, so resample it first",
+                run.name,
+                run.dt_secs,
+                ident.dt_secs
+            );
+        }
+    }
+    Ok(Runs { ident, ident_junctions, validate, chirp, steady })
+}
+
+/// Outputs to model: the project's list (each must exist), else every output of the ident run.
+pub fn outputs_to_model(project: &Project, ident: &Run) -> Result<Vec<String>> {
+    if project.outputs.is_empty() {
+        return Ok(ident.outputs.iter().map(|c| c.name.clone()).collect());
+    }
+    for name in &project.outputs {
+        if ident.output(name).is_none() {
+            let available: Vec<&str> = ident.outputs.iter().map(|c| c.name.as_str()).collect();
+            bail!(
+                "output '{name}' is not in the identification run '{}' (outputs: {})",
+                ident.name,
+                available.join(", ")
+            );
+        }
+    }
+    Ok(project.outputs.clone())
+}
+
+/// Take the clusters of the project's saved model (`clusters_from` / `--clusters`) for every output
+/// that has none of its own; say which outputs fall back to the automatic proposal.
+pub fn apply_saved_clusters(project: &mut Project, dt_secs: f64, outputs: &[String]) -> Result<Vec<String>> {
+    let Some(path) = &project.clusters_from else { return Ok(Vec::new()) };
+    let saved = crate::io::model_file::clusters_from_model(path, dt_secs)?;
+    let mut notes = Vec::new();
+    for output in outputs {
+        if project.clusters.contains_key(output) {
+            notes.push(format!(
+                "'{output}': the project's own clusters take precedence over {}",
+                path.display()
+            ));
+        } else if let Some(clusters) = saved.get(output) {
+            project.clusters.insert(output.clone(), clusters.clone());
+            notes.push(format!("'{output}': {} clusters taken from {}", clusters.len(), path.display()));
+        } else {
+            notes.push(format!(
+                "'{output}': {} holds no clusters for it; the automatic proposal is used",
+                path.display()
+            ));
+        }
+    }
+    Ok(notes)
+}

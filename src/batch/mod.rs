@@ -1,0 +1,164 @@
+//! `jetid --batch`: project → runs → gray-box model of each output → model.json, report.json,
+//! report.md and figures. No egui. One module per stage, in the order the data flows:
+//! [`load`] → [`identify`] → [`effects`] → [`diagnose`] → [`compare`] → [`residuals`] →
+//! [`report`] and [`figures`]. The command line builds the [`Project`] (`cli::batch_args`).
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+
+use crate::core::compare::{fit_baselines, noise_fits};
+use crate::core::numerics::noise_fit::Distribution;
+use crate::core::residuals::steady_noise_sigma;
+use crate::io::model_file::ModelFile;
+use crate::io::project::Project;
+use crate::io::report::Report;
+
+mod compare;
+mod diagnose;
+mod effects;
+pub mod figures;
+mod identify;
+mod load;
+mod report;
+pub mod residuals;
+
+pub use identify::identify;
+pub use load::{Runs, load_runs};
+
+/// Stopwatch that records named phases in milliseconds.
+#[derive(Default)]
+pub struct Timings(pub BTreeMap<String, f64>);
+
+impl Timings {
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let out = f();
+        *self.0.entry(name.to_owned()).or_default() += start.elapsed().as_secs_f64() * 1e3;
+        out
+    }
+}
+
+/// What every output's stages share: the project, its runs and the steady run's input noise.
+struct Batch<'a> {
+    project: &'a Project,
+    runs: &'a Runs,
+    out_dir: &'a Path,
+    /// The steady run's input noise, best family by likelihood (drives the Monte Carlo study).
+    input_noise: Option<Distribution>,
+}
+
+/// Run the whole pipeline on `project` and write the results to `out_dir`.
+pub fn run(mut project: Project, out_dir: &Path) -> Result<()> {
+    let total = Instant::now();
+    let mut timings = Timings::default();
+    for id in &project.add_effects {
+        crate::core::effects::check_id(id).with_context(|| format!("--add-effect {id}"))?;
+    }
+    let runs = timings.time("load_runs", || load::load_runs(&project))?;
+    let outputs = load::outputs_to_model(&project, &runs.ident)?;
+    let cluster_notes = load::apply_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+
+    let mut model_file = report::new_model_file(&runs);
+    let mut report = report::new_report(&project, &runs, cluster_notes);
+    let noise = runs.steady.as_ref().map(|s| noise_fits(s, &mut report.diagnostics));
+    let input_noise = noise
+        .as_ref()
+        .and_then(|n| n.get(&runs.ident.input.name))
+        .and_then(|r| r.best().map(|f| f.distribution));
+    let batch = Batch { project: &project, runs: &runs, out_dir, input_noise };
+    let mut monte_carlo = BTreeMap::new();
+    for output in &outputs {
+        batch.model_output(output, &mut model_file, &mut report, &mut monte_carlo, &mut timings)?;
+    }
+    report.noise_fit = noise.map(serde_json::to_value).transpose().context("noise fit")?;
+    if !monte_carlo.is_empty() {
+        report.monte_carlo = Some(serde_json::to_value(monte_carlo).context("Monte Carlo summary")?);
+    }
+    report.timings_ms = timings.0;
+    report.timings_ms.insert("total".into(), total.elapsed().as_secs_f64() * 1e3);
+    report::write_all(out_dir, &model_file, &report)
+}
+
+impl Batch<'_> {
+    /// Every stage for one output: identify, add the effects, fit the baselines, diagnose, compare,
+    /// analyse the residuals and draw the figures.
+    fn model_output(
+        &self,
+        output: &str,
+        model_file: &mut ModelFile,
+        report: &mut Report,
+        monte_carlo: &mut BTreeMap<String, BTreeMap<String, crate::core::compare::MonteCarloSummary>>,
+        timings: &mut Timings,
+    ) -> Result<()> {
+        let (project, runs, notes) = (self.project, self.runs, &mut report.diagnostics);
+        let identified = timings
+            .time(&format!("identify_{output}"), || identify::identify(project, runs, output))
+            .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
+        let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
+        let sequence = timings.time(&format!("effects_{output}"), || {
+            effects::apply_effects(project, runs, &identified, output, notes)
+        })?;
+        let extended = sequence.model;
+        model_file.push(&identified.model, &unit);
+        if let Some(last) = model_file.outputs.last_mut() {
+            // Effects are fitted together with the gain and static map they sit beside.
+            last.wiener = extended.wiener.clone();
+            last.static_map_beta = extended.wiener.map.beta();
+            last.effects = extended.records();
+        }
+        let mut models = timings
+            .time(&format!("baselines_{output}"), || fit_baselines(&identified, &runs.ident, output, notes));
+        models.initial_state = project.settings_for(output).initial_state;
+        let mut out = report::output_report(&identified, &models, unit);
+        out.effects_applied = extended.effect_ids().iter().map(|s| (*s).to_owned()).collect();
+        out.error_history = sequence.history;
+        if !extended.effects.is_empty() {
+            models.extended = Some(extended.clone());
+        }
+        let diagnosis = timings.time(&format!("diagnosis_{output}"), || {
+            diagnose::diagnose_output(project, runs, &identified, &extended, output)
+        });
+        match diagnosis {
+            Ok((entries, skipped)) => {
+                out.diagnosis = entries;
+                notes.extend(skipped);
+            }
+            Err(e) => notes.push(format!("diagnosis of '{output}': {e}")),
+        }
+        let studies =
+            compare::compare(&models, runs, output, self.input_noise.as_ref(), &mut out, notes, timings);
+        let sigma = runs.steady.as_ref().and_then(|s| steady_noise_sigma(s, output));
+        let (residuals, figs) = timings.time("residuals", || {
+            residuals::residual_reports(self.out_dir, output, &models, &runs.scored(), sigma, notes)
+        });
+        out.residuals = residuals;
+        report.figures.extend(figs);
+        let notes = &mut report.diagnostics;
+        if runs.steady.is_some() && self.input_noise.is_some() {
+            monte_carlo.insert(output.to_owned(), compare::monte_carlo_summaries(&studies.monte_carlo));
+            let (figs, figure_notes) = timings
+                .time("figures", || figures::monte_carlo_figures(self.out_dir, output, &studies.monte_carlo));
+            report.figures.extend(figs);
+            notes.extend(figure_notes);
+        }
+        let (figs, figure_notes) = timings.time("figures", || {
+            figures::output_figures(
+                self.out_dir,
+                output,
+                &identified,
+                &models,
+                &runs.validate,
+                studies.frequency.as_ref(),
+                &out.error_boxes,
+            )
+        });
+        report.figures.extend(figs);
+        report.diagnostics.extend(figure_notes);
+        report.outputs.insert(output.to_owned(), out);
+        Ok(())
+    }
+}

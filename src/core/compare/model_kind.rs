@@ -1,0 +1,137 @@
+//! The models of the paper's comparison, and the paper's own figures for them.
+use serde::{Deserialize, Serialize};
+
+/// A model of the comparison. Its report name is how report.json keys it (CONTRACT.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    /// The gray-box Wiener model `u → G(z) → f(v)`, with its effects where it has any.
+    GrayBox,
+    /// The reduced transfer function alone, without the static map: what the nonlinearity buys.
+    Linear,
+    HammersteinWiener,
+    Nnarx,
+}
+
+/// One row of the paper's Table 1: RMSPE % and SE on the time-domain validation, then on the chirp.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PaperRow {
+    pub rmspe_pct: f64,
+    pub se: f64,
+    pub rmspe_chirp_pct: f64,
+    pub se_chirp: f64,
+}
+
+/// The two outputs the paper models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PaperOutput {
+    ShaftSpeed,
+    Thrust,
+}
+
+impl PaperOutput {
+    /// The paper's output an output column stands for, by its name.
+    pub fn of(output: &str) -> Option<Self> {
+        if output.contains("speed") || output.contains("rpm") {
+            Some(Self::ShaftSpeed)
+        } else if output.contains("thrust") {
+            Some(Self::Thrust)
+        } else {
+            None
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::ShaftSpeed => "shaft speed",
+            Self::Thrust => "thrust",
+        }
+    }
+}
+
+impl ModelKind {
+    /// In the order of the comparison tables.
+    pub const ALL: [Self; 4] = [Self::GrayBox, Self::Linear, Self::HammersteinWiener, Self::Nnarx];
+
+    /// The key in report.json.
+    pub fn report_name(self) -> &'static str {
+        match self {
+            Self::GrayBox => "gray_box",
+            Self::Linear => "linear",
+            Self::HammersteinWiener => "hammerstein_wiener",
+            Self::Nnarx => "nnarx",
+        }
+    }
+
+    pub fn from_report_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.report_name() == name)
+    }
+
+    /// The name people read (legends, tables).
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::GrayBox => "gray-box",
+            Self::Linear => "linear",
+            Self::HammersteinWiener => "Hammerstein–Wiener",
+            Self::Nnarx => "NNARX",
+        }
+    }
+
+    /// The longer title of report.md's tables.
+    pub fn title(self) -> &'static str {
+        match self {
+            Self::GrayBox => "gray-box (Wiener)",
+            Self::Linear => "linear (reduced TF alone)",
+            Self::HammersteinWiener | Self::Nnarx => self.label(),
+        }
+    }
+
+    /// The paper's Table 1 for this model (section 6; the linear block alone is not in it).
+    pub fn paper_table1(self, output: PaperOutput) -> Option<PaperRow> {
+        let row =
+            |rmspe_pct, se, rmspe_chirp_pct, se_chirp| PaperRow { rmspe_pct, se, rmspe_chirp_pct, se_chirp };
+        Some(match (self, output) {
+            (Self::GrayBox, PaperOutput::ShaftSpeed) => row(1.3429, 26.613, 2.0327, 11.641),
+            (Self::HammersteinWiener, PaperOutput::ShaftSpeed) => row(5.5167, 121.06, 8.5607, 47.835),
+            (Self::Nnarx, PaperOutput::ShaftSpeed) => row(3.1928, 52.280, 3.8578, 27.555),
+            (Self::GrayBox, PaperOutput::Thrust) => row(4.3739, 0.0580, 6.4324, 0.0309),
+            (Self::HammersteinWiener, PaperOutput::Thrust) => row(8.0221, 0.1431, 14.838, 0.0552),
+            (Self::Nnarx, PaperOutput::Thrust) => row(7.4271, 0.1466, 17.136, 0.0489),
+            (Self::Linear, _) => return None,
+        })
+    }
+
+    /// The paper's Monte Carlo standard deviation (section 7): rpm for shaft speed, N for thrust.
+    pub fn paper_monte_carlo_std(self, output: PaperOutput) -> Option<f64> {
+        Some(match (self, output) {
+            (Self::GrayBox, PaperOutput::ShaftSpeed) => 6.035,
+            (Self::HammersteinWiener, PaperOutput::ShaftSpeed) => 14.08,
+            (Self::Nnarx, PaperOutput::ShaftSpeed) => 26.5,
+            (Self::GrayBox, PaperOutput::Thrust) => 0.0136,
+            (Self::HammersteinWiener, PaperOutput::Thrust) => 0.0352,
+            (Self::Nnarx, PaperOutput::Thrust) => 0.1064,
+            (Self::Linear, _) => return None,
+        })
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.report_name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_names_round_trip_and_match_serde() {
+        for kind in ModelKind::ALL {
+            assert_eq!(ModelKind::from_report_name(kind.report_name()), Some(kind));
+            let json = serde_json::to_string(&kind).unwrap_or_default();
+            assert_eq!(json, format!("\"{}\"", kind.report_name()));
+        }
+        assert_eq!(ModelKind::from_report_name("arx"), None);
+    }
+}

@@ -16,7 +16,8 @@ use super::session::{Role, Session};
 use super::theme;
 use super::traces_ui::run_label;
 use crate::core::residuals::{
-    ChannelCorrelation, Regime, ResidualAnalysis, ResidualSettings, analyse_residuals, summary_sentences,
+    ChannelCorrelation, Regime, ResidualAnalysis, ResidualSettings, analyse_residuals, steady_noise_sigma,
+    summary_sentences,
 };
 use crate::core::run::Run;
 
@@ -92,13 +93,11 @@ impl ResidualsState {
 /// deviation) of the first steady run that records it.
 fn steady_sigma(session: &Session, output: &str) -> Option<(f64, String)> {
     session.runs.iter().filter(|r| r.role == Role::Steady).find_map(|entry| {
-        let y = &entry.run.output(output)?.values;
-        let n = y.len() as f64;
-        let mean = y.iter().sum::<f64>() / n;
-        let sigma = (y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
-        (n >= 10.0 && sigma.is_finite() && sigma > 0.0).then(|| {
-            (sigma, format!("σ = {sigma:.4} from the normal fit of the steady run {}", entry.display_name()))
-        })
+        let sigma = steady_noise_sigma(&entry.run, output)?;
+        Some((
+            sigma,
+            format!("σ = {sigma:.4} from the normal fit of the steady run {}", entry.display_name()),
+        ))
     })
 }
 
@@ -112,10 +111,7 @@ fn analyse(output: &str, session: &Session, live: &LiveModel) -> Analyses {
         },
         |(_, note)| note.clone(),
     );
-    let settings = ResidualSettings {
-        model_channels: live.current_model().required_channels().iter().map(|c| (*c).to_owned()).collect(),
-        ..ResidualSettings::default()
-    };
+    let settings = ResidualSettings::for_model_channels(&live.current_model().required_channels());
     let runs = live
         .runs
         .iter()

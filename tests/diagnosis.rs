@@ -15,7 +15,7 @@
 
 use jetid::core::diagnose::{DiagnoseError, DiagnosisKind, DiagnosisReport, apply, diagnose, remove};
 use jetid::core::effects::{
-    AmbientCorrection, BLOCK_IDS, EFFECT_IDS, EffectBlock, EffectError, ExtendedModel, FitData, refit,
+    AmbientCorrection, EffectBlock, EffectError, EffectId, ExtendedModel, FitData, refit,
 };
 use jetid::core::identification::pipeline::{
     OutputSettings, SegmentFits, build_gray_box, fit_segments, identify_output, segments_for,
@@ -177,7 +177,7 @@ fn no_effect_is_significant_on_effect_free_runs() {
                 summary(&report)
             );
             let physics = report.entries.iter().filter(|d| d.kind == DiagnosisKind::Physics).count();
-            assert_eq!(physics, EFFECT_IDS.len(), "every effect applies: {:?}", report.skipped);
+            assert_eq!(physics, EffectId::CATALOG.len(), "every effect applies: {:?}", report.skipped);
         }
     }
 }
@@ -354,26 +354,27 @@ fn effect_records_are_checked() {
     let params =
         |pairs: &[(&str, f64)]| pairs.iter().map(|(k, v)| ((*k).to_owned(), *v)).collect::<BTreeMap<_, _>>();
     assert!(matches!(
-        EffectBlock::from_params("warp_drive", &params(&[])),
-        Err(EffectError::UnknownEffect { id, known }) if id == "warp_drive" && known.len() == BLOCK_IDS.len()
+        "warp_drive".parse::<EffectId>(),
+        Err(EffectError::UnknownEffect { id, known }) if id == "warp_drive" && known.len() == EffectId::ALL.len()
     ));
     assert!(matches!(
-        EffectBlock::from_params("thermal_soak", &params(&[("gain", 0.1), ("tau", 40.0)])),
+        EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1), ("tau", 40.0)])),
         Err(EffectError::UnknownParameter { param, known, .. }) if param == "tau" && known == ["gain", "tau_s"]
     ));
     assert!(matches!(
-        EffectBlock::from_params("thermal_soak", &params(&[("gain", 0.1)])),
+        EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1)])),
         Err(EffectError::MissingParameter { param, .. }) if param == "tau_s"
     ));
     assert!(matches!(
-        EffectBlock::from_params("thermal_soak", &params(&[("gain", 1.5), ("tau_s", 40.0)])),
+        EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 1.5), ("tau_s", 40.0)])),
         Err(EffectError::ParameterOutOfRange { param, max, .. }) if param == "gain" && (max - 0.9).abs() < 1e-12
     ));
     assert!(matches!(
-        EffectBlock::from_params("transport_delay", &params(&[("delay_samples", f64::NAN)])),
+        EffectBlock::from_params(id("transport_delay"), &params(&[("delay_samples", f64::NAN)])),
         Err(EffectError::ParameterOutOfRange { .. })
     ));
-    let soak = EffectBlock::from_params("thermal_soak", &params(&[("gain", 0.1), ("tau_s", 40.0)])).unwrap();
+    let soak =
+        EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1), ("tau_s", 40.0)])).unwrap();
     assert_eq!(EffectBlock::from_record(&soak.record()).unwrap(), soak);
 }
 
@@ -381,21 +382,18 @@ fn effect_records_are_checked() {
 fn misuse_is_a_typed_error_and_effects_can_be_removed() {
     let b = bench(&[], 1);
     let c = speed_default(&b);
-    let delayed = apply(&c.model, "transport_delay", &b.ident, &c.fits, &c.settings).unwrap();
-    assert_eq!(delayed.effect_ids(), ["transport_delay"]);
+    let delayed = apply(&c.model, id("transport_delay"), &b.ident, &c.fits, &c.settings).unwrap();
+    assert_eq!(EffectId::names(&delayed.effect_ids()), ["transport_delay"]);
     assert!(matches!(
-        apply(&delayed, "transport_delay", &b.ident, &c.fits, &c.settings),
+        apply(&delayed, id("transport_delay"), &b.ident, &c.fits, &c.settings),
         Err(DiagnoseError::Effect(EffectError::AlreadyApplied { effect })) if effect == "transport_delay"
     ));
     assert!(matches!(
-        remove(&delayed, "thermal_soak", &b.ident, &c.fits, &c.settings),
+        remove(&delayed, id("thermal_soak"), &b.ident, &c.fits, &c.settings),
         Err(DiagnoseError::Effect(EffectError::NotApplied { effect })) if effect == "thermal_soak"
     ));
-    assert!(matches!(
-        apply(&c.model, "warp_drive", &b.ident, &c.fits, &c.settings),
-        Err(DiagnoseError::Effect(EffectError::UnknownEffect { .. }))
-    ));
-    let back = remove(&delayed, "transport_delay", &b.ident, &c.fits, &c.settings).unwrap();
+    assert!(matches!("warp_drive".parse::<EffectId>(), Err(EffectError::UnknownEffect { .. })));
+    let back = remove(&delayed, id("transport_delay"), &b.ident, &c.fits, &c.settings).unwrap();
     assert!(back.effects.is_empty());
     let (base_error, back_error) =
         (third_run_error(&c.model, &b, TestKind::Chirp), third_run_error(&back, &b, TestKind::Chirp));
@@ -428,7 +426,7 @@ fn misuse_is_a_typed_error_and_effects_can_be_removed() {
         skipped.reason
     );
     let physics = report.entries.iter().filter(|d| d.kind == DiagnosisKind::Physics).count();
-    assert_eq!(physics, EFFECT_IDS.len() - 1);
+    assert_eq!(physics, EffectId::CATALOG.len() - 1);
     assert!(matches!(
         diagnose(&c.model, &b.ident, &c.fits, &[], &c.settings),
         Err(DiagnoseError::NoValidationRuns)
@@ -439,4 +437,9 @@ fn misuse_is_a_typed_error_and_effects_can_be_removed() {
         diagnose(&c.model, &b.ident, &c.fits, &[&no_output], &c.settings),
         Err(DiagnoseError::MissingOutput { output, .. }) if output == SPEED
     ));
+}
+
+/// The typed id of a catalog name (the tests write ids as users do).
+fn id(name: &str) -> EffectId {
+    name.parse().unwrap()
 }

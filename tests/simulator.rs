@@ -2,6 +2,7 @@
 //! bad configurations as errors, and the `jetid simulate` command.
 #![allow(clippy::unwrap_used)]
 use clap::Parser;
+use jetid::core::effects::EffectId;
 use jetid::sim::{
     DT_SECS, Effect, FuelProfile, SimConfig, SimError, SimOutput, TestKind, columns, designs, simulate,
 };
@@ -197,7 +198,7 @@ fn bleed_valve_kinks_the_static_map() {
         let out = simulate(&cfg).unwrap();
         at(truth(&out, columns::SPEED), 0.0)
     };
-    let bleed = || vec![Effect::with_defaults("static_map_order").unwrap()];
+    let bleed = || vec![Effect::with_defaults(EffectId::StaticMapOrder).unwrap()];
     assert!((steady(4.0, bleed()) - steady(4.0, vec![])).abs() < 1.0, "no change below the bleed speed");
     let drop_rpm = steady(designs::MAX_FUEL_GPH, vec![]) - steady(designs::MAX_FUEL_GPH, bleed());
     assert!(drop_rpm > 1_500.0, "drop {drop_rpm}");
@@ -226,8 +227,8 @@ fn bad_configurations_are_errors() {
         matches!("warp_drive:factor=9".parse::<Effect>(), Err(SimError::UnknownEffect { id, .. }) if id == "warp_drive")
     );
     let twice = vec![
-        Effect::with_defaults("transport_delay").unwrap(),
-        Effect::with_defaults("transport_delay").unwrap(),
+        Effect::with_defaults(EffectId::TransportDelay).unwrap(),
+        Effect::with_defaults(EffectId::TransportDelay).unwrap(),
     ];
     let cfg = SimConfig::for_test("t", TestKind::Steady, 1).unwrap().with_effects(twice);
     assert!(matches!(simulate(&cfg), Err(SimError::DuplicateEffect { .. })));

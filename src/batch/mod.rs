@@ -53,9 +53,6 @@ struct Batch<'a> {
 pub fn run(mut project: Project, out_dir: &Path) -> Result<()> {
     let total = Instant::now();
     let mut timings = Timings::default();
-    for id in &project.add_effects {
-        crate::core::effects::check_id(id).with_context(|| format!("--add-effect {id}"))?;
-    }
     let runs = timings.time("load_runs", || load::load_runs(&project))?;
     let outputs = load::outputs_to_model(&project, &runs.ident)?;
     let cluster_notes = load::apply_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
@@ -114,7 +111,7 @@ impl Batch<'_> {
             .time(&format!("baselines_{output}"), || fit_baselines(&identified, &runs.ident, output, notes));
         models.initial_state = project.settings_for(output).initial_state;
         let mut out = report::output_report(&identified, &models, unit);
-        out.effects_applied = extended.effect_ids().iter().map(|s| (*s).to_owned()).collect();
+        out.effects_applied = extended.effect_ids();
         out.error_history = sequence.history;
         if !extended.effects.is_empty() {
             models.extended = Some(extended.clone());

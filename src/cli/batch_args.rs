@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use crate::core::effects::EffectId;
 use crate::io::project::{LoadSpec, Project, RunSource, bundled_project_path, load_project};
 
 #[derive(Debug, Args, Default, Clone)]
@@ -27,8 +28,8 @@ pub struct BatchArgs {
     #[arg(long = "output")]
     pub outputs: Vec<String>,
     /// Apply an effect from the catalog, parameters fitted (repeatable).
-    #[arg(long = "add-effect")]
-    pub add_effects: Vec<String>,
+    #[arg(long = "add-effect", value_enum, value_name = "ID")]
+    pub add_effects: Vec<EffectId>,
     /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
     #[arg(long = "map")]
     pub maps: Vec<String>,

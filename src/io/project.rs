@@ -33,6 +33,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 
+use crate::core::effects::EffectId;
 use crate::core::identification::arx::ArxOrders;
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::initial_state::InitialState;
@@ -127,7 +128,7 @@ pub struct ProjectFile {
     pub chirp: Option<RunEntry>,
     pub steady: Option<RunEntry>,
     pub outputs: Vec<String>,
-    pub add_effects: Vec<String>,
+    pub add_effects: Vec<EffectId>,
     pub clusters_from: Option<String>,
     pub steps_from: Option<String>,
     pub load: LoadSpec,
@@ -151,7 +152,7 @@ pub struct Project {
     pub chirp: Option<RunSource>,
     pub steady: Option<RunSource>,
     pub outputs: Vec<String>,
-    pub add_effects: Vec<String>,
+    pub add_effects: Vec<EffectId>,
     pub settings: BTreeMap<String, OutputSettings>,
     pub segments: BTreeMap<String, Vec<Segment>>,
     pub clusters: BTreeMap<String, Vec<Cluster>>,

@@ -6,6 +6,7 @@
 use std::str::FromStr;
 
 use super::error::SimError;
+use crate::core::effects::EffectId;
 
 /// One parameter of an effect: its name (with unit suffix), default and admissible range.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,15 +21,8 @@ const fn spec(name: &'static str, default: f64, min: f64, max: f64) -> ParamSpec
     ParamSpec { name, default, min, max }
 }
 
-/// Effect ids, as in METHOD.md's catalog.
-pub const EFFECT_IDS: [&str; 6] = [
-    "transport_delay",
-    "thermal_soak",
-    "ambient_correction",
-    "asymmetric_dynamics",
-    "sensor_dynamics",
-    "static_map_order",
-];
+/// The effects the simulator can switch on: METHOD.md's catalog, keyed on the model's own ids.
+pub const EFFECT_IDS: [EffectId; 6] = EffectId::CATALOG;
 
 const TRANSPORT_DELAY: &[ParamSpec] = &[spec("delay_s", 0.45, 0.0, 5.0)];
 const THERMAL_SOAK: &[ParamSpec] = &[spec("gain", 0.10, 0.0, 0.5), spec("tau_s", 40.0, 1.0, 1000.0)];
@@ -73,60 +67,67 @@ pub enum Effect {
 
 impl Effect {
     /// The catalog id of this effect.
-    pub fn id(&self) -> &'static str {
+    pub fn id(&self) -> EffectId {
         match self {
-            Self::TransportDelay { .. } => "transport_delay",
-            Self::ThermalSoak { .. } => "thermal_soak",
-            Self::AmbientCorrection { .. } => "ambient_correction",
-            Self::AsymmetricDynamics { .. } => "asymmetric_dynamics",
-            Self::SensorDynamics { .. } => "sensor_dynamics",
-            Self::StaticMapOrder { .. } => "static_map_order",
+            Self::TransportDelay { .. } => EffectId::TransportDelay,
+            Self::ThermalSoak { .. } => EffectId::ThermalSoak,
+            Self::AmbientCorrection { .. } => EffectId::AmbientCorrection,
+            Self::AsymmetricDynamics { .. } => EffectId::AsymmetricDynamics,
+            Self::SensorDynamics { .. } => EffectId::SensorDynamics,
+            Self::StaticMapOrder { .. } => EffectId::StaticMapOrder,
         }
     }
 
-    /// The parameters an effect id accepts, or `UnknownEffect`.
-    pub fn parameters(id: &str) -> Result<&'static [ParamSpec], SimError> {
+    /// The parameters an effect accepts, or `UnknownEffect` for a block the simulator does not
+    /// simulate (the scheduled time constant is the engine's own behaviour, always on).
+    pub fn parameters(id: EffectId) -> Result<&'static [ParamSpec], SimError> {
         match id {
-            "transport_delay" => Ok(TRANSPORT_DELAY),
-            "thermal_soak" => Ok(THERMAL_SOAK),
-            "ambient_correction" => Ok(AMBIENT_CORRECTION),
-            "asymmetric_dynamics" => Ok(ASYMMETRIC_DYNAMICS),
-            "sensor_dynamics" => Ok(SENSOR_DYNAMICS),
-            "static_map_order" => Ok(STATIC_MAP_ORDER),
-            _ => Err(SimError::UnknownEffect {
-                id: id.to_owned(),
-                known: EFFECT_IDS.iter().map(|s| (*s).to_owned()).collect(),
-            }),
+            EffectId::TransportDelay => Ok(TRANSPORT_DELAY),
+            EffectId::ThermalSoak => Ok(THERMAL_SOAK),
+            EffectId::AmbientCorrection => Ok(AMBIENT_CORRECTION),
+            EffectId::AsymmetricDynamics => Ok(ASYMMETRIC_DYNAMICS),
+            EffectId::SensorDynamics => Ok(SENSOR_DYNAMICS),
+            EffectId::StaticMapOrder => Ok(STATIC_MAP_ORDER),
+            EffectId::ScheduledTimeConstant => Err(unknown_effect(id.name())),
         }
     }
 
     /// The effect with its default parameters.
-    pub fn with_defaults(id: &str) -> Result<Self, SimError> {
+    pub fn with_defaults(id: EffectId) -> Result<Self, SimError> {
         let specs = Self::parameters(id)?;
         let values: Vec<f64> = specs.iter().map(|p| p.default).collect();
         Ok(Self::from_values(id, &values))
     }
 
     /// Build from parameter values listed in the order of [`Effect::parameters`]; values are checked.
-    fn from_values(id: &str, v: &[f64]) -> Self {
+    fn from_values(id: EffectId, v: &[f64]) -> Self {
         let at = |i: usize| v.get(i).copied().unwrap_or(0.0);
         match id {
-            "transport_delay" => Self::TransportDelay { delay_s: at(0) },
-            "thermal_soak" => Self::ThermalSoak { gain: at(0), tau_s: at(1) },
-            "ambient_correction" => Self::AmbientCorrection {
+            EffectId::TransportDelay => Self::TransportDelay { delay_s: at(0) },
+            EffectId::ThermalSoak => Self::ThermalSoak { gain: at(0), tau_s: at(1) },
+            EffectId::AmbientCorrection => Self::AmbientCorrection {
                 t_start_c: at(0),
                 t_end_c: at(1),
                 p_start_kpa: at(2),
                 p_end_kpa: at(3),
                 rh_start_pct: at(4),
             },
-            "asymmetric_dynamics" => Self::AsymmetricDynamics { decel_factor: at(0), accel_factor: at(1) },
-            "sensor_dynamics" => {
+            EffectId::AsymmetricDynamics => {
+                Self::AsymmetricDynamics { decel_factor: at(0), accel_factor: at(1) }
+            }
+            EffectId::SensorDynamics => {
                 Self::SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2), buffet_n: at(3) }
             }
-            _ => Self::StaticMapOrder { bleed_rpm: at(0), gain: at(1) },
+            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant => {
+                Self::StaticMapOrder { bleed_rpm: at(0), gain: at(1) }
+            }
         }
     }
+}
+
+/// The simulator's error for an effect it does not know, listing the ones it does.
+fn unknown_effect(id: &str) -> SimError {
+    SimError::UnknownEffect { id: id.to_owned(), known: EffectId::names(&EFFECT_IDS) }
 }
 
 impl FromStr for Effect {
@@ -138,7 +139,8 @@ impl FromStr for Effect {
             Some((id, params)) => (id.trim(), params.trim()),
             None => (text.trim(), ""),
         };
-        let specs = Self::parameters(id)?;
+        let effect: EffectId = id.parse().map_err(|_| unknown_effect(id))?;
+        let specs = Self::parameters(effect)?;
         let mut values: Vec<f64> = specs.iter().map(|p| p.default).collect();
         let mut seen = vec![false; specs.len()];
         for item in params.split(',').map(str::trim).filter(|s| !s.is_empty()) {
@@ -178,7 +180,7 @@ impl FromStr for Effect {
             }
             *slot = value;
         }
-        Ok(Self::from_values(id, &values))
+        Ok(Self::from_values(effect, &values))
     }
 }
 
@@ -236,7 +238,7 @@ impl ActiveEffects {
         let mut active = Self::none();
         for (i, effect) in effects.iter().enumerate() {
             if effects.iter().take(i).any(|e| e.id() == effect.id()) {
-                return Err(SimError::DuplicateEffect { id: effect.id().to_owned() });
+                return Err(SimError::DuplicateEffect { id: effect.id().name().to_owned() });
             }
             match *effect {
                 Effect::TransportDelay { delay_s } => active.delay_s = delay_s,
@@ -270,7 +272,7 @@ mod tests {
         let e: Effect = "thermal_soak:gain=0.06,tau_s=40".parse().unwrap();
         assert_eq!(e, Effect::ThermalSoak { gain: 0.06, tau_s: 40.0 });
         let e: Effect = "transport_delay".parse().unwrap();
-        assert_eq!(e, Effect::with_defaults("transport_delay").unwrap());
+        assert_eq!(e, Effect::with_defaults(EffectId::TransportDelay).unwrap());
         let e: Effect = " sensor_dynamics : freq_hz = 2 ".parse().unwrap();
         let Effect::SensorDynamics { freq_hz, zeta, .. } = e else { panic!("wrong effect {e:?}") };
         assert!((freq_hz - 2.0).abs() < 1e-12 && (zeta - 0.06).abs() < 1e-12);
@@ -305,8 +307,10 @@ mod tests {
             "transport_delay:delay_s=NaN".parse::<Effect>(),
             Err(SimError::ParameterOutOfRange { .. })
         ));
-        let twice =
-            [Effect::with_defaults("thermal_soak").unwrap(), Effect::with_defaults("thermal_soak").unwrap()];
+        let twice = [
+            Effect::with_defaults(EffectId::ThermalSoak).unwrap(),
+            Effect::with_defaults(EffectId::ThermalSoak).unwrap(),
+        ];
         assert!(matches!(ActiveEffects::from_effects(&twice), Err(SimError::DuplicateEffect { .. })));
     }
 }

@@ -4,6 +4,7 @@
 use super::ambient::STANDARD_DAY;
 use super::engine::Drive;
 use super::*;
+use crate::core::effects::EffectId;
 
 fn drive(fuel_cmd_gph: f64) -> Drive {
     Drive { fuel_cmd_gph, ambient: STANDARD_DAY, corrected: false, buffet_n: 0.0 }
@@ -48,9 +49,9 @@ fn steady_state_is_an_equilibrium() {
     let engine = Engine::new(
         EngineParams::default(),
         ActiveEffects::from_effects(&[
-            Effect::with_defaults("thermal_soak").unwrap(),
-            Effect::with_defaults("static_map_order").unwrap(),
-            Effect::with_defaults("sensor_dynamics").unwrap(),
+            Effect::with_defaults(EffectId::ThermalSoak).unwrap(),
+            Effect::with_defaults(EffectId::StaticMapOrder).unwrap(),
+            Effect::with_defaults(EffectId::SensorDynamics).unwrap(),
         ])
         .unwrap(),
     );

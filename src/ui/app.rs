@@ -4,6 +4,8 @@ use std::time::Instant;
 
 use egui::RichText;
 
+use crate::core::effects::EffectId;
+
 use super::command::Command;
 use super::derived::Derived;
 use super::file_dialog::{PendingPick, PickPoll, PickPurpose};
@@ -154,10 +156,7 @@ impl App {
                 self.edit_setup(&status, |setup| setup.output_mut(&output).settings = settings);
             }
             Command::ApplyEffect { output, effect } => self.apply_effect(&output, &effect),
-            Command::RemoveEffect { output, effect } => {
-                let status = format!("{output}: effect {effect} removed");
-                self.edit_setup(&status, |setup| setup.output_mut(&output).effects.retain(|e| *e != effect));
-            }
+            Command::RemoveEffect { output, effect } => self.remove_effect(&output, &effect),
             Command::Undo => self.undo(),
             Command::Redo => self.redo(),
             Command::ExportModel(path) => self.export_model(&path),
@@ -216,17 +215,34 @@ impl App {
 
     /// Add a catalog effect to an output's setup (undoable); an unknown id is an error shown.
     fn apply_effect(&mut self, output: &str, effect: &str) {
-        if let Err(err) = crate::core::effects::check_id(effect) {
-            return self
-                .push_error(&anyhow::Error::new(err).context(format!("adding an effect to {output}")));
-        }
+        let effect: EffectId = match effect.parse() {
+            Ok(id) => id,
+            Err(err) => {
+                return self
+                    .push_error(&anyhow::Error::new(err).context(format!("adding an effect to {output}")));
+            }
+        };
         let status = format!("{output}: effect {effect} applied");
         self.edit_setup(&status, |setup| {
             let effects = &mut setup.output_mut(output).effects;
-            if !effects.iter().any(|e| e == effect) {
-                effects.push(effect.to_owned());
+            if !effects.contains(&effect) {
+                effects.push(effect);
             }
         });
+    }
+
+    /// Take an effect out of an output's setup (undoable); an unknown id is an error shown.
+    fn remove_effect(&mut self, output: &str, effect: &str) {
+        let effect: EffectId = match effect.parse() {
+            Ok(id) => id,
+            Err(err) => {
+                return self.push_error(
+                    &anyhow::Error::new(err).context(format!("removing an effect from {output}")),
+                );
+            }
+        };
+        let status = format!("{output}: effect {effect} removed");
+        self.edit_setup(&status, |setup| setup.output_mut(output).effects.retain(|e| *e != effect));
     }
 
     fn reload_run(&mut self, index: usize, options: crate::io::csv_run::LoadOptions) {

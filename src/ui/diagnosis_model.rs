@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::core::diagnose;
 use crate::core::diagnose::HistoryStep;
-use crate::core::effects::ExtendedModel;
+use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
@@ -37,7 +37,7 @@ pub fn next_model_id() -> u64 {
 #[derive(Clone, Debug, Default)]
 pub struct EffectsOutcome {
     /// The effect ids the setup asks for, in the order they were applied.
-    pub requested: Vec<String>,
+    pub requested: Vec<EffectId>,
     /// The gray-box model with every requested effect added and refitted; `None` without effects,
     /// during a drag preview, or when an effect could not be added.
     pub model: Option<ExtendedModel>,
@@ -60,7 +60,7 @@ impl EffectsOutcome {
 /// result. `runs` are the scored runs, in the order of `live.runs`.
 pub(super) fn apply_effects(
     live: &mut LiveModel,
-    ids: &[String],
+    ids: &[EffectId],
     ident: &Run,
     fits: &SegmentFits,
     settings: &OutputSettings,

@@ -21,7 +21,7 @@ use super::session::Session;
 use super::theme;
 use crate::core::diagnose::HistoryStep;
 use crate::core::diagnose::{self, DiagnosisKind, DiagnosisReport};
-use crate::core::effects::BLOCK_IDS;
+use crate::core::effects::EffectId;
 
 /// The two halves of the view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -175,10 +175,12 @@ fn which_effect_ui(
             }
             for id in &live.effects.requested {
                 ui.horizontal(|ui| {
-                    ui.label(RichText::new(id).monospace());
+                    ui.label(RichText::new(id.name()).monospace());
                     if ui.button("Remove").on_hover_text("Take the effect out (undo: Ctrl+Z)").clicked() {
-                        commands
-                            .push(Command::RemoveEffect { output: output.to_owned(), effect: id.clone() });
+                        commands.push(Command::RemoveEffect {
+                            output: output.to_owned(),
+                            effect: id.name().to_owned(),
+                        });
                     }
                 });
             }
@@ -314,7 +316,7 @@ fn entry_ui(
     output: &str,
     rank: usize,
     entry: &diagnose::Diagnosis,
-    applied: &[String],
+    applied: &[EffectId],
 ) -> Option<Command> {
     let mut command = None;
     egui::Frame::group(ui.style()).show(ui, |ui| {
@@ -344,9 +346,9 @@ fn entry_ui(
                 }
             }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-                if applied.contains(&entry.effect) {
+                if applied.iter().any(|id| id.name() == entry.effect) {
                     ui.label(RichText::new("in the model").color(theme::OK));
-                } else if !BLOCK_IDS.contains(&entry.effect.as_str()) {
+                } else if entry.effect.parse::<EffectId>().is_err() {
                     ui.label(RichText::new("edit the clusters").color(theme::HINT)).on_hover_text(
                         "A change of the linear block or the map is made on the z-plane (add or move a \
                          cluster) or in the output's settings, not added as a block",

@@ -85,7 +85,7 @@ pub fn screenshot(
     view: &str,
     output: Option<&str>,
     project: Option<&Path>,
-    add_effects: &[String],
+    add_effects: &[crate::core::effects::EffectId],
 ) -> Result<()> {
     // `failures`: the Diagnosis view's "Where it fails" section.
     let failures = view.eq_ignore_ascii_case(FAILURES_VIEW);

@@ -7,6 +7,7 @@ use super::command::Command;
 use super::derived::{Derived, LiveView};
 use super::model_cache::ScoredRun;
 use super::theme;
+use crate::core::effects::EffectId;
 use crate::core::identification::cluster::{ClusterEval, ClusterStatus};
 use crate::core::numerics::metrics::Metrics;
 
@@ -46,7 +47,7 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
             if live.effects.left_out_for_preview {
                 text += &format!(
                     "; without the effects {}, fitted again on release",
-                    live.effects.requested.join(", ")
+                    EffectId::names(&live.effects.requested).join(", ")
                 );
             }
             ui.label(RichText::new(text + ")").color(theme::WARNING));

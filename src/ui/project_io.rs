@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 
 use super::session::{LoadFailure, Role, Session, SessionRun};
 use super::setup::{ModelSetup, OutputSetup};
+use crate::core::effects::EffectId;
 use crate::io::csv_run::LoadOptions;
 use crate::io::project::{IdentEntry, LoadSpec, OutputSpec, Project, ProjectFile, RunEntry, RunSource};
 
@@ -61,13 +62,13 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
 /// The effects to write as the project's `add_effects`. That list applies to every output (the
 /// project format has no per-output effects), so only the effects every output has are written, in
 /// the order of the first output; the notes name what could not be saved.
-fn shared_effects(setup: &ModelSetup, outputs: &[String], notes: &mut Vec<String>) -> Vec<String> {
-    let lists: Vec<(&String, Vec<String>)> = outputs.iter().map(|o| (o, setup.output(o).effects)).collect();
+fn shared_effects(setup: &ModelSetup, outputs: &[String], notes: &mut Vec<String>) -> Vec<EffectId> {
+    let lists: Vec<(&String, Vec<EffectId>)> = outputs.iter().map(|o| (o, setup.output(o).effects)).collect();
     let Some((_, first)) = lists.first() else { return Vec::new() };
-    let shared: Vec<String> =
-        first.iter().filter(|id| lists.iter().all(|(_, list)| list.contains(id))).cloned().collect();
+    let shared: Vec<EffectId> =
+        first.iter().filter(|id| lists.iter().all(|(_, list)| list.contains(id))).copied().collect();
     for (output, list) in &lists {
-        let lost: Vec<&str> = list.iter().filter(|id| !shared.contains(id)).map(String::as_str).collect();
+        let lost: Vec<&str> = list.iter().filter(|id| !shared.contains(id)).map(|id| id.name()).collect();
         if !lost.is_empty() {
             notes.push(format!(
                 "a project's add_effects applies to every output: {output}'s {} was not saved",

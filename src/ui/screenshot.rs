@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result, anyhow};
 
+use crate::core::effects::EffectId;
+
 use super::app::App;
 use super::command::Command;
 use super::session::Session;
@@ -24,7 +26,7 @@ const TIMEOUT: Duration = Duration::from_secs(600);
 /// The app a screenshot shows: the bundled sample runs, or `project` opened as File > Open
 /// project does; then `add_effects` applied to every identified output, as the Apply button does.
 /// Errors (a project that cannot be opened, an unknown effect) are returned, not drawn.
-pub fn screenshot_app(project: Option<&Path>, add_effects: &[String]) -> Result<App> {
+pub fn screenshot_app(project: Option<&Path>, add_effects: &[EffectId]) -> Result<App> {
     let mut app = match project {
         None => App::startup(None),
         Some(path) => {
@@ -37,7 +39,7 @@ pub fn screenshot_app(project: Option<&Path>, add_effects: &[String]) -> Result<
     let outputs: Vec<String> = app.cache.output_names().into_iter().map(ToOwned::to_owned).collect();
     for effect in add_effects {
         for output in &outputs {
-            app.apply(Command::ApplyEffect { output: output.clone(), effect: effect.clone() });
+            app.apply(Command::ApplyEffect { output: output.clone(), effect: effect.name().to_owned() });
         }
     }
     if let Some(error) = app.view.errors.first() {

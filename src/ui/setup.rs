@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::core::effects::EffectId;
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::pipeline::OutputSettings;
 use crate::core::identification::segment::Segment;
@@ -30,7 +31,7 @@ pub struct OutputSetup {
     /// Effects of the missing-physics catalog added to the model, by id, in the order the user
     /// applied them (each refitted on the identification data in turn).
     #[serde(default)]
-    pub effects: Vec<String>,
+    pub effects: Vec<EffectId>,
 }
 
 impl OutputSetup {

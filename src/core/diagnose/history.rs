@@ -2,7 +2,7 @@
 //! validation error after every step: the error history the batch reports and the app draws.
 use serde::{Deserialize, Serialize};
 
-use crate::core::effects::ExtendedModel;
+use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
@@ -26,14 +26,14 @@ pub struct EffectSequence {
     /// Why a step has no validation error, in words.
     pub history_gaps: Vec<String>,
     /// The effect that could not be added, and why; the effects after it were not tried.
-    pub failed: Option<(String, DiagnoseError)>,
+    pub failed: Option<(EffectId, DiagnoseError)>,
 }
 
 /// Add `ids` to `base` in order, each refitted on the identification data (`ident`, `fits`), and
 /// score the model on `validation` after every step.
 pub fn apply_in_order(
     base: &ExtendedModel,
-    ids: &[String],
+    ids: &[EffectId],
     ident: &Run,
     fits: &SegmentFits,
     settings: &OutputSettings,
@@ -42,11 +42,11 @@ pub fn apply_in_order(
     let mut sequence =
         EffectSequence { model: base.clone(), history: Vec::new(), history_gaps: Vec::new(), failed: None };
     sequence.record("base", validation, settings);
-    for id in ids {
+    for &id in ids {
         match apply(&sequence.model, id, ident, fits, settings) {
             Ok(next) => sequence.model = next,
             Err(err) => {
-                sequence.failed = Some((id.clone(), err));
+                sequence.failed = Some((id, err));
                 break;
             }
         }

@@ -44,8 +44,8 @@
 //! credited even when the refinement comes within 10 % of it.
 use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
 use crate::core::effects::{
-    AmbientCorrection, EFFECT_IDS, EffectError, ExtendedModel, FitData, StructuralChange, TransportDelay,
-    apply_effect, evidence, physics, refine_structure, refit,
+    AmbientCorrection, EffectError, EffectId, ExtendedModel, FitData, StructuralChange, apply_effect,
+    refine_structure, refit,
 };
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
@@ -235,11 +235,11 @@ pub fn validation_rmspe(
 }
 
 /// Why an effect cannot be tried on these runs, if it cannot.
-fn not_applicable(id: &str, current: &ExtendedModel, runs: &[&Run]) -> Option<String> {
+fn not_applicable(id: EffectId, current: &ExtendedModel, runs: &[&Run]) -> Option<String> {
     if current.effect(id).is_some() {
         return Some("already in the model".to_owned());
     }
-    if id == AmbientCorrection::ID {
+    if id == EffectId::AmbientCorrection {
         return runs.iter().find_map(|run| AmbientCorrection::conditions(run).err().map(|e| e.to_string()));
     }
     None
@@ -294,7 +294,7 @@ pub fn diagnose_with_progress(
     settings: &OutputSettings,
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<DiagnosisReport, DiagnoseError> {
-    let steps = (EFFECT_IDS.len() + StructuralChange::ALL.len()) as f64 + 1.0;
+    let steps = (EffectId::CATALOG.len() + StructuralChange::ALL.len()) as f64 + 1.0;
     if !progress(0.0) {
         return Err(DiagnoseError::Cancelled);
     }
@@ -360,13 +360,13 @@ pub fn diagnose_with_progress(
             rival: None,
         });
     }
-    for id in EFFECT_IDS {
+    for id in EffectId::CATALOG {
         done += 1.0;
         if !progress(done / steps) {
             return Err(DiagnoseError::Cancelled);
         }
         if let Some(reason) = not_applicable(id, current, &all_runs) {
-            skipped.push(SkippedEffect { effect: id.to_owned(), reason });
+            skipped.push(SkippedEffect { effect: id.name().to_owned(), reason });
             continue;
         }
         let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
@@ -376,12 +376,12 @@ pub fn diagnose_with_progress(
         let (model, after) = match trial {
             Ok(t) => t,
             Err(e) => {
-                skipped.push(SkippedEffect { effect: id.to_owned(), reason: e.to_string() });
+                skipped.push(SkippedEffect { effect: id.name().to_owned(), reason: e.to_string() });
                 continue;
             }
         };
         let (test, rmspe_after_pct, beats_current) = judge.verdict(&after);
-        let evidence = evidence(id, &traces)?;
+        let evidence = id.evidence(&traces);
         // A physical effect must also beat the best structural refinement, by the same rule.
         let held = rival.as_ref().map(|(r, errors)| {
             let vs = diebold_mariano(&loss_differences(errors, &after));
@@ -392,15 +392,15 @@ pub fn diagnose_with_progress(
         // response is shifted late (not only its later part), a dead time that fits better than the
         // best structural refinement is credited even if the refinement comes close: a pole placed
         // to mimic a dead time is no evidence against one.
-        let evidence_says_dead_time = id == TransportDelay::ID && lateness.whole_response_late();
+        let evidence_says_dead_time = id == EffectId::TransportDelay && lateness.whole_response_late();
         let beats_structure = held.as_ref().is_none_or(|r| {
             (r.test.p_value < SIGNIFICANCE_LEVEL && r.reduction >= MIN_RELATIVE_REDUCTION)
                 || (evidence_says_dead_time && r.reduction > 0.0)
         });
         entries.push(Diagnosis {
-            effect: id.to_owned(),
+            effect: id.name().to_owned(),
             kind: DiagnosisKind::Physics,
-            physics: physics(id)?.to_owned(),
+            physics: id.physics().to_owned(),
             significant: beats_current && beats_structure && evidence.supports,
             rmspe_before_pct,
             rmspe_after_pct,
@@ -454,7 +454,7 @@ impl Judge<'_> {
 /// Add the effect `id` to `current` and refit on the identification data of `fits`.
 pub fn apply(
     current: &ExtendedModel,
-    id: &str,
+    id: EffectId,
     ident: &Run,
     fits: &SegmentFits,
     settings: &OutputSettings,
@@ -466,7 +466,7 @@ pub fn apply(
 /// Remove the effect `id` from `current` and refit what remains on the identification data.
 pub fn remove(
     current: &ExtendedModel,
-    id: &str,
+    id: EffectId,
     ident: &Run,
     fits: &SegmentFits,
     settings: &OutputSettings,

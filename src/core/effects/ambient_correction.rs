@@ -1,6 +1,7 @@
 //! `ambient_correction`: the engine scales with inlet conditions.
 use super::Evidence;
 use super::stats::{ResidualTrace, correlation};
+use super::{Block, EffectId, value_at};
 use super::{EffectError, ParamSpec};
 use crate::core::run::Run;
 
@@ -33,10 +34,6 @@ pub struct Conditions {
 }
 
 impl AmbientCorrection {
-    /// Catalog id.
-    pub const ID: &'static str = "ambient_correction";
-    pub(super) const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("output_theta_exp", 0.0, 1.5), ParamSpec::real("output_delta_exp", 0.0, 1.5)];
     /// Channels read from every run.
     pub const CHANNELS: &'static [&'static str] = &["ambient_temp_c", "ambient_pressure_kpa"];
 
@@ -49,7 +46,7 @@ impl AmbientCorrection {
             Ok(Self { output_theta_exp: 0.0, output_delta_exp: 1.0 })
         } else {
             Err(EffectError::NotApplicable {
-                effect: Self::ID.to_owned(),
+                effect: Self::ID.name().to_owned(),
                 reason: format!("no corrected form is known for output '{output}' (only speed and thrust)"),
             })
         }
@@ -60,7 +57,7 @@ impl AmbientCorrection {
         let [temp, pressure] = [Self::CHANNELS[0], Self::CHANNELS[1]].map(|name| {
             let channel =
                 run.aux(name).or_else(|| run.channel(name)).ok_or_else(|| EffectError::MissingChannel {
-                    effect: Self::ID.to_owned(),
+                    effect: Self::ID.name().to_owned(),
                     channel: name.to_owned(),
                     run: run.name.clone(),
                 })?;
@@ -136,6 +133,27 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
         "little dependence on inlet conditions"
     };
     Evidence { sentence: format!("residual tracks {name}, r = {r:.2}: {meaning}"), supports: r.abs() > 0.2 }
+}
+
+impl Block for AmbientCorrection {
+    const ID: EffectId = EffectId::AmbientCorrection;
+    const PARAMS: &'static [ParamSpec] =
+        &[ParamSpec::real("output_theta_exp", 0.0, 1.5), ParamSpec::real("output_delta_exp", 0.0, 1.5)];
+    const PHYSICS: &'static str = "the engine scales with inlet conditions: it runs on corrected fuel u/(δ√θ) and gives \
+         corrected speed N/√θ or thrust F/δ";
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.output_theta_exp, self.output_delta_exp]
+    }
+
+    fn from_values(values: &[f64]) -> Self {
+        let at = |i| value_at(values, i);
+        Self { output_theta_exp: at(0), output_delta_exp: at(1) }
+    }
+
+    fn evidence(traces: &[ResidualTrace]) -> Evidence {
+        evidence(traces)
+    }
 }
 
 #[cfg(test)]

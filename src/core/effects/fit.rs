@@ -15,8 +15,8 @@ use super::solver::{LmSettings, minimise};
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ScheduledTimeConstant, SensorDynamics,
-    StaticMapOrder, ThermalSoak, TransportDelay, check_id,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, ScheduledTimeConstant,
+    SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
 };
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::identification::refine::RootParams;
@@ -298,10 +298,13 @@ fn check_channels(s: &Structure, data: &FitData) -> Result<(), EffectError> {
 /// effects. For a block with a discrete choice (the delay, the kink's position) the screening is
 /// repeated around the refined roots while it finds better fits: roots that had absorbed part of a
 /// delay only let go of it once the delay is in the model.
-pub fn apply_effect(model: &ExtendedModel, id: &str, data: &FitData) -> Result<ExtendedModel, EffectError> {
-    let id = check_id(id)?;
+pub fn apply_effect(
+    model: &ExtendedModel,
+    id: EffectId,
+    data: &FitData,
+) -> Result<ExtendedModel, EffectError> {
     if model.effect(id).is_some() {
-        return Err(EffectError::AlreadyApplied { effect: id.to_owned() });
+        return Err(EffectError::AlreadyApplied { effect: id.name().to_owned() });
     }
     let base = Structure::of(model)?;
     let failed =
@@ -314,7 +317,7 @@ pub fn apply_effect(model: &ExtendedModel, id: &str, data: &FitData) -> Result<E
     let search = Search { id, guesses: &guesses, data };
     let mut starts: Vec<Structure> = search.screen(&base, &[]);
     starts.extend(neutral_block(id, data).map(|b| base.with(b)));
-    if id == TransportDelay::ID {
+    if id == EffectId::TransportDelay {
         // Poles may stand in for a dead time (an ARX model cannot hold a long delay, so the segment
         // models put fast roots where it is): the delay is also tried with the fastest one or two pole
         // groups taken out.
@@ -325,7 +328,7 @@ pub fn apply_effect(model: &ExtendedModel, id: &str, data: &FitData) -> Result<E
             reduced = fewer;
         }
     }
-    let discrete = matches!(id, TransportDelay::ID | StaticMapOrder::ID);
+    let discrete = matches!(id, EffectId::TransportDelay | EffectId::StaticMapOrder);
     let rounds = if discrete { MAX_SCREENING_ROUNDS } else { 1 };
     let best = search.improve(None, starts, rounds);
     best.map(|b| b.model).ok_or_else(|| failed("no admissible starting point"))
@@ -351,7 +354,7 @@ fn without_fastest_pole_group(s: &Structure) -> Option<Structure> {
 
 /// Screening and refinement of one block's starting points.
 struct Search<'a> {
-    id: &'a str,
+    id: EffectId,
     guesses: &'a [EffectBlock],
     data: &'a FitData,
 }
@@ -407,56 +410,56 @@ impl Search<'_> {
 }
 
 /// The block's setting that leaves the model unchanged, where there is one.
-fn neutral_block(id: &str, data: &FitData) -> Option<EffectBlock> {
+fn neutral_block(id: EffectId, data: &FitData) -> Option<EffectBlock> {
     match id {
-        ThermalSoak::ID => Some(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.0, tau_s: 20.0 })),
-        AsymmetricDynamics::ID => {
+        EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.0, tau_s: 20.0 })),
+        EffectId::AsymmetricDynamics => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
         }
-        ScheduledTimeConstant::ID => Some(EffectBlock::ScheduledTimeConstant(
+        EffectId::ScheduledTimeConstant => Some(EffectBlock::ScheduledTimeConstant(
             ScheduledTimeConstant::for_input(&data.run.input.values, 0.0),
         )),
-        SensorDynamics::ID => Some(EffectBlock::SensorDynamics(SensorDynamics {
+        EffectId::SensorDynamics => Some(EffectBlock::SensorDynamics(SensorDynamics {
             freq_hz: 0.9 * SensorDynamics::max_freq_hz(data.dt_secs),
             zeta: 0.7,
             lag_s: 0.01,
         })),
-        _ => None,
+        EffectId::TransportDelay | EffectId::AmbientCorrection | EffectId::StaticMapOrder => None,
     }
 }
 
 /// Starting points for the new block, from the data and the current model.
 fn starting_points(
-    id: &str,
+    id: EffectId,
     base: &Structure,
     current: &ExtendedModel,
     data: &FitData,
 ) -> Result<Vec<EffectBlock>, EffectError> {
     Ok(match id {
-        TransportDelay::ID => {
+        EffectId::TransportDelay => {
             TransportDelay::guesses(data.dt_secs).into_iter().map(EffectBlock::TransportDelay).collect()
         }
-        ThermalSoak::ID => ThermalSoak::guesses().into_iter().map(EffectBlock::ThermalSoak).collect(),
-        AmbientCorrection::ID => {
+        EffectId::ThermalSoak => ThermalSoak::guesses().into_iter().map(EffectBlock::ThermalSoak).collect(),
+        EffectId::AmbientCorrection => {
             vec![EffectBlock::AmbientCorrection(AmbientCorrection::for_output(&data.output)?)]
         }
-        AsymmetricDynamics::ID => {
+        EffectId::AsymmetricDynamics => {
             AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
             AsymmetricDynamics::guesses().into_iter().map(EffectBlock::AsymmetricDynamics).collect()
         }
-        ScheduledTimeConstant::ID => {
+        EffectId::ScheduledTimeConstant => {
             AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
             ScheduledTimeConstant::guesses(&data.run.input.values)
                 .into_iter()
                 .map(EffectBlock::ScheduledTimeConstant)
                 .collect()
         }
-        SensorDynamics::ID => {
+        EffectId::SensorDynamics => {
             let y_hat = current.simulate(&data.run)?;
             let e: Vec<f64> = data.y.iter().zip(&y_hat).map(|(y, yh)| y - yh).collect();
             SensorDynamics::guesses(&e, data.dt_secs).into_iter().map(EffectBlock::SensorDynamics).collect()
         }
-        _ => {
+        EffectId::StaticMapOrder => {
             let (v, _) = current.simulate_with_v(&data.run)?;
             let steady_v: Vec<f64> =
                 data.steady_windows.iter().filter_map(|&(a, b)| v.get(a..b).map(mean)).collect();

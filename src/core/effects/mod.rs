@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 mod ambient_correction;
 mod asymmetric_dynamics;
 mod fit;
+mod id;
 mod model;
 mod scheduled_time_constant;
 mod sensor_dynamics;
@@ -34,6 +35,7 @@ pub mod transport_delay;
 pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;
 pub use fit::{FitData, apply_effect, refit, refit_static};
+pub use id::EffectId;
 pub use model::ExtendedModel;
 pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
@@ -41,28 +43,6 @@ pub use static_map_order::StaticMapOrder;
 pub use structural::{StructuralChange, refine_structure};
 pub use thermal_soak::ThermalSoak;
 pub use transport_delay::TransportDelay;
-
-/// Effect ids in the order of METHOD.md's catalog: the physics the diagnosis tries.
-pub const EFFECT_IDS: [&str; 6] = [
-    TransportDelay::ID,
-    ThermalSoak::ID,
-    AmbientCorrection::ID,
-    AsymmetricDynamics::ID,
-    SensorDynamics::ID,
-    StaticMapOrder::ID,
-];
-
-/// Every block a model can hold, in signal-path order: the catalog's effects and the scheduled
-/// time constant, which refines the model's own structure (the diagnosis tries it as structure).
-pub const BLOCK_IDS: [&str; 7] = [
-    TransportDelay::ID,
-    ThermalSoak::ID,
-    AmbientCorrection::ID,
-    AsymmetricDynamics::ID,
-    ScheduledTimeConstant::ID,
-    SensorDynamics::ID,
-    StaticMapOrder::ID,
-];
 
 /// One parameter of an effect block: its name (with unit suffix) and admissible range.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -126,9 +106,99 @@ pub enum EffectError {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EffectRecord {
     /// Catalog id.
-    pub id: String,
+    pub id: EffectId,
     /// Parameters by name (see [`param_specs`]).
     pub params: BTreeMap<String, f64>,
+}
+
+/// What every block of the model says about itself: its id, parameters, physics and the evidence
+/// for it in a model's residuals. Adding a block: a variant of [`EffectId`] and of [`EffectBlock`],
+/// and this trait.
+pub trait Block: Sized {
+    const ID: EffectId;
+    /// Its parameters, with unit suffixes and admissible ranges, in the order of [`Self::values`].
+    const PARAMS: &'static [ParamSpec];
+    /// What it means physically and what it changes in the model, in one sentence.
+    const PHYSICS: &'static str;
+    /// Parameter values in the order of [`Self::PARAMS`].
+    fn values(&self) -> Vec<f64>;
+    /// The block from values in the order of [`Self::PARAMS`], already checked against them.
+    fn from_values(values: &[f64]) -> Self;
+    /// What the current model's residuals say about this block.
+    fn evidence(traces: &[stats::ResidualTrace]) -> Evidence;
+}
+
+fn block_id<B: Block>(_: &B) -> EffectId {
+    B::ID
+}
+
+/// `for_each_block!(block, b => expr)`: `expr` with `b` bound to the block inside any variant.
+macro_rules! for_each_block {
+    ($value:expr, $b:ident => $body:expr) => {
+        match $value {
+            EffectBlock::TransportDelay($b) => $body,
+            EffectBlock::ThermalSoak($b) => $body,
+            EffectBlock::AmbientCorrection($b) => $body,
+            EffectBlock::AsymmetricDynamics($b) => $body,
+            EffectBlock::ScheduledTimeConstant($b) => $body,
+            EffectBlock::SensorDynamics($b) => $body,
+            EffectBlock::StaticMapOrder($b) => $body,
+        }
+    };
+}
+
+/// `for_each_id!(id, B => expr)`: `expr` with `B` the block type of `id`.
+macro_rules! for_each_id {
+    ($id:expr, $t:ident => $body:expr) => {
+        match $id {
+            EffectId::TransportDelay => {
+                type $t = TransportDelay;
+                $body
+            }
+            EffectId::ThermalSoak => {
+                type $t = ThermalSoak;
+                $body
+            }
+            EffectId::AmbientCorrection => {
+                type $t = AmbientCorrection;
+                $body
+            }
+            EffectId::AsymmetricDynamics => {
+                type $t = AsymmetricDynamics;
+                $body
+            }
+            EffectId::ScheduledTimeConstant => {
+                type $t = ScheduledTimeConstant;
+                $body
+            }
+            EffectId::SensorDynamics => {
+                type $t = SensorDynamics;
+                $body
+            }
+            EffectId::StaticMapOrder => {
+                type $t = StaticMapOrder;
+                $body
+            }
+        }
+    };
+}
+
+impl EffectId {
+    /// The parameters the block accepts.
+    pub fn param_specs(self) -> &'static [ParamSpec] {
+        for_each_id!(self, B => B::PARAMS)
+    }
+
+    /// What the block means physically and what it changes in the model, in one sentence.
+    pub fn physics(self) -> &'static str {
+        for_each_id!(self, B => B::PHYSICS)
+    }
+
+    /// The evidence for the block, computed from the current model's residuals on the given runs
+    /// (identification range and validation runs).
+    pub fn evidence(self, traces: &[stats::ResidualTrace]) -> Evidence {
+        for_each_id!(self, B => B::evidence(traces))
+    }
 }
 
 /// One effect of the catalog with its fitted parameters.
@@ -150,57 +220,6 @@ pub enum EffectBlock {
     ScheduledTimeConstant(ScheduledTimeConstant),
 }
 
-/// The known block ids as owned strings (for error messages).
-fn known_ids() -> Vec<String> {
-    BLOCK_IDS.iter().map(|s| (*s).to_owned()).collect()
-}
-
-/// Check that `id` names a block (an effect of the catalog or the scheduled time constant).
-pub fn check_id(id: &str) -> Result<&'static str, EffectError> {
-    BLOCK_IDS
-        .iter()
-        .find(|known| **known == id)
-        .copied()
-        .ok_or_else(|| EffectError::UnknownEffect { id: id.to_owned(), known: known_ids() })
-}
-
-/// The parameters an effect id accepts.
-pub fn param_specs(id: &str) -> Result<&'static [ParamSpec], EffectError> {
-    Ok(match check_id(id)? {
-        TransportDelay::ID => TransportDelay::PARAMS,
-        ThermalSoak::ID => ThermalSoak::PARAMS,
-        AmbientCorrection::ID => AmbientCorrection::PARAMS,
-        AsymmetricDynamics::ID => AsymmetricDynamics::PARAMS,
-        SensorDynamics::ID => SensorDynamics::PARAMS,
-        ScheduledTimeConstant::ID => ScheduledTimeConstant::PARAMS,
-        _ => StaticMapOrder::PARAMS,
-    })
-}
-
-/// What an effect means physically and what it changes in the model, in one sentence.
-pub fn physics(id: &str) -> Result<&'static str, EffectError> {
-    Ok(match check_id(id)? {
-        TransportDelay::ID => "fuel line and valve dead time: the input reaches the engine d samples late",
-        ThermalSoak::ID => {
-            "casing and rotor absorb heat after a power change: a share g of every change arrives \
-             with a slow time constant τ"
-        }
-        AmbientCorrection::ID => {
-            "the engine scales with inlet conditions: it runs on corrected fuel u/(δ√θ) and gives \
-             corrected speed N/√θ or thrust F/δ"
-        }
-        AsymmetricDynamics::ID => {
-            "acceleration and deceleration differ: the spool time constant is scaled while slowing down"
-        }
-        SensorDynamics::ID => "load cell or stand resonance and sensor lag: a second-order sensor block",
-        ScheduledTimeConstant::ID => {
-            "the spool time constant changes with the operating point (slower at low speed): the \
-             slowest pole is scheduled on the operating point"
-        }
-        _ => "the static map is too simple: a kink (bleed valve, limiter) is added to f(v)",
-    })
-}
-
 /// What the current model's residuals say about an effect: one sentence, and whether it shows the
 /// effect's signature at all. The thresholds are the evidence sentences' own words: where the
 /// sentence says there is little or nothing ("little slow creep", "no sharp resonance", "rise and
@@ -219,26 +238,12 @@ impl Evidence {
     }
 }
 
-/// The evidence for effect `id`, computed from the current model's residuals on the given runs
-/// (identification range and validation runs).
-pub fn evidence(id: &str, traces: &[stats::ResidualTrace]) -> Result<Evidence, EffectError> {
-    Ok(match check_id(id)? {
-        TransportDelay::ID => transport_delay::evidence(traces),
-        ThermalSoak::ID => thermal_soak::evidence(traces),
-        AmbientCorrection::ID => ambient_correction::evidence(traces),
-        AsymmetricDynamics::ID => asymmetric_dynamics::evidence(traces),
-        SensorDynamics::ID => sensor_dynamics::evidence(traces),
-        ScheduledTimeConstant::ID => asymmetric_dynamics::level_evidence(traces),
-        _ => static_map_order::evidence(traces),
-    })
-}
-
 /// Check named parameters against an effect's specs; returns the values in spec order.
-fn checked_values(id: &str, params: &BTreeMap<String, f64>) -> Result<Vec<f64>, EffectError> {
-    let specs = param_specs(id)?;
+fn checked_values(id: EffectId, params: &BTreeMap<String, f64>) -> Result<Vec<f64>, EffectError> {
+    let specs = id.param_specs();
     if let Some(name) = params.keys().find(|name| !specs.iter().any(|s| s.name == name.as_str())) {
         return Err(EffectError::UnknownParameter {
-            effect: id.to_owned(),
+            effect: id.name().to_owned(),
             param: name.clone(),
             known: specs.iter().map(|s| s.name.to_owned()).collect(),
         });
@@ -246,13 +251,16 @@ fn checked_values(id: &str, params: &BTreeMap<String, f64>) -> Result<Vec<f64>, 
     specs.iter().map(|spec| check_value(id, spec, params.get(spec.name).copied())).collect()
 }
 
-fn check_value(id: &str, spec: &ParamSpec, value: Option<f64>) -> Result<f64, EffectError> {
+fn check_value(id: EffectId, spec: &ParamSpec, value: Option<f64>) -> Result<f64, EffectError> {
     let Some(value) = value else {
-        return Err(EffectError::MissingParameter { effect: id.to_owned(), param: spec.name.to_owned() });
+        return Err(EffectError::MissingParameter {
+            effect: id.name().to_owned(),
+            param: spec.name.to_owned(),
+        });
     };
     if !value.is_finite() || value < spec.min || value > spec.max {
         return Err(EffectError::ParameterOutOfRange {
-            effect: id.to_owned(),
+            effect: id.name().to_owned(),
             param: spec.name.to_owned(),
             value,
             min: spec.min,
@@ -263,81 +271,54 @@ fn check_value(id: &str, spec: &ParamSpec, value: Option<f64>) -> Result<f64, Ef
 }
 
 /// The value at `index` of a checked list (specs and values have equal lengths by construction).
-fn value_at(values: &[f64], index: usize) -> f64 {
+pub(crate) fn value_at(values: &[f64], index: usize) -> f64 {
     values.get(index).copied().unwrap_or(0.0)
 }
 
 impl EffectBlock {
-    /// The catalog id.
-    pub fn id(&self) -> &'static str {
-        match self {
-            Self::TransportDelay(_) => TransportDelay::ID,
-            Self::ThermalSoak(_) => ThermalSoak::ID,
-            Self::AmbientCorrection(_) => AmbientCorrection::ID,
-            Self::AsymmetricDynamics(_) => AsymmetricDynamics::ID,
-            Self::SensorDynamics(_) => SensorDynamics::ID,
-            Self::StaticMapOrder(_) => StaticMapOrder::ID,
-            Self::ScheduledTimeConstant(_) => ScheduledTimeConstant::ID,
-        }
+    /// The block's id.
+    pub fn id(&self) -> EffectId {
+        for_each_block!(self, b => block_id(b))
     }
 
     /// Position in the signal path.
     pub fn rank(&self) -> usize {
-        BLOCK_IDS.iter().position(|id| *id == self.id()).unwrap_or(BLOCK_IDS.len())
+        self.id().rank()
     }
 
-    /// Parameter values in the order of [`param_specs`].
+    /// Parameter values in the order of [`EffectId::param_specs`].
     fn values(&self) -> Vec<f64> {
-        match self {
-            Self::TransportDelay(b) => vec![b.delay_samples],
-            Self::ThermalSoak(b) => vec![b.gain, b.tau_s],
-            Self::AmbientCorrection(b) => vec![b.output_theta_exp, b.output_delta_exp],
-            Self::AsymmetricDynamics(b) => vec![b.decel_factor],
-            Self::SensorDynamics(b) => vec![b.freq_hz, b.zeta, b.lag_s],
-            Self::StaticMapOrder(b) => vec![b.knot_v, b.slope_change],
-            Self::ScheduledTimeConstant(b) => vec![b.log_ratio, b.state_log_ratio, b.ref_input, b.input_span],
-        }
+        for_each_block!(self, b => b.values())
     }
 
     /// Named parameters (the serialisable form).
     pub fn params(&self) -> BTreeMap<String, f64> {
-        let specs = param_specs(self.id()).unwrap_or(&[]);
+        let specs = self.id().param_specs();
         specs.iter().zip(self.values()).map(|(s, v)| (s.name.to_owned(), v)).collect()
     }
 
     /// Build a block from named parameters; every parameter is required and checked.
-    pub fn from_params(id: &str, params: &BTreeMap<String, f64>) -> Result<Self, EffectError> {
+    pub fn from_params(id: EffectId, params: &BTreeMap<String, f64>) -> Result<Self, EffectError> {
         let v = checked_values(id, params)?;
-        let at = |i| value_at(&v, i);
-        Ok(match check_id(id)? {
-            TransportDelay::ID => Self::TransportDelay(TransportDelay { delay_samples: at(0) }),
-            ThermalSoak::ID => Self::ThermalSoak(ThermalSoak { gain: at(0), tau_s: at(1) }),
-            AmbientCorrection::ID => Self::AmbientCorrection(AmbientCorrection {
-                output_theta_exp: at(0),
-                output_delta_exp: at(1),
-            }),
-            AsymmetricDynamics::ID => Self::AsymmetricDynamics(AsymmetricDynamics { decel_factor: at(0) }),
-            SensorDynamics::ID => {
-                Self::SensorDynamics(SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2) })
-            }
-            ScheduledTimeConstant::ID => Self::ScheduledTimeConstant(ScheduledTimeConstant {
-                log_ratio: at(0),
-                state_log_ratio: at(1),
-                ref_input: at(2),
-                input_span: at(3),
-            }),
-            _ => Self::StaticMapOrder(StaticMapOrder { knot_v: at(0), slope_change: at(1) }),
+        Ok(match id {
+            EffectId::TransportDelay => Self::TransportDelay(Block::from_values(&v)),
+            EffectId::ThermalSoak => Self::ThermalSoak(Block::from_values(&v)),
+            EffectId::AmbientCorrection => Self::AmbientCorrection(Block::from_values(&v)),
+            EffectId::AsymmetricDynamics => Self::AsymmetricDynamics(Block::from_values(&v)),
+            EffectId::ScheduledTimeConstant => Self::ScheduledTimeConstant(Block::from_values(&v)),
+            EffectId::SensorDynamics => Self::SensorDynamics(Block::from_values(&v)),
+            EffectId::StaticMapOrder => Self::StaticMapOrder(Block::from_values(&v)),
         })
     }
 
     /// The serialisable record.
     pub fn record(&self) -> EffectRecord {
-        EffectRecord { id: self.id().to_owned(), params: self.params() }
+        EffectRecord { id: self.id(), params: self.params() }
     }
 
     /// Build from a record (checked).
     pub fn from_record(record: &EffectRecord) -> Result<Self, EffectError> {
-        Self::from_params(&record.id, &record.params)
+        Self::from_params(record.id, &record.params)
     }
 
     /// Channels (besides the input and the output) the block reads from every run.
@@ -393,13 +374,13 @@ mod tests {
             EffectBlock::SensorDynamics(SensorDynamics { freq_hz: 1.4, zeta: 0.06, lag_s: 0.3 }),
             EffectBlock::StaticMapOrder(StaticMapOrder { knot_v: 80_000.0, slope_change: -0.5 }),
         ];
-        for (block, id) in blocks.iter().zip(EFFECT_IDS) {
+        for (block, id) in blocks.iter().zip(EffectId::CATALOG) {
             assert_eq!(block.id(), id);
             let record = block.record();
             let json = serde_json::to_string(&record).unwrap();
             let back: EffectRecord = serde_json::from_str(&json).unwrap();
             assert_eq!(&EffectBlock::from_record(&back).unwrap(), block);
-            assert!(physics(id).unwrap().len() > 20);
+            assert!(id.physics().len() > 20);
         }
     }
 }

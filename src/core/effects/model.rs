@@ -4,8 +4,8 @@ use num_complex::Complex64;
 use super::ambient_correction::Conditions;
 use super::asymmetric_dynamics::SplitShape;
 use super::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectRecord, SensorDynamics,
-    TransportDelay, check_id,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, SensorDynamics,
+    TransportDelay,
 };
 use crate::core::identification::initial_state::{InitialState, fit_free_response};
 use crate::core::identification::pipeline::GrayBoxModel;
@@ -57,25 +57,25 @@ impl ExtendedModel {
     }
 
     /// The effect with this id, if applied.
-    pub fn effect(&self, id: &str) -> Option<&EffectBlock> {
+    pub fn effect(&self, id: EffectId) -> Option<&EffectBlock> {
         self.effects.iter().find(|e| e.id() == id)
     }
 
     /// Ids of the applied effects, in signal-path order.
-    pub fn effect_ids(&self) -> Vec<&'static str> {
+    pub fn effect_ids(&self) -> Vec<EffectId> {
         self.effects.iter().map(EffectBlock::id).collect()
     }
 
     /// The model with one more effect block, as given (nothing is refitted; see `apply_effect`).
     pub fn with_effect(&self, block: EffectBlock) -> Result<Self, EffectError> {
         if self.effect(block.id()).is_some() {
-            return Err(EffectError::AlreadyApplied { effect: block.id().to_owned() });
+            return Err(EffectError::AlreadyApplied { effect: block.id().name().to_owned() });
         }
         if let EffectBlock::SensorDynamics(s) = &block {
             let max = SensorDynamics::max_freq_hz(self.wiener.linear.tf.dt_secs);
             if s.freq_hz > max {
                 return Err(EffectError::ParameterOutOfRange {
-                    effect: SensorDynamics::ID.to_owned(),
+                    effect: EffectId::SensorDynamics.name().to_owned(),
                     param: "freq_hz".to_owned(),
                     value: s.freq_hz,
                     min: 0.0,
@@ -90,10 +90,9 @@ impl ExtendedModel {
     }
 
     /// The model without the effect `id`, as it is (nothing is refitted).
-    pub fn without_effect(&self, id: &str) -> Result<Self, EffectError> {
-        let id = check_id(id)?;
+    pub fn without_effect(&self, id: EffectId) -> Result<Self, EffectError> {
         if self.effect(id).is_none() {
-            return Err(EffectError::NotApplied { effect: id.to_owned() });
+            return Err(EffectError::NotApplied { effect: id.name().to_owned() });
         }
         let mut model = self.clone();
         model.effects.retain(|e| e.id() != id);
@@ -252,7 +251,7 @@ pub(super) fn output_stage(
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use crate::core::effects::{EFFECT_IDS, ThermalSoak, TransportDelay};
+    use crate::core::effects::{ThermalSoak, TransportDelay};
     use crate::core::identification::wiener::unit_gain_tf;
     use crate::core::run::Channel;
 
@@ -282,7 +281,7 @@ mod tests {
         let soaked = m.with_effect(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.2, tau_s: 5.0 })).unwrap();
         let both =
             soaked.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 3.0 })).unwrap();
-        assert_eq!(both.effect_ids(), vec![EFFECT_IDS[0], EFFECT_IDS[1]]);
+        assert_eq!(both.effect_ids(), vec![EffectId::CATALOG[0], EffectId::CATALOG[1]]);
         let y = both.simulate(&r).unwrap();
         assert!((y[22] - plain[0]).abs() < 1e-12, "the delay holds the start");
         assert!(y[60] < plain[60], "the soak slows the rise");
@@ -296,14 +295,14 @@ mod tests {
             model().with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 1.0 })).unwrap();
         assert_eq!(
             m.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 2.0 })),
-            Err(EffectError::AlreadyApplied { effect: "transport_delay".into() })
+            Err(EffectError::AlreadyApplied { effect: EffectId::TransportDelay.name().into() })
         );
         assert_eq!(
-            m.without_effect("thermal_soak"),
-            Err(EffectError::NotApplied { effect: "thermal_soak".into() })
+            m.without_effect(EffectId::ThermalSoak),
+            Err(EffectError::NotApplied { effect: EffectId::ThermalSoak.name().into() })
         );
         assert!(
-            matches!(m.without_effect("warp"), Err(EffectError::UnknownEffect { known, .. }) if known.len() == crate::core::effects::BLOCK_IDS.len())
+            matches!("warp".parse::<EffectId>(), Err(EffectError::UnknownEffect { known, .. }) if known.len() == EffectId::ALL.len())
         );
         let ambient = model().with_effect(EffectBlock::AmbientCorrection(AmbientCorrection {
             output_theta_exp: 0.0,
@@ -313,7 +312,7 @@ mod tests {
         assert_eq!(
             ambient.unwrap().simulate(&run(10)),
             Err(EffectError::MissingChannel {
-                effect: "ambient_correction".into(),
+                effect: EffectId::AmbientCorrection.name().into(),
                 channel: "ambient_temp_c".into(),
                 run: "bench".into()
             })

@@ -1,7 +1,10 @@
 //! `scheduled_time_constant`: the spool's time constant follows the operating point it is heading for.
+use super::Evidence;
 use super::asymmetric_dynamics::SplitShape;
+use super::stats::ResidualTrace;
 use super::stats::mean;
 use super::{AsymmetricDynamics, ParamSpec};
+use super::{Block, EffectId, value_at};
 
 /// A turbojet's spool is slower at low speed. Its power balance J ω ω̇ = P_t(w) − P_c(N), with
 /// compressor power ∝ N³, linearised at speed N gives a time constant τ ∝ 1/N; over a large step
@@ -36,15 +39,6 @@ pub struct ScheduledTimeConstant {
 const MAX_LOG_RATIO: f64 = 3.0;
 
 impl ScheduledTimeConstant {
-    /// Block id.
-    pub const ID: &'static str = "scheduled_time_constant";
-    pub(super) const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec::real("log_ratio", -MAX_LOG_RATIO, MAX_LOG_RATIO),
-        ParamSpec::real("state_log_ratio", -MAX_LOG_RATIO, MAX_LOG_RATIO),
-        ParamSpec::real("ref_input", -1e12, 1e12),
-        ParamSpec::real("input_span", 1e-12, 1e12),
-    ];
-
     /// The block for an input signal, with time constants `ratio` apart over its range.
     pub fn for_input(u: &[f64], log_ratio: f64) -> Self {
         let (lo, hi) = u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
@@ -107,6 +101,31 @@ pub fn respond(
             x
         })
         .collect()
+}
+
+impl Block for ScheduledTimeConstant {
+    const ID: EffectId = EffectId::ScheduledTimeConstant;
+    const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec::real("log_ratio", -MAX_LOG_RATIO, MAX_LOG_RATIO),
+        ParamSpec::real("state_log_ratio", -MAX_LOG_RATIO, MAX_LOG_RATIO),
+        ParamSpec::real("ref_input", -1e12, 1e12),
+        ParamSpec::real("input_span", 1e-12, 1e12),
+    ];
+    const PHYSICS: &'static str = "the spool time constant changes with the operating point (slower at low speed): the \
+         slowest pole is scheduled on the operating point";
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.log_ratio, self.state_log_ratio, self.ref_input, self.input_span]
+    }
+
+    fn from_values(values: &[f64]) -> Self {
+        let at = |i| value_at(values, i);
+        Self { log_ratio: at(0), state_log_ratio: at(1), ref_input: at(2), input_span: at(3) }
+    }
+
+    fn evidence(traces: &[ResidualTrace]) -> Evidence {
+        super::asymmetric_dynamics::level_evidence(traces)
+    }
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, median, welch_spectrum};
+use super::{Block, EffectId, value_at};
 
 /// Load cell / stand resonance and sensor lag: the measured output is the engine's output seen
 /// through a first-order lag `lag_s` and a unit-gain second-order resonance (`freq_hz`, `zeta`),
@@ -25,14 +26,6 @@ const MIN_FREQ_HZ: f64 = 0.05;
 const SPECTRUM_SEGMENT: usize = 128;
 
 impl SensorDynamics {
-    /// Catalog id.
-    pub const ID: &'static str = "sensor_dynamics";
-    pub(super) const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec::real("freq_hz", MIN_FREQ_HZ, 1000.0),
-        ParamSpec::real("zeta", 0.005, 2.0),
-        ParamSpec::real("lag_s", 0.0, 10.0),
-    ];
-
     /// Highest admissible resonance for a sample time, Hz.
     pub fn max_freq_hz(dt_secs: f64) -> f64 {
         0.95 * 0.5 / dt_secs
@@ -166,6 +159,29 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
             "residual spectrum peaks at {freq_hz:.2} Hz, {ratio:.0}× its neighbourhood: {meaning}"
         ),
         supports: ratio > 4.0,
+    }
+}
+
+impl Block for SensorDynamics {
+    const ID: EffectId = EffectId::SensorDynamics;
+    const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec::real("freq_hz", MIN_FREQ_HZ, 1000.0),
+        ParamSpec::real("zeta", 0.005, 2.0),
+        ParamSpec::real("lag_s", 0.0, 10.0),
+    ];
+    const PHYSICS: &'static str = "load cell or stand resonance and sensor lag: a second-order sensor block";
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.freq_hz, self.zeta, self.lag_s]
+    }
+
+    fn from_values(values: &[f64]) -> Self {
+        let at = |i| value_at(values, i);
+        Self { freq_hz: at(0), zeta: at(1), lag_s: at(2) }
+    }
+
+    fn evidence(traces: &[ResidualTrace]) -> Evidence {
+        evidence(traces)
     }
 }
 

@@ -2,6 +2,7 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, plateaus};
+use super::{Block, EffectId, value_at};
 use crate::core::identification::static_map::StaticMap;
 use crate::core::numerics::lstsq::solve_lstsq;
 
@@ -21,11 +22,6 @@ pub struct StaticMapOrder {
 const KNOT_FRACTIONS: [f64; 3] = [0.25, 0.5, 0.75];
 
 impl StaticMapOrder {
-    /// Catalog id.
-    pub const ID: &'static str = "static_map_order";
-    pub(super) const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("knot_v", -1e12, 1e12), ParamSpec::real("slope_change", -1e6, 1e6)];
-
     /// The kink's contribution at `v`.
     pub fn eval(&self, v: f64) -> f64 {
         self.slope_change * (v - self.knot_v).max(0.0)
@@ -118,6 +114,27 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
             points.len()
         ),
         supports: worst > 4.0,
+    }
+}
+
+impl Block for StaticMapOrder {
+    const ID: EffectId = EffectId::StaticMapOrder;
+    const PARAMS: &'static [ParamSpec] =
+        &[ParamSpec::real("knot_v", -1e12, 1e12), ParamSpec::real("slope_change", -1e6, 1e6)];
+    const PHYSICS: &'static str =
+        "the static map is too simple: a kink (bleed valve, limiter) is added to f(v)";
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.knot_v, self.slope_change]
+    }
+
+    fn from_values(values: &[f64]) -> Self {
+        let at = |i| value_at(values, i);
+        Self { knot_v: at(0), slope_change: at(1) }
+    }
+
+    fn evidence(traces: &[ResidualTrace]) -> Evidence {
+        evidence(traces)
     }
 }
 

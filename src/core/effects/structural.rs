@@ -14,7 +14,7 @@
 use num_complex::Complex64;
 
 use super::fit::{Assembled, REFINED_STARTS, Structure, assemble, refine};
-use super::{EffectBlock, EffectError, ExtendedModel, FitData, ScheduledTimeConstant, apply_effect};
+use super::{EffectBlock, EffectError, EffectId, ExtendedModel, FitData, apply_effect};
 use crate::core::identification::cluster::natural_freq_and_damping;
 use crate::core::identification::direct_fit::{pair_guesses, real_pole_guesses};
 use crate::core::identification::structure::root_words;
@@ -45,7 +45,7 @@ impl StructuralChange {
             Self::PolePair => "extra_pole_pair",
             Self::Zero => "extra_zero",
             Self::MapOrder => "higher_map_order",
-            Self::ScheduledTimeConstant => ScheduledTimeConstant::ID,
+            Self::ScheduledTimeConstant => EffectId::ScheduledTimeConstant.name(),
         }
     }
 
@@ -78,8 +78,8 @@ pub fn refine_structure(
     data: &FitData,
 ) -> Result<(ExtendedModel, String), EffectError> {
     if change == StructuralChange::ScheduledTimeConstant {
-        let fitted = apply_effect(model, ScheduledTimeConstant::ID, data)?;
-        let words = fitted.effect(ScheduledTimeConstant::ID).map_or_else(String::new, |b| match b {
+        let fitted = apply_effect(model, EffectId::ScheduledTimeConstant, data)?;
+        let words = fitted.effect(EffectId::ScheduledTimeConstant).map_or_else(String::new, |b| match b {
             EffectBlock::ScheduledTimeConstant(s) => format!(
                 "the spool time constant follows the operating point: {:.2} times as long at the low end of \
                  the identified range as at the high end",

@@ -2,6 +2,7 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, correlation, low_pass};
+use super::{Block, EffectId, value_at};
 
 /// Casing and rotor soak: after a power change the metal absorbs a share `gain` of it and gives it
 /// back with the slow time constant `tau_s` (tens of seconds). In the model a parallel slow
@@ -20,11 +21,6 @@ pub struct ThermalSoak {
 const TAU_GRID_S: [f64; 6] = [5.0, 10.0, 20.0, 40.0, 80.0, 160.0];
 
 impl ThermalSoak {
-    /// Catalog id.
-    pub const ID: &'static str = "thermal_soak";
-    pub(super) const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("gain", -0.9, 0.9), ParamSpec::real("tau_s", 0.1, 5000.0)];
-
     /// The linear block's output with the soak branch added.
     pub fn apply(&self, v: &[f64], dt_secs: f64) -> Vec<f64> {
         let slow = low_pass(v, dt_secs, self.tau_s);
@@ -76,6 +72,27 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
             "residual follows the {tau_s:.0} s-filtered history of the response, r = {r:.2}: {meaning}"
         ),
         supports: r.abs() > 0.2,
+    }
+}
+
+impl Block for ThermalSoak {
+    const ID: EffectId = EffectId::ThermalSoak;
+    const PARAMS: &'static [ParamSpec] =
+        &[ParamSpec::real("gain", -0.9, 0.9), ParamSpec::real("tau_s", 0.1, 5000.0)];
+    const PHYSICS: &'static str = "casing and rotor absorb heat after a power change: a share g of every change arrives \
+         with a slow time constant τ";
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.gain, self.tau_s]
+    }
+
+    fn from_values(values: &[f64]) -> Self {
+        let at = |i| value_at(values, i);
+        Self { gain: at(0), tau_s: at(1) }
+    }
+
+    fn evidence(traces: &[ResidualTrace]) -> Evidence {
+        evidence(traces)
     }
 }
 

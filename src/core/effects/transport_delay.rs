@@ -2,6 +2,7 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, median};
+use super::{Block, EffectId, value_at};
 
 /// Fuel line and valve dead time: the fuel command reaches the engine `delay_samples` samples late,
 /// so the input is delayed by z⁻ᵈ before the linear block. The delay may be fractional (linear
@@ -20,11 +21,6 @@ const MAX_DELAY_SECS: f64 = 2.5;
 const MAX_DELAY_SAMPLES: f64 = 1000.0;
 
 impl TransportDelay {
-    /// Catalog id.
-    pub const ID: &'static str = "transport_delay";
-    pub(super) const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("delay_samples", 0.0, MAX_DELAY_SAMPLES)];
-
     /// The delay in seconds for a sample time.
     pub fn delay_secs(&self, dt_secs: f64) -> f64 {
         self.delay_samples * dt_secs
@@ -185,6 +181,26 @@ pub fn lateness(traces: &[ResidualTrace]) -> Lateness {
 pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let late = lateness(traces);
     Evidence { supports: late.steps > 0 && late.onset_secs >= 2.0 * late.dt_secs, sentence: late.sentence() }
+}
+
+impl Block for TransportDelay {
+    const ID: EffectId = EffectId::TransportDelay;
+    const PARAMS: &'static [ParamSpec] = &[ParamSpec::real("delay_samples", 0.0, MAX_DELAY_SAMPLES)];
+    const PHYSICS: &'static str =
+        "fuel line and valve dead time: the input reaches the engine d samples late";
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.delay_samples]
+    }
+
+    fn from_values(values: &[f64]) -> Self {
+        let at = |i| value_at(values, i);
+        Self { delay_samples: at(0) }
+    }
+
+    fn evidence(traces: &[ResidualTrace]) -> Evidence {
+        evidence(traces)
+    }
 }
 
 #[cfg(test)]

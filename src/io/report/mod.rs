@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::compare::{ModelKind, PaperOutput};
 use crate::core::diagnose::HistoryStep;
+use crate::core::effects::EffectId;
 use crate::core::numerics::metrics::Metrics;
 use crate::io::atomic::write_atomic;
 
@@ -44,7 +45,7 @@ pub struct OutputReport {
     pub models: BTreeMap<String, BTreeMap<String, Metrics>>,
     pub identified: IdentSummary,
     pub diagnosis: Vec<DiagnosisEntry>,
-    pub effects_applied: Vec<String>,
+    pub effects_applied: Vec<EffectId>,
     pub error_history: Vec<HistoryStep>,
     /// model → run → box-plot statistics of the percentage error 100·(y − ŷ)/y.
     #[serde(default)]

@@ -1,7 +1,6 @@
 //! `ambient_correction`: the engine scales with inlet conditions.
 use super::Evidence;
 use super::stats::{ResidualTrace, correlation};
-use super::{Block, EffectId, value_at};
 use super::{EffectError, ParamSpec};
 use crate::core::run::Run;
 
@@ -46,7 +45,7 @@ impl AmbientCorrection {
             Ok(Self { output_theta_exp: 0.0, output_delta_exp: 1.0 })
         } else {
             Err(EffectError::NotApplicable {
-                effect: Self::ID.name().to_owned(),
+                effect: <Self as super::Block>::ID.name().to_owned(),
                 reason: format!("no corrected form is known for output '{output}' (only speed and thrust)"),
             })
         }
@@ -57,7 +56,7 @@ impl AmbientCorrection {
         let [temp, pressure] = [Self::CHANNELS[0], Self::CHANNELS[1]].map(|name| {
             let channel =
                 run.aux(name).or_else(|| run.channel(name)).ok_or_else(|| EffectError::MissingChannel {
-                    effect: Self::ID.name().to_owned(),
+                    effect: <Self as super::Block>::ID.name().to_owned(),
                     channel: name.to_owned(),
                     run: run.name.clone(),
                 })?;
@@ -135,26 +134,13 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     Evidence { sentence: format!("residual tracks {name}, r = {r:.2}: {meaning}"), supports: r.abs() > 0.2 }
 }
 
-impl Block for AmbientCorrection {
-    const ID: EffectId = EffectId::AmbientCorrection;
-    const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("output_theta_exp", 0.0, 1.5), ParamSpec::real("output_delta_exp", 0.0, 1.5)];
-    const PHYSICS: &'static str = "the engine scales with inlet conditions: it runs on corrected fuel u/(δ√θ) and gives \
-         corrected speed N/√θ or thrust F/δ";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.output_theta_exp, self.output_delta_exp]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { output_theta_exp: at(0), output_delta_exp: at(1) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        evidence(traces)
-    }
-}
+block_impl!(
+    AmbientCorrection { output_theta_exp, output_delta_exp },
+    params: &[ParamSpec::real("output_theta_exp", 0.0, 1.5), ParamSpec::real("output_delta_exp", 0.0, 1.5)],
+    physics: "the engine scales with inlet conditions: it runs on corrected fuel u/(δ√θ) and gives \
+         corrected speed N/√θ or thrust F/δ",
+    evidence: evidence
+);
 
 #[cfg(test)]
 mod tests {

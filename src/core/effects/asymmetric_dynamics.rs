@@ -1,5 +1,4 @@
 //! `asymmetric_dynamics`: acceleration and deceleration differ.
-use super::{Block, EffectId, value_at};
 use num_complex::Complex64;
 
 use super::Evidence;
@@ -32,7 +31,7 @@ impl AsymmetricDynamics {
     /// Split off the slowest real pole in (0, 1).
     pub fn split(poles: &[Complex64], zeros: &[Complex64], dt_secs: f64) -> Result<SplitShape, EffectError> {
         let not_applicable = |reason: &str| EffectError::NotApplicable {
-            effect: Self::ID.name().to_owned(),
+            effect: <Self as super::Block>::ID.name().to_owned(),
             reason: reason.to_owned(),
         };
         let index = poles
@@ -142,25 +141,12 @@ pub(super) fn level_evidence(traces: &[ResidualTrace]) -> Evidence {
     }
 }
 
-impl Block for AsymmetricDynamics {
-    const ID: EffectId = EffectId::AsymmetricDynamics;
-    const PARAMS: &'static [ParamSpec] = &[ParamSpec::real("decel_factor", 0.1, 10.0)];
-    const PHYSICS: &'static str =
-        "acceleration and deceleration differ: the spool time constant is scaled while slowing down";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.decel_factor]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { decel_factor: at(0) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        evidence(traces)
-    }
-}
+block_impl!(
+    AsymmetricDynamics { decel_factor },
+    params: &[ParamSpec::real("decel_factor", 0.1, 10.0)],
+    physics: "acceleration and deceleration differ: the spool time constant is scaled while slowing down",
+    evidence: evidence
+);
 
 #[cfg(test)]
 mod tests {

@@ -18,6 +18,31 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+/// `block_impl!(Type { field, … }, params: …, physics: …, evidence: fn)`: the [`Block`] of a block
+/// whose parameters are its fields, in the order of its parameter specs.
+macro_rules! block_impl {
+    ($t:ident { $($field:ident),+ }, params: $params:expr, physics: $physics:expr, evidence: $evidence:expr) => {
+        impl super::Block for $t {
+            const ID: super::EffectId = super::EffectId::$t;
+            const PARAMS: &'static [ParamSpec] = $params;
+            const PHYSICS: &'static str = $physics;
+
+            fn values(&self) -> Vec<f64> {
+                vec![$(self.$field),+]
+            }
+
+            fn from_values(values: &[f64]) -> Self {
+                let mut values = values.iter().copied();
+                Self { $($field: values.next().unwrap_or(0.0)),+ }
+            }
+
+            fn evidence(traces: &[ResidualTrace]) -> Evidence {
+                $evidence(traces)
+            }
+        }
+    };
+}
+
 mod ambient_correction;
 mod asymmetric_dynamics;
 mod fit;
@@ -128,76 +153,62 @@ pub trait Block: Sized {
     fn evidence(traces: &[stats::ResidualTrace]) -> Evidence;
 }
 
-fn block_id<B: Block>(_: &B) -> EffectId {
-    B::ID
+/// What [`EffectId`] needs of a block type, gathered once per id.
+struct BlockInfo {
+    params: &'static [ParamSpec],
+    physics: &'static str,
+    evidence: fn(&[stats::ResidualTrace]) -> Evidence,
 }
 
-/// `for_each_block!(block, b => expr)`: `expr` with `b` bound to the block inside any variant.
-macro_rules! for_each_block {
-    ($value:expr, $b:ident => $body:expr) => {
-        match $value {
-            EffectBlock::TransportDelay($b) => $body,
-            EffectBlock::ThermalSoak($b) => $body,
-            EffectBlock::AmbientCorrection($b) => $body,
-            EffectBlock::AsymmetricDynamics($b) => $body,
-            EffectBlock::ScheduledTimeConstant($b) => $body,
-            EffectBlock::SensorDynamics($b) => $body,
-            EffectBlock::StaticMapOrder($b) => $body,
-        }
-    };
+impl BlockInfo {
+    fn of<B: Block>() -> Self {
+        Self { params: B::PARAMS, physics: B::PHYSICS, evidence: B::evidence }
+    }
 }
 
-/// `for_each_id!(id, B => expr)`: `expr` with `B` the block type of `id`.
-macro_rules! for_each_id {
-    ($id:expr, $t:ident => $body:expr) => {
-        match $id {
-            EffectId::TransportDelay => {
-                type $t = TransportDelay;
-                $body
-            }
-            EffectId::ThermalSoak => {
-                type $t = ThermalSoak;
-                $body
-            }
-            EffectId::AmbientCorrection => {
-                type $t = AmbientCorrection;
-                $body
-            }
-            EffectId::AsymmetricDynamics => {
-                type $t = AsymmetricDynamics;
-                $body
-            }
-            EffectId::ScheduledTimeConstant => {
-                type $t = ScheduledTimeConstant;
-                $body
-            }
-            EffectId::SensorDynamics => {
-                type $t = SensorDynamics;
-                $body
-            }
-            EffectId::StaticMapOrder => {
-                type $t = StaticMapOrder;
-                $body
-            }
-        }
-    };
+/// The object-safe part of [`Block`], for a block held in an [`EffectBlock`].
+trait BlockValues {
+    fn id(&self) -> EffectId;
+    fn values(&self) -> Vec<f64>;
+}
+
+impl<B: Block> BlockValues for B {
+    fn id(&self) -> EffectId {
+        B::ID
+    }
+
+    fn values(&self) -> Vec<f64> {
+        Block::values(self)
+    }
 }
 
 impl EffectId {
+    fn info(self) -> BlockInfo {
+        match self {
+            Self::TransportDelay => BlockInfo::of::<TransportDelay>(),
+            Self::ThermalSoak => BlockInfo::of::<ThermalSoak>(),
+            Self::AmbientCorrection => BlockInfo::of::<AmbientCorrection>(),
+            Self::AsymmetricDynamics => BlockInfo::of::<AsymmetricDynamics>(),
+            Self::ScheduledTimeConstant => BlockInfo::of::<ScheduledTimeConstant>(),
+            Self::SensorDynamics => BlockInfo::of::<SensorDynamics>(),
+            Self::StaticMapOrder => BlockInfo::of::<StaticMapOrder>(),
+        }
+    }
+
     /// The parameters the block accepts.
     pub fn param_specs(self) -> &'static [ParamSpec] {
-        for_each_id!(self, B => B::PARAMS)
+        self.info().params
     }
 
     /// What the block means physically and what it changes in the model, in one sentence.
     pub fn physics(self) -> &'static str {
-        for_each_id!(self, B => B::PHYSICS)
+        self.info().physics
     }
 
     /// The evidence for the block, computed from the current model's residuals on the given runs
     /// (identification range and validation runs).
     pub fn evidence(self, traces: &[stats::ResidualTrace]) -> Evidence {
-        for_each_id!(self, B => B::evidence(traces))
+        (self.info().evidence)(traces)
     }
 }
 
@@ -270,15 +281,22 @@ fn check_value(id: EffectId, spec: &ParamSpec, value: Option<f64>) -> Result<f64
     Ok(value)
 }
 
-/// The value at `index` of a checked list (specs and values have equal lengths by construction).
-pub(crate) fn value_at(values: &[f64], index: usize) -> f64 {
-    values.get(index).copied().unwrap_or(0.0)
-}
-
 impl EffectBlock {
     /// The block's id.
     pub fn id(&self) -> EffectId {
-        for_each_block!(self, b => block_id(b))
+        self.as_values().id()
+    }
+
+    fn as_values(&self) -> &dyn BlockValues {
+        match self {
+            Self::TransportDelay(b) => b,
+            Self::ThermalSoak(b) => b,
+            Self::AmbientCorrection(b) => b,
+            Self::AsymmetricDynamics(b) => b,
+            Self::ScheduledTimeConstant(b) => b,
+            Self::SensorDynamics(b) => b,
+            Self::StaticMapOrder(b) => b,
+        }
     }
 
     /// Position in the signal path.
@@ -288,7 +306,7 @@ impl EffectBlock {
 
     /// Parameter values in the order of [`EffectId::param_specs`].
     fn values(&self) -> Vec<f64> {
-        for_each_block!(self, b => b.values())
+        self.as_values().values()
     }
 
     /// Named parameters (the serialisable form).

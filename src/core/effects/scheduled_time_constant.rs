@@ -4,7 +4,6 @@ use super::asymmetric_dynamics::SplitShape;
 use super::stats::ResidualTrace;
 use super::stats::mean;
 use super::{AsymmetricDynamics, ParamSpec};
-use super::{Block, EffectId, value_at};
 
 /// A turbojet's spool is slower at low speed. Its power balance J ω ω̇ = P_t(w) − P_c(N), with
 /// compressor power ∝ N³, linearised at speed N gives a time constant τ ∝ 1/N; over a large step
@@ -103,30 +102,18 @@ pub fn respond(
         .collect()
 }
 
-impl Block for ScheduledTimeConstant {
-    const ID: EffectId = EffectId::ScheduledTimeConstant;
-    const PARAMS: &'static [ParamSpec] = &[
+block_impl!(
+    ScheduledTimeConstant { log_ratio, state_log_ratio, ref_input, input_span },
+    params: &[
         ParamSpec::real("log_ratio", -MAX_LOG_RATIO, MAX_LOG_RATIO),
         ParamSpec::real("state_log_ratio", -MAX_LOG_RATIO, MAX_LOG_RATIO),
         ParamSpec::real("ref_input", -1e12, 1e12),
         ParamSpec::real("input_span", 1e-12, 1e12),
-    ];
-    const PHYSICS: &'static str = "the spool time constant changes with the operating point (slower at low speed): the \
-         slowest pole is scheduled on the operating point";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.log_ratio, self.state_log_ratio, self.ref_input, self.input_span]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { log_ratio: at(0), state_log_ratio: at(1), ref_input: at(2), input_span: at(3) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        super::asymmetric_dynamics::level_evidence(traces)
-    }
-}
+    ],
+    physics: "the spool time constant changes with the operating point (slower at low speed): the \
+         slowest pole is scheduled on the operating point",
+    evidence: super::asymmetric_dynamics::level_evidence
+);
 
 #[cfg(test)]
 mod tests {

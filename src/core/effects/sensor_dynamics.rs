@@ -2,7 +2,6 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, median, welch_spectrum};
-use super::{Block, EffectId, value_at};
 
 /// Load cell / stand resonance and sensor lag: the measured output is the engine's output seen
 /// through a first-order lag `lag_s` and a unit-gain second-order resonance (`freq_hz`, `zeta`),
@@ -162,28 +161,16 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     }
 }
 
-impl Block for SensorDynamics {
-    const ID: EffectId = EffectId::SensorDynamics;
-    const PARAMS: &'static [ParamSpec] = &[
+block_impl!(
+    SensorDynamics { freq_hz, zeta, lag_s },
+    params: &[
         ParamSpec::real("freq_hz", MIN_FREQ_HZ, 1000.0),
         ParamSpec::real("zeta", 0.005, 2.0),
         ParamSpec::real("lag_s", 0.0, 10.0),
-    ];
-    const PHYSICS: &'static str = "load cell or stand resonance and sensor lag: a second-order sensor block";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.freq_hz, self.zeta, self.lag_s]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { freq_hz: at(0), zeta: at(1), lag_s: at(2) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        evidence(traces)
-    }
-}
+    ],
+    physics: "load cell or stand resonance and sensor lag: a second-order sensor block",
+    evidence: evidence
+);
 
 #[cfg(test)]
 mod tests {

@@ -2,7 +2,6 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, plateaus};
-use super::{Block, EffectId, value_at};
 use crate::core::identification::static_map::StaticMap;
 use crate::core::numerics::lstsq::solve_lstsq;
 
@@ -117,26 +116,12 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     }
 }
 
-impl Block for StaticMapOrder {
-    const ID: EffectId = EffectId::StaticMapOrder;
-    const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("knot_v", -1e12, 1e12), ParamSpec::real("slope_change", -1e6, 1e6)];
-    const PHYSICS: &'static str =
-        "the static map is too simple: a kink (bleed valve, limiter) is added to f(v)";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.knot_v, self.slope_change]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { knot_v: at(0), slope_change: at(1) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        evidence(traces)
-    }
-}
+block_impl!(
+    StaticMapOrder { knot_v, slope_change },
+    params: &[ParamSpec::real("knot_v", -1e12, 1e12), ParamSpec::real("slope_change", -1e6, 1e6)],
+    physics: "the static map is too simple: a kink (bleed valve, limiter) is added to f(v)",
+    evidence: evidence
+);
 
 #[cfg(test)]
 mod tests {

@@ -2,7 +2,6 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, correlation, low_pass};
-use super::{Block, EffectId, value_at};
 
 /// Casing and rotor soak: after a power change the metal absorbs a share `gain` of it and gives it
 /// back with the slow time constant `tau_s` (tens of seconds). In the model a parallel slow
@@ -75,26 +74,13 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     }
 }
 
-impl Block for ThermalSoak {
-    const ID: EffectId = EffectId::ThermalSoak;
-    const PARAMS: &'static [ParamSpec] =
-        &[ParamSpec::real("gain", -0.9, 0.9), ParamSpec::real("tau_s", 0.1, 5000.0)];
-    const PHYSICS: &'static str = "casing and rotor absorb heat after a power change: a share g of every change arrives \
-         with a slow time constant τ";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.gain, self.tau_s]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { gain: at(0), tau_s: at(1) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        evidence(traces)
-    }
-}
+block_impl!(
+    ThermalSoak { gain, tau_s },
+    params: &[ParamSpec::real("gain", -0.9, 0.9), ParamSpec::real("tau_s", 0.1, 5000.0)],
+    physics: "casing and rotor absorb heat after a power change: a share g of every change arrives \
+         with a slow time constant τ",
+    evidence: evidence
+);
 
 #[cfg(test)]
 mod tests {

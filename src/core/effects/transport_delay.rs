@@ -2,7 +2,6 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, median};
-use super::{Block, EffectId, value_at};
 
 /// Fuel line and valve dead time: the fuel command reaches the engine `delay_samples` samples late,
 /// so the input is delayed by z⁻ᵈ before the linear block. The delay may be fractional (linear
@@ -183,25 +182,12 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     Evidence { supports: late.steps > 0 && late.onset_secs >= 2.0 * late.dt_secs, sentence: late.sentence() }
 }
 
-impl Block for TransportDelay {
-    const ID: EffectId = EffectId::TransportDelay;
-    const PARAMS: &'static [ParamSpec] = &[ParamSpec::real("delay_samples", 0.0, MAX_DELAY_SAMPLES)];
-    const PHYSICS: &'static str =
-        "fuel line and valve dead time: the input reaches the engine d samples late";
-
-    fn values(&self) -> Vec<f64> {
-        vec![self.delay_samples]
-    }
-
-    fn from_values(values: &[f64]) -> Self {
-        let at = |i| value_at(values, i);
-        Self { delay_samples: at(0) }
-    }
-
-    fn evidence(traces: &[ResidualTrace]) -> Evidence {
-        evidence(traces)
-    }
-}
+block_impl!(
+    TransportDelay { delay_samples },
+    params: &[ParamSpec::real("delay_samples", 0.0, MAX_DELAY_SAMPLES)],
+    physics: "fuel line and valve dead time: the input reaches the engine d samples late",
+    evidence: evidence
+);
 
 #[cfg(test)]
 mod tests {

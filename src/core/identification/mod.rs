@@ -8,6 +8,7 @@ pub mod arx;
 pub mod cluster;
 pub mod cluster_proposal;
 pub mod cross_validation;
+pub mod dead_time;
 pub mod direct_fit;
 pub mod initial_state;
 pub mod pipeline;

@@ -35,15 +35,16 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::identification::arx;
 use crate::core::identification::cluster::{self, Cluster, ClusterEval, RootKind};
+use crate::core::identification::cluster_proposal::propose_clusters;
 use crate::core::identification::cross_validation::{
     Gain, Noise, cross_validate, fitted, fmt_error, model_error_reduction,
 };
+pub use crate::core::identification::dead_time::DeadTimeVerdict;
+use crate::core::identification::dead_time::{apparent_nk, group_delay_secs, with_dead_time};
 use crate::core::identification::direct_fit::{DirectFit, direct_fit};
 use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits};
-use crate::core::identification::reduce::{IdentData, Polished, RootGroup, assemble_groups, count_of};
-use crate::core::numerics::stats::mean;
+use crate::core::identification::reduce::{IdentData, Polished, RootGroup, count_of};
 use crate::core::run::Run;
 
 /// Smallest share of the held-out RMS error a root must remove to enter the model.
@@ -91,47 +92,6 @@ pub struct Proposal {
     pub direct: Option<DirectFit>,
 }
 
-/// The input dead time the reduced model may carry (a fuel line and valve delay), as a candidate of
-/// the proposal like a root: what the segment ARX models say, and what the cross-validation said.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct DeadTimeVerdict {
-    /// Dead time tried (or kept), samples.
-    pub samples: usize,
-    pub dt_secs: f64,
-    pub kept: bool,
-    /// The segment ARX models' input delay, samples (1: none beyond the sampling).
-    pub arx_nk: usize,
-    pub reason: String,
-}
-
-impl DeadTimeVerdict {
-    fn untried(data: &IdentData) -> Self {
-        Self {
-            samples: data.delay,
-            dt_secs: data.fits.dt_secs,
-            kept: data.delay > 0,
-            arx_nk: data.fits.nk(),
-            reason: "not tried".to_owned(),
-        }
-    }
-
-    /// The dead time the model carries, samples (0 when none was kept).
-    pub fn in_model(&self) -> usize {
-        if self.kept { self.samples } else { 0 }
-    }
-
-    /// The sentence the report and the app show.
-    pub fn sentence(&self) -> String {
-        format!(
-            "input dead time {:.2} s ({} samples; the segment ARX models fit best with the input {} samples late): {}",
-            self.samples as f64 * self.dt_secs,
-            self.samples,
-            self.arx_nk,
-            self.reason
-        )
-    }
-}
-
 impl Proposal {
     /// One sentence per candidate, and the direct fit's note.
     pub fn sentences(&self) -> Vec<String> {
@@ -173,7 +133,7 @@ pub fn propose(
     ident: &Run,
     settings: &OutputSettings,
 ) -> Result<Proposal, PipelineError> {
-    let candidates = cluster::propose_clusters(&fits.roots, &settings.cluster, fits.dt_secs)?;
+    let candidates = propose_clusters(&fits.roots, &settings.cluster, fits.dt_secs)?;
     let evals = cluster::evaluate_clusters(&candidates, &fits.roots, &settings.cluster, fits.dt_secs)?;
     let data = IdentData::new(fits, ident, settings)?;
     let mut verdicts: Vec<CandidateVerdict> = evals.iter().map(|e| verdict(e, fits.roots.len())).collect();
@@ -471,65 +431,4 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
     }
     kept.sort_unstable();
     Selection { kept, dead_time }
-}
-
-/// The dead time candidate beside `groups`, around `excess` samples (the late start the roots do not
-/// explain): the whole delays next to it screened on the identification error with the roots as they
-/// are, the best few polished with the roots.
-fn with_dead_time(data: &IdentData, groups: &[RootGroup], excess: usize) -> Option<(Polished, usize)> {
-    let max = ((crate::core::identification::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round()
-        as usize)
-        .max(1);
-    let mut screened: Vec<(f64, usize)> = (excess.saturating_sub(1).max(1)..=(excess + 1).min(max))
-        .filter_map(|d| {
-            assemble_groups(&data.with_delay(d), groups, data.settings.static_order)
-                .ok()
-                .map(|a| (a.rms(), d))
-        })
-        .collect();
-    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
-    screened
-        .into_iter()
-        .take(REFINED_GUESSES)
-        .filter_map(|(_, d)| fitted(&data.with_delay(d), groups).map(|p| (p, d)))
-        .min_by(|a, b| a.0.assembled.rms().total_cmp(&b.0.assembled.rms()))
-}
-
-/// Low-frequency group delay of a root group, s: τ for a real pole, 2ζ/ωn for a pair (the slope of
-/// its phase at ω → 0); zero for a zero or a root that is not a stable pole.
-fn group_delay_secs(g: &RootGroup, dt_secs: f64) -> f64 {
-    if g.kind != RootKind::Pole {
-        return 0.0;
-    }
-    let (omega, zeta, tau) = g.s_plane(dt_secs);
-    match (g.pair, tau) {
-        (false, Some(tau)) => tau,
-        (true, _) if omega > 0.0 => 2.0 * zeta / omega,
-        _ => 0.0,
-    }
-}
-
-/// The input delay at which short-B ARX models fit a model's own simulated step responses best (the
-/// same estimator that timed the data, [`arx::estimate_dead_time`]): how late the model itself starts.
-fn apparent_nk(data: &IdentData, assembled: &crate::core::identification::reduce::Assembled) -> usize {
-    let simulated: Vec<f64> = data.y.iter().zip(&assembled.residual).map(|(y, r)| y + r).collect();
-    let deviations: Vec<(Vec<f64>, Vec<f64>)> = data
-        .fits
-        .segments
-        .iter()
-        .filter_map(|seg| {
-            let (a, s, b) = (
-                seg.start.checked_sub(data.start)?,
-                seg.step_at.checked_sub(data.start)?,
-                seg.end.checked_sub(data.start)?,
-            );
-            let (u, y) = (data.u.get(a..b)?, simulated.get(a..b)?);
-            let (u0, y0) = (mean(data.u.get(a..s)?), mean(simulated.get(a..s)?));
-            Some((u.iter().map(|x| x - u0).collect(), y.iter().map(|x| x - y0).collect()))
-        })
-        .collect();
-    let max = ((crate::core::identification::pipeline::MAX_DEAD_TIME_SECS / data.fits.dt_secs).round()
-        as usize)
-        .clamp(1, 50);
-    arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
 }

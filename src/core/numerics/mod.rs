@@ -1,12 +1,15 @@
 //! Numerical building blocks with no knowledge of engines: least squares (`lstsq`), polynomials
 //! and their roots (`poly`), discrete transfer functions (`tf`), Levenberg–Marquardt (`lm`), the
-//! paper's metrics (`metrics`), spectral estimates (`spectral`) and noise distributions
-//! (`noise_fit`).
+//! paper's metrics (`metrics`), spectral estimates (`spectral`) and their −3 dB cut-offs (`cutoff`),
+//! noise distributions (`noise_fit`, with the special functions in `special`) and small statistics
+//! (`stats`).
+pub mod cutoff;
 pub mod lm;
 pub mod lstsq;
 pub mod metrics;
 pub mod noise_fit;
 pub mod poly;
+pub mod special;
 pub mod spectral;
 pub mod stats;
 pub mod tf;

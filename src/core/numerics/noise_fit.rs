@@ -3,13 +3,14 @@
 //! Every fit works on centred and scaled data internally (a fuel channel at 5.43 with σ ≈ 0.003 or a
 //! speed channel at 73,850 rpm with σ ≈ 51 both become O(1) numbers) and reports its parameters and
 //! log-likelihood on the raw data.
+pub use crate::core::numerics::special::ln_gamma;
+use crate::core::numerics::special::{HALF_LN_2PI, ln_gamma_ratio_half, ln_minus_digamma, stirling_a};
 use rand::Rng;
 use rand_distr::{Gamma, Open01, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 /// Euler–Mascheroni constant, the mean of the standard maximum-value Gumbel.
 const EULER_GAMMA: f64 = 0.577_215_664_901_532_9;
-const HALF_LN_2PI: f64 = 0.918_938_533_204_672_8;
 /// The smallest sample any of the two-parameter fits accepts (also the shortest Monte Carlo run).
 pub const MIN_SAMPLES: usize = 3;
 
@@ -483,48 +484,4 @@ fn fit_nakagami_scaled(data: &[f64], c: f64) -> Result<(f64, f64), NoiseFitError
         if ln_minus_digamma(mid.exp()) > delta { lo = mid } else { hi = mid }
     }
     Ok(((0.5 * (lo + hi)).exp(), 1.0 + mean_sq_minus_one))
-}
-
-/// Stirling series tail S(x) in ln Γ(x) = (x − ½) ln x − x + ½ ln 2π + S(x), for x ≥ 10.
-fn stirling_tail(x: f64) -> f64 {
-    let r = 1.0 / (x * x);
-    (1.0 / 12.0 - r * (1.0 / 360.0 - r * (1.0 / 1260.0 - r / 1680.0))) / x
-}
-
-/// ln Γ(x) for x > 0 (recurrence up to x ≥ 10, then Stirling).
-pub fn ln_gamma(x: f64) -> f64 {
-    let mut shift = 0.0;
-    let mut x = x;
-    while x < 10.0 {
-        shift += x.ln();
-        x += 1.0;
-    }
-    (x - 0.5) * x.ln() - x + HALF_LN_2PI + stirling_tail(x) - shift
-}
-
-/// m ln m − ln Γ(m) − m, free of cancellation for large m.
-fn stirling_a(m: f64) -> f64 {
-    if m >= 10.0 { 0.5 * m.ln() - HALF_LN_2PI - stirling_tail(m) } else { m * m.ln() - ln_gamma(m) - m }
-}
-
-/// ln Γ(m + ½) − ln Γ(m) − ½ ln m, free of cancellation for large m.
-fn ln_gamma_ratio_half(m: f64) -> f64 {
-    if m >= 10.0 {
-        m * (0.5 / m).ln_1p() - 0.5 + stirling_tail(m + 0.5) - stirling_tail(m)
-    } else {
-        ln_gamma(m + 0.5) - ln_gamma(m) - 0.5 * m.ln()
-    }
-}
-
-/// ln x − ψ(x) for x > 0 (recurrence up to x ≥ 10, then the asymptotic series).
-fn ln_minus_digamma(x: f64) -> f64 {
-    let mut correction = 0.0;
-    let mut y = x;
-    while y < 10.0 {
-        correction += 1.0 / y;
-        y += 1.0;
-    }
-    let r = 1.0 / (y * y);
-    let tail = 1.0 / (2.0 * y) + r * (1.0 / 12.0 - r * (1.0 / 120.0 - r * (1.0 / 252.0 - r / 240.0)));
-    tail - (y / x).ln() + correction
 }

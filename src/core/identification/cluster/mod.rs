@@ -22,8 +22,6 @@
 use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 
-pub use super::cluster_proposal::propose_clusters;
-
 type Complex64 = Complex<f64>;
 
 /// A cluster counts as on the real axis when |Im c| ≤ this fraction of its radius.
@@ -480,35 +478,8 @@ pub fn natural_freq_and_damping(z: Complex64, dt_secs: f64) -> (f64, f64) {
     (omega, damping)
 }
 
-/// Serialises a complex number as `[re, im]`.
-mod complex_serde {
-    use super::Complex64;
-    use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-    pub fn serialize<S: Serializer>(z: &Complex64, s: S) -> Result<S::Ok, S::Error> {
-        [z.re, z.im].serialize(s)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Complex64, D::Error> {
-        let [re, im] = <[f64; 2]>::deserialize(d)?;
-        Ok(Complex64::new(re, im))
-    }
-}
-
-/// Serialises complex numbers as a list of `[re, im]`.
-mod complex_vec_serde {
-    use super::Complex64;
-    use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-    pub fn serialize<S: Serializer>(zs: &[Complex64], s: S) -> Result<S::Ok, S::Error> {
-        zs.iter().map(|z| [z.re, z.im]).collect::<Vec<_>>().serialize(s)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Complex64>, D::Error> {
-        let pairs = Vec::<[f64; 2]>::deserialize(d)?;
-        Ok(pairs.into_iter().map(|[re, im]| Complex64::new(re, im)).collect())
-    }
-}
+mod complex_serde;
+mod complex_vec_serde;
 
 #[cfg(test)]
 mod tests;

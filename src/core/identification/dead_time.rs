@@ -1,0 +1,113 @@
+//! The input dead time as a candidate of the proposal (`core::identification::structure`): its
+//! verdict, the screening of whole delays beside the kept roots, and how late a model itself starts.
+use serde::{Deserialize, Serialize};
+
+use crate::core::identification::arx;
+use crate::core::identification::cluster::RootKind;
+use crate::core::identification::cross_validation::fitted;
+use crate::core::identification::pipeline::MAX_DEAD_TIME_SECS;
+use crate::core::identification::reduce::{Assembled, IdentData, Polished, RootGroup, assemble_groups};
+use crate::core::identification::structure::REFINED_GUESSES;
+use crate::core::numerics::stats::mean;
+
+/// The input dead time the reduced model may carry (a fuel line and valve delay), as a candidate of
+/// the proposal like a root: what the segment ARX models say, and what the cross-validation said.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeadTimeVerdict {
+    /// Dead time tried (or kept), samples.
+    pub samples: usize,
+    pub dt_secs: f64,
+    pub kept: bool,
+    /// The segment ARX models' input delay, samples (1: none beyond the sampling).
+    pub arx_nk: usize,
+    pub reason: String,
+}
+
+impl DeadTimeVerdict {
+    pub(super) fn untried(data: &IdentData) -> Self {
+        Self {
+            samples: data.delay,
+            dt_secs: data.fits.dt_secs,
+            kept: data.delay > 0,
+            arx_nk: data.fits.nk(),
+            reason: "not tried".to_owned(),
+        }
+    }
+
+    /// The dead time the model carries, samples (0 when none was kept).
+    pub fn in_model(&self) -> usize {
+        if self.kept { self.samples } else { 0 }
+    }
+
+    /// The sentence the report and the app show.
+    pub fn sentence(&self) -> String {
+        format!(
+            "input dead time {:.2} s ({} samples; the segment ARX models fit best with the input {} samples late): {}",
+            self.samples as f64 * self.dt_secs,
+            self.samples,
+            self.arx_nk,
+            self.reason
+        )
+    }
+}
+
+/// The dead time candidate beside `groups`, around `excess` samples (the late start the roots do not
+/// explain): the whole delays next to it screened on the identification error with the roots as they
+/// are, the best few polished with the roots.
+pub(super) fn with_dead_time(
+    data: &IdentData,
+    groups: &[RootGroup],
+    excess: usize,
+) -> Option<(Polished, usize)> {
+    let max = ((MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).max(1);
+    let mut screened: Vec<(f64, usize)> = (excess.saturating_sub(1).max(1)..=(excess + 1).min(max))
+        .filter_map(|d| {
+            assemble_groups(&data.with_delay(d), groups, data.settings.static_order)
+                .ok()
+                .map(|a| (a.rms(), d))
+        })
+        .collect();
+    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
+    screened
+        .into_iter()
+        .take(REFINED_GUESSES)
+        .filter_map(|(_, d)| fitted(&data.with_delay(d), groups).map(|p| (p, d)))
+        .min_by(|a, b| a.0.assembled.rms().total_cmp(&b.0.assembled.rms()))
+}
+
+/// Low-frequency group delay of a root group, s: τ for a real pole, 2ζ/ωn for a pair (the slope of
+/// its phase at ω → 0); zero for a zero or a root that is not a stable pole.
+pub(super) fn group_delay_secs(g: &RootGroup, dt_secs: f64) -> f64 {
+    if g.kind != RootKind::Pole {
+        return 0.0;
+    }
+    let (omega, zeta, tau) = g.s_plane(dt_secs);
+    match (g.pair, tau) {
+        (false, Some(tau)) => tau,
+        (true, _) if omega > 0.0 => 2.0 * zeta / omega,
+        _ => 0.0,
+    }
+}
+
+/// The input delay at which short-B ARX models fit a model's own simulated step responses best (the
+/// same estimator that timed the data, [`arx::estimate_dead_time`]): how late the model itself starts.
+pub(super) fn apparent_nk(data: &IdentData, assembled: &Assembled) -> usize {
+    let simulated: Vec<f64> = data.y.iter().zip(&assembled.residual).map(|(y, r)| y + r).collect();
+    let deviations: Vec<(Vec<f64>, Vec<f64>)> = data
+        .fits
+        .segments
+        .iter()
+        .filter_map(|seg| {
+            let (a, s, b) = (
+                seg.start.checked_sub(data.start)?,
+                seg.step_at.checked_sub(data.start)?,
+                seg.end.checked_sub(data.start)?,
+            );
+            let (u, y) = (data.u.get(a..b)?, simulated.get(a..b)?);
+            let (u0, y0) = (mean(data.u.get(a..s)?), mean(simulated.get(a..s)?));
+            Some((u.iter().map(|x| x - u0).collect(), y.iter().map(|x| x - y0).collect()))
+        })
+        .collect();
+    let max = ((MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).clamp(1, 50);
+    arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
+}

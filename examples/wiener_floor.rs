@@ -11,7 +11,9 @@ use jetid::core::identification::pipeline::{OutputSettings, identify_output, pre
 use jetid::core::identification::segment::SegmentSettings;
 use jetid::core::identification::static_map::fit_static_map;
 use jetid::core::identification::wiener::fit_linear_block;
-use jetid::core::numerics::lm::{LmOptions, levenberg_marquardt};
+use jetid::core::numerics::lm::{
+    Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
+};
 use jetid::io::csv_run::{LoadOptions, load_run};
 use jetid::sim::designs::TestKind;
 use jetid::sim::{SimConfig, simulate};
@@ -41,8 +43,10 @@ fn main() -> Result<()> {
         let map = fit_static_map(&v, y, 2).ok()?;
         Some(v.iter().zip(y).map(|(vk, yk)| (map.eval(*vk) - yk) / yk).collect())
     };
-    let opts = LmOptions { max_iterations: 200, ..LmOptions::default() };
-    let fit = levenberg_marquardt(&[real.re, pair.re, pair.im], residual, &opts)?;
+    let settings = LmSettings { max_iterations: 200, cost_tol: 1e-9, damping: Damping::marquardt(12) };
+    let mut problem: LeastSquares<_, LmError> =
+        LeastSquares::new(residual, Jacobian::default(), StepSolver::Svd);
+    let fit = minimise(&mut problem, &[real.re, pair.re, pair.im], &settings, &mut no_progress)?;
     let n = y.len() as f64;
     println!("pipeline (fitted on ident):      validation RMSPE vs truth {pipeline_rmspe:.4} %");
     println!(

@@ -450,7 +450,9 @@ impl OutputCache {
         })
     }
 
-    /// Cluster evaluations and the live path for `clusters` with `settings`.
+    /// Cluster evaluations and the live path for `clusters` with `settings`: one core call, which
+    /// evaluates the clusters once; only when it gives no model are the clusters evaluated alone, so
+    /// that the z-plane still says which cluster fails.
     fn evaluate(
         &self,
         run: &Run,
@@ -465,9 +467,16 @@ impl OutputCache {
             let why = "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned();
             return (Ok(Vec::new()), Err(why));
         }
-        let evals = cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
-            .map_err(|e| e.to_string());
-        (evals, self.live_path(fits, run, clusters, settings))
+        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
+        match live_update(fits, run, clusters, settings, &runs, &self.omegas_rad_s) {
+            Ok(result) => self.split_result(result, settings),
+            Err(err) => {
+                let evals =
+                    cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
+                        .map_err(|e| e.to_string());
+                (evals, Err(err.to_string()))
+            }
+        }
     }
 
     /// The model of the automatic proposal (its clusters with its dead time, or its direct fit).
@@ -483,22 +492,19 @@ impl OutputCache {
         let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
         let settings = &self.setup.settings;
         match live_update_proposed(fits, run, proposal, settings, &runs, &self.omegas_rad_s) {
-            Ok(result) => (Ok(result.evals.clone()), Ok(self.live_model(result, settings))),
+            Ok(result) => self.split_result(result, settings),
             Err(err) => (Ok(Vec::new()), Err(err.to_string())),
         }
     }
 
-    fn live_path(
+    /// The core's live result as the cache keeps it: the evaluations apart, the model with its runs.
+    fn split_result(
         &self,
-        fits: &SegmentFits,
-        run: &Run,
-        clusters: &[Cluster],
+        mut result: LiveResult,
         settings: &OutputSettings,
-    ) -> Result<LiveModel, String> {
-        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        let result = live_update(fits, run, clusters, settings, &runs, &self.omegas_rad_s)
-            .map_err(|e| e.to_string())?;
-        Ok(self.live_model(result, settings))
+    ) -> (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>) {
+        let evals = std::mem::take(&mut result.evals);
+        (Ok(evals), Ok(self.live_model(result, settings)))
     }
 
     fn live_model(&self, result: LiveResult, settings: &OutputSettings) -> LiveModel {

@@ -17,8 +17,10 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use super::lm_progress::{LmSettings, minimise};
 use super::{BaselineError, Scaling, check_signals, report};
+use crate::core::numerics::lm::{
+    Damping, Jacobian, LeastSquares, LmOutcome, LmSettings, StepSolver, minimise,
+};
 use crate::core::numerics::lstsq::solve_lstsq;
 use crate::core::numerics::poly;
 use crate::core::numerics::tf::DiscreteTf;
@@ -268,12 +270,11 @@ pub fn fit_hammerstein_wiener(
     let arx_cost = cost(&linear, &theta_lin, &u_n, &y_n);
     report(progress, 0.02)?;
 
-    let settings =
-        LmSettings { max_iterations: opts.linear_iterations, cost_tol: opts.cost_tol, diff_step: 1e-7 };
+    let settings = hw_settings(opts.linear_iterations, opts.cost_tol);
     let max_lin = opts.linear_iterations.max(1) as f64;
-    let lin = minimise(
+    let lin = fit_stage(
         &theta_lin,
-        &mut |th| linear.residual(th, &u_n, &y_n),
+        |th| linear.residual(th, &u_n, &y_n),
         &settings,
         "linear output-error",
         &mut |k| report(progress, 0.02 + 0.28 * k as f64 / max_lin),
@@ -286,16 +287,12 @@ pub fn fit_hammerstein_wiener(
     theta.extend(std::iter::repeat_n(0.0, full.n_in()));
     theta.extend(lin.theta.get(n_lin..).unwrap_or_default());
     theta.extend(std::iter::repeat_n(0.0, full.n_out().saturating_sub(2)));
-    let settings =
-        LmSettings { max_iterations: opts.max_iterations, cost_tol: opts.cost_tol, diff_step: 1e-7 };
+    let settings = hw_settings(opts.max_iterations, opts.cost_tol);
     let max_full = opts.max_iterations.max(1) as f64;
-    let fit = minimise(
-        &theta,
-        &mut |th| full.residual(th, &u_n, &y_n),
-        &settings,
-        "Hammerstein–Wiener",
-        &mut |k| report(progress, 0.3 + 0.7 * k as f64 / max_full),
-    )?;
+    let fit =
+        fit_stage(&theta, |th| full.residual(th, &u_n, &y_n), &settings, "Hammerstein–Wiener", &mut |k| {
+            report(progress, 0.3 + 0.7 * k as f64 / max_full)
+        })?;
     check_not_diverged("Hammerstein–Wiener", fit.cost, &y_n)?;
     let Some(blocks) = full.blocks(&fit.theta) else {
         return Err(BaselineError::Diverged { stage: "Hammerstein–Wiener", rms_normalised: f64::INFINITY });
@@ -396,4 +393,29 @@ fn output_gain_offset(
         [d0, d1] => Ok([*d0, *d1]),
         _ => Err(BaselineError::Diverged { stage: "ARX", rms_normalised: f64::INFINITY }),
     }
+}
+
+/// The baseline's Levenberg–Marquardt: 16 damping tries, a forward-difference Jacobian with steps of
+/// 10⁻⁷·max(|θ|, 1) (the normalised parameters are of order one) that falls back to a backward
+/// difference at the edge of the admissible region (a pole near the unit circle).
+fn hw_settings(max_iterations: usize, cost_tol: f64) -> LmSettings {
+    LmSettings { max_iterations, cost_tol, damping: Damping::marquardt(16) }
+}
+
+/// One stage of the fit (`stage` names it in errors); `on_iteration` reports progress and cancels.
+fn fit_stage(
+    theta0: &[f64],
+    residual: impl FnMut(&[f64]) -> Option<Vec<f64>>,
+    settings: &LmSettings,
+    stage: &'static str,
+    on_iteration: &mut dyn FnMut(usize) -> Result<(), BaselineError>,
+) -> Result<LmOutcome, BaselineError> {
+    let jacobian = Jacobian { rel_step: 1e-7, floor: 1.0, backward_fallback: true };
+    let mut problem: LeastSquares<_, BaselineError> = LeastSquares::new(residual, jacobian, StepSolver::Svd);
+    minimise(&mut problem, theta0, settings, on_iteration).map_err(|e| match e {
+        BaselineError::Lm(crate::core::numerics::lm::LmError::BadStart) => {
+            BaselineError::Diverged { stage, rms_normalised: f64::INFINITY }
+        }
+        other => other,
+    })
 }

@@ -8,12 +8,12 @@
 //! `&mut |_| true`.
 use serde::{Deserialize, Serialize};
 
+use crate::core::numerics::lm::LmError;
 use crate::core::numerics::lstsq::LstsqError;
 use crate::core::numerics::poly::PolyError;
 use crate::core::numerics::tf::TfError;
 
 pub mod hammerstein_wiener;
-mod lm_progress;
 mod mlp;
 pub mod nnarx;
 mod nnarx_train;
@@ -49,11 +49,24 @@ pub enum BaselineError {
     #[error(transparent)]
     Lstsq(#[from] LstsqError),
     #[error(transparent)]
+    Lm(LmError),
+    #[error(transparent)]
     Tf(#[from] TfError),
     #[error(transparent)]
     Poly(#[from] PolyError),
     #[error("the {what} is not numerically positive definite")]
     Factorisation { what: &'static str },
+}
+
+impl From<LmError> for BaselineError {
+    /// A least-squares failure inside Levenberg–Marquardt is the solver's error as the baselines
+    /// report it everywhere else.
+    fn from(e: LmError) -> Self {
+        match e {
+            LmError::Lstsq(e) => Self::Lstsq(e),
+            other => Self::Lm(other),
+        }
+    }
 }
 
 /// An affine change of units: `normalised = (physical − offset) / scale`, with `scale > 0`.

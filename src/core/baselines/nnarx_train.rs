@@ -15,6 +15,7 @@ use faer::Mat;
 use super::BaselineError;
 use super::mlp::MlpShape;
 use super::spd::Cholesky;
+use crate::core::numerics::lm::{Damping, LmProblem, LmSettings, Scale, minimise};
 
 const MU_START: f64 = 0.005;
 const MU_MAX: f64 = 1e10;
@@ -121,6 +122,57 @@ fn linearise(shape: MlpShape, w: &[f64], data: &TrainData) -> Linearisation {
     Linearisation { e_d: 0.5 * gram[(p, p)], e_w: sum_sq_half(w), jtj, jte }
 }
 
+/// The regularised objective `M(w) = β·E_D + α·E_W` as a Levenberg–Marquardt problem: every
+/// linearisation re-estimates α and β from the evidence (MacKay's update) before the step.
+struct Bayesian<'a> {
+    shape: MlpShape,
+    data: &'a TrainData,
+    alpha: f64,
+    beta: f64,
+}
+
+impl LmProblem for Bayesian<'_> {
+    type Linearisation = Linearisation;
+    type Error = BaselineError;
+
+    fn objective(&mut self, w: &[f64]) -> Option<f64> {
+        let m =
+            self.beta * sum_sq_half(&one_step_errors(self.shape, w, self.data)) + self.alpha * sum_sq_half(w);
+        m.is_finite().then_some(m)
+    }
+
+    fn linearise(&mut self, w: &[f64], _objective: f64) -> Result<(Linearisation, f64), BaselineError> {
+        let n = self.data.t.len() as f64;
+        let lin = linearise(self.shape, w, self.data);
+        let gamma = lin.gamma(self.alpha, self.beta)?;
+        self.alpha = (gamma / (2.0 * lin.e_w.max(f64::MIN_POSITIVE))).clamp(1e-10, 1e10);
+        self.beta = ((n - gamma) / (2.0 * lin.e_d.max(f64::MIN_POSITIVE))).clamp(1e-10, 1e14);
+        let objective = self.beta * lin.e_d + self.alpha * lin.e_w;
+        Ok((lin, objective))
+    }
+
+    fn step(
+        &mut self,
+        lin: &mut Linearisation,
+        w: &[f64],
+        mu: f64,
+    ) -> Result<Option<Vec<f64>>, BaselineError> {
+        let step = lin.step(w, self.alpha, self.beta, mu);
+        Ok(step.map(|step| w.iter().zip(&step).map(|(a, b)| a + b).collect()))
+    }
+}
+
+/// μ from [`MU_START`], ×0.1 after a step that lowers M (not below 10⁻²⁰), ×10 after one that does
+/// not, up to [`MU_MAX`] (Foresee & Hagan's schedule).
+const DAMPING: Damping = Damping {
+    start: MU_START,
+    on_accept: Scale::Times(0.1),
+    floor: 1e-20,
+    on_reject: Scale::Times(10.0),
+    max_tries: usize::MAX,
+    ceiling: MU_MAX,
+};
+
 /// Train from `w0`; `on_iteration(k)` is called after iteration `k` and may abort with its error.
 pub(super) fn train(
     shape: MlpShape,
@@ -129,40 +181,12 @@ pub(super) fn train(
     max_iterations: usize,
     on_iteration: &mut dyn FnMut(usize) -> Result<(), BaselineError>,
 ) -> Result<TrainOutcome, BaselineError> {
-    let n = data.t.len();
-    let mut w = w0;
-    let (mut alpha, mut beta, mut mu) = (0.01, 1.0, MU_START);
-    let mut iterations = 0;
-    while iterations < max_iterations {
-        iterations += 1;
-        let lin = linearise(shape, &w, data);
-        let gamma = lin.gamma(alpha, beta)?;
-        alpha = (gamma / (2.0 * lin.e_w.max(f64::MIN_POSITIVE))).clamp(1e-10, 1e10);
-        beta = ((n as f64 - gamma) / (2.0 * lin.e_d.max(f64::MIN_POSITIVE))).clamp(1e-10, 1e14);
-        let objective = beta * lin.e_d + alpha * lin.e_w;
-        let mut accepted = None;
-        while mu <= MU_MAX {
-            if let Some(step) = lin.step(&w, alpha, beta, mu) {
-                let candidate: Vec<f64> = w.iter().zip(&step).map(|(a, b)| a + b).collect();
-                let trial = beta * sum_sq_half(&one_step_errors(shape, &candidate, data))
-                    + alpha * sum_sq_half(&candidate);
-                if trial.is_finite() && trial < objective {
-                    mu = (mu * 0.1).max(1e-20);
-                    accepted = Some((candidate, trial));
-                    break;
-                }
-            }
-            mu *= 10.0;
-        }
-        on_iteration(iterations)?;
-        let Some((candidate, trial)) = accepted else { break };
-        w = candidate;
-        if objective - trial < COST_TOL * objective {
-            break;
-        }
-    }
+    let mut problem = Bayesian { shape, data, alpha: 0.01, beta: 1.0 };
+    let settings = LmSettings { max_iterations, cost_tol: COST_TOL, damping: DAMPING };
+    let fitted = minimise(&mut problem, &w0, &settings, on_iteration)?;
+    let (alpha, beta, w) = (problem.alpha, problem.beta, fitted.theta);
     let lin = linearise(shape, &w, data);
     let gamma = lin.gamma(alpha, beta)?;
-    let log_evidence = lin.log_evidence(alpha, beta, n)?;
-    Ok(TrainOutcome { weights: w, iterations, alpha, beta, gamma, log_evidence })
+    let log_evidence = lin.log_evidence(alpha, beta, data.t.len())?;
+    Ok(TrainOutcome { weights: w, iterations: fitted.iterations, alpha, beta, gamma, log_evidence })
 }

@@ -11,7 +11,6 @@
 use num_complex::Complex64;
 
 use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output_stage};
-use super::solver::{LmSettings, minimise};
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{
@@ -21,6 +20,9 @@ use super::{
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::identification::refine::RootParams;
 use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+use crate::core::numerics::lm::{
+    Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
+};
 use crate::core::numerics::tf::DiscreteTf;
 use crate::core::run::{Channel, Run};
 
@@ -226,9 +228,14 @@ fn fit_gain_offset(w: &[f64], y: &[f64]) -> Option<(f64, f64)> {
     Some((gain, my - gain * mw))
 }
 
+/// The effect fits' Levenberg–Marquardt: few iterations to a loose tolerance (the screening has
+/// already chosen the start; a 10⁻⁵ relative gain is far below what the diagnosis can resolve).
+const EFFECT_FIT: LmSettings =
+    LmSettings { max_iterations: 15, cost_tol: 1e-5, damping: Damping::marquardt(10) };
+
 /// Move roots and continuous effect parameters together from `start`.
 pub(super) fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
-    refine_with(start, data, &LmSettings::default())
+    refine_with(start, data, &EFFECT_FIT)
 }
 
 fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Option<Assembled> {
@@ -253,8 +260,10 @@ fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Opti
         Some(Structure { poles, zeros, effects, map_order: start.map_order, delay: start.delay })
     };
     let residual = |theta: &[f64]| unpack(theta).and_then(|s| assemble(&s, data)).map(|a| a.residual);
-    let (theta, _) = minimise(&theta0, residual, settings)?;
-    assemble(&unpack(&theta)?, data)
+    let mut problem: LeastSquares<_, LmError> =
+        LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
+    let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;
+    assemble(&unpack(&fitted.theta)?, data)
 }
 
 /// Refit every parameter of the model's structure (roots, effect parameters, gain, offset, static

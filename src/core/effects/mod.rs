@@ -50,7 +50,6 @@ mod id;
 mod model;
 mod scheduled_time_constant;
 mod sensor_dynamics;
-mod solver;
 mod static_map_order;
 pub mod stats;
 mod structural;

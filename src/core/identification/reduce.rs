@@ -27,7 +27,9 @@ use crate::core::identification::pipeline::{OutputSettings, PipelineError, Segme
 use crate::core::identification::refine::Refinement;
 use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
 use crate::core::identification::wiener::{WienerModel, fit_linear_block_excluding};
-use crate::core::numerics::lm::{LmOptions, levenberg_marquardt};
+use crate::core::numerics::lm::{
+    Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
+};
 use crate::core::numerics::stats::mean;
 use crate::core::run::Run;
 
@@ -399,8 +401,10 @@ pub fn polish_with(
             }
         })
     };
-    let opts = LmOptions { max_iterations, cost_tol: POLISH_COST_TOL, ..LmOptions::default() };
-    let fitted = levenberg_marquardt(&theta0, residual, &opts).ok();
+    let settings = LmSettings { max_iterations, cost_tol: POLISH_COST_TOL, damping: Damping::marquardt(12) };
+    let mut problem: LeastSquares<_, LmError> =
+        LeastSquares::new(residual, Jacobian::default(), StepSolver::Svd);
+    let fitted = minimise(&mut problem, &theta0, &settings, &mut no_progress).ok();
     let moved = fitted.as_ref().and_then(|f| decode_all(groups, &f.theta));
     let after = moved.as_ref().and_then(|m| assemble_groups(data, m, Some(static_order)).ok());
     let before_rms = fitted_rms(data, &start.residual);

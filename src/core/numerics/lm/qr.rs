@@ -1,0 +1,80 @@
+//! Householder QR for the least-squares steps of [`super::StepSolver::QrOnce`]: the Jacobian is
+//! reduced to its p × p triangular factor once per iteration, and each damped step is a small
+//! 2p × p problem. No normal equations are formed.
+
+/// Householder QR of the columns `cols` (each of length m ≥ p), applied to `rhs` as well.
+/// Returns the p × p upper factor (by columns) and the first p entries of `Qᵀ rhs`.
+pub(super) fn qr_reduce(mut cols: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let p = cols.len();
+    for k in 0..p {
+        let Some(col) = cols.get(k) else { break };
+        let m = col.len();
+        if k >= m {
+            break;
+        }
+        let norm = col[k..].iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm <= f64::MIN_POSITIVE {
+            continue;
+        }
+        let alpha = if col[k] > 0.0 { -norm } else { norm };
+        let mut v: Vec<f64> = col[k..].to_vec();
+        v[0] -= alpha;
+        let vnorm2: f64 = v.iter().map(|x| x * x).sum();
+        if vnorm2 <= f64::MIN_POSITIVE {
+            continue;
+        }
+        let reflect = |y: &mut [f64]| {
+            let dot: f64 = v.iter().zip(y.iter()).map(|(a, b)| a * b).sum();
+            let f = 2.0 * dot / vnorm2;
+            for (yi, vi) in y.iter_mut().zip(&v) {
+                *yi -= f * vi;
+            }
+        };
+        for col in cols.iter_mut().skip(k) {
+            if let Some(tail) = col.get_mut(k..) {
+                reflect(tail);
+            }
+        }
+        if let Some(tail) = rhs.get_mut(k..) {
+            reflect(tail);
+        }
+    }
+    let r = cols.iter().map(|c| c.iter().take(p).copied().collect()).collect();
+    (r, rhs.into_iter().take(p).collect())
+}
+
+/// Solve the upper-triangular `R x = c`; components whose pivot is negligible are set to zero.
+pub(super) fn back_substitute(r: &[Vec<f64>], c: &[f64]) -> Vec<f64> {
+    let p = r.len();
+    let at = |i: usize, j: usize| r.get(j).and_then(|col| col.get(i)).copied().unwrap_or(0.0);
+    let big = (0..p).map(|i| at(i, i).abs()).fold(0.0, f64::max);
+    let tol = f64::EPSILON * p.max(1) as f64 * 100.0 * big;
+    let mut x = vec![0.0; p];
+    for i in (0..p).rev() {
+        let pivot = at(i, i);
+        if pivot.abs() <= tol {
+            continue;
+        }
+        let s: f64 = (i + 1..p).map(|j| at(i, j) * x[j]).sum();
+        x[i] = (c.get(i).copied().unwrap_or(0.0) - s) / pivot;
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_least_squares() {
+        // Overdetermined linear system: the residual of the solution is orthogonal to the columns.
+        let cols = vec![vec![1.0, 1.0, 1.0, 1.0], vec![0.0, 1.0, 2.0, 3.0]];
+        let b = vec![1.0, 2.9, 5.1, 7.0];
+        let (r, c) = qr_reduce(cols.clone(), b.clone());
+        let x = back_substitute(&r, &c);
+        let res: Vec<f64> = (0..4).map(|i| b[i] - x[0] * cols[0][i] - x[1] * cols[1][i]).collect();
+        for col in &cols {
+            assert!(col.iter().zip(&res).map(|(a, b)| a * b).sum::<f64>().abs() < 1e-12);
+        }
+    }
+}

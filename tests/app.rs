@@ -8,7 +8,7 @@ use egui::accesskit::Role as A11yRole;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use jetid::io::csv_run::{ColumnMap, LoadOptions};
-use jetid::ui::session::{SavedSession, SessionRun};
+use jetid::ui::state::session::{SavedSession, SessionRun};
 use jetid::ui::{App, Command, Role, Session, Tab};
 
 /// A small valid run with canonical column names.

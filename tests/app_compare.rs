@@ -11,8 +11,8 @@ use std::time::Duration;
 
 use jetid::core::compare::{Cancelled, CompareInput, ModelKind, compare_output, compare_stage};
 use jetid::core::numerics::metrics::metrics;
-use jetid::ui::compare_table::{MODELS, table1_columns};
-use jetid::ui::compare_ui::CompareStatus;
+use jetid::ui::views::compare::CompareStatus;
+use jetid::ui::views::compare::table::{MODELS, table1_columns};
 use jetid::ui::{App, Command, Role, Tab};
 
 const GRAY_BOX: ModelKind = ModelKind::GrayBox;

@@ -2,47 +2,17 @@
 //! one place where commands change the session.
 use std::time::Instant;
 
-use egui::RichText;
-
 use crate::core::effects::EffectId;
 
-use super::command::Command;
-use super::derived::Derived;
-use super::file_dialog::{PendingPick, PickPoll, PickPurpose};
-use super::mapping_ui::{self, MappingDialog, MappingTarget};
-use super::model_cache::IdentCache;
-use super::session::{LoadFailure, Role, SavedSession, Session, SessionRun, file_label};
-use super::setup::History;
-use super::views::{self, Tab, ViewStates};
-use super::{panels_ui, theme};
-
-/// State that only matters while the app runs: nothing here is saved.
-#[derive(Default)]
-pub struct ViewState {
-    pub tab: Tab,
-    pub selected_run: Option<usize>,
-    /// The output the model views show (the first output when `None` or not present).
-    pub output: Option<String>,
-    pub views: ViewStates,
-    /// Undo and redo of segment, cluster and settings changes.
-    pub history: History,
-    /// Model and project file errors, shown until dismissed.
-    pub errors: Vec<String>,
-    /// Files that could not be read, shown until dismissed.
-    pub failures: Vec<LoadFailure>,
-    pub mapping: Option<MappingDialog>,
-    /// The latest message for the status bar.
-    pub status: Option<String>,
-    /// The duration of the previous frame's UI code, in ms.
-    pub frame_ms: Option<f32>,
-    /// The whole previous frame as eframe measured it (UI and tessellation), in ms.
-    pub cpu_frame_ms: Option<f32>,
-    /// A native file dialog is open.
-    pub picker: Option<PendingPick>,
-    /// A file dialog to open at the end of the frame.
-    pub dialog_requested: Option<PickPurpose>,
-    pub quit_requested: bool,
-}
+use crate::ui::derived::Derived;
+use crate::ui::derived::model_cache::IdentCache;
+use crate::ui::file_dialog::{PendingPick, PickPoll, PickPurpose};
+use crate::ui::mapping_ui::{self, MappingDialog, MappingTarget};
+use crate::ui::panels_ui;
+use crate::ui::state::command::Command;
+use crate::ui::state::session::{LoadFailure, Role, SavedSession, Session, SessionRun, file_label};
+use crate::ui::state::{Tab, ViewState};
+use crate::ui::views;
 
 pub struct App {
     pub session: Session,
@@ -454,11 +424,6 @@ fn shortcut_commands(ui: &egui::Ui) -> Vec<Command> {
         .collect()
 }
 
-/// The hint shown when a view has nothing to draw.
-pub(super) fn hint(ui: &mut egui::Ui, text: &str) {
-    ui.label(RichText::new(text).color(theme::HINT));
-}
-
 /// How often a frame looks for a finished automatic proposal while one is computed: quick enough
 /// that the model appears without a felt delay (a tenth of a second is below what a user notices
 /// after a second of waiting), slow enough to cost nothing while idle.
@@ -469,7 +434,7 @@ const PROPOSAL_POLL: std::time::Duration = std::time::Duration::from_millis(100)
 /// the proposal found and the saved project builds the same model in the batch; going back to the
 /// proposal drops a dead time that came from it.
 fn carry_dead_time(
-    setup: &mut super::setup::OutputSetup,
+    setup: &mut crate::ui::state::setup::OutputSetup,
     clusters: Option<Vec<crate::core::identification::cluster::Cluster>>,
     proposed: Option<usize>,
 ) {

@@ -1,7 +1,7 @@
 //! Setup changes (segments, clusters, settings) with undo and redo: the part of `App::apply` that
 //! records history.
-use super::app::App;
-use super::setup::ModelSetup;
+use crate::ui::app::App;
+use crate::ui::state::setup::ModelSetup;
 
 impl App {
     /// Change the setup; a change that changes nothing is not recorded. Every real change can be

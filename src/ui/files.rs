@@ -4,12 +4,12 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow, bail};
 
-use super::app::App;
-use super::project_io;
-use super::session::file_label;
 use crate::io::atomic::write_atomic;
 use crate::io::model_file::{ModelFile, SignalInfo, read_model, write_model};
 use crate::io::project::load_project;
+use crate::ui::app::App;
+use crate::ui::project_io;
+use crate::ui::state::session::file_label;
 
 /// A model file's sample time may differ from the identification run's by this fraction.
 const DT_TOLERANCE: f64 = 0.02;

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 
 use egui::RichText;
 
-use super::command::Command;
-use super::session::{Role, file_label};
-use super::theme;
 use crate::io::csv_run::{ColumnMap, LoadOptions};
+use crate::ui::state::command::Command;
+use crate::ui::state::session::{Role, file_label};
+use crate::ui::theme;
 
 // Guesses that pre-fill the dialog (names lower-cased): the canonical names of CONTRACT.md and
 // the obvious variants. The user confirms or corrects them.

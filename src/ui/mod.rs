@@ -10,44 +10,24 @@ use std::sync::mpsc;
 use anyhow::{Result, anyhow, bail};
 
 pub mod app;
-pub mod bode_ui;
-pub mod cluster_table_ui;
-pub mod command;
-pub mod compare_plots;
-pub mod compare_table;
-pub mod compare_ui;
-pub mod data_ui;
 pub mod derived;
-pub mod diagnosis_model;
-pub mod diagnosis_residuals_ui;
-pub mod diagnosis_ui;
 mod edit;
-pub mod empirical_bode;
 pub mod file_dialog;
 mod files;
-pub mod jobs;
 pub mod mapping_ui;
-pub mod model_cache;
-pub mod model_ui;
 pub mod panels_ui;
-pub mod plot_util;
 pub mod project_io;
 pub mod screenshot;
-pub mod segments_ui;
-pub mod session;
-pub mod setup;
-pub mod static_map_ui;
+pub mod state;
 pub mod theme;
-pub mod traces_ui;
 pub mod views;
-pub mod zplane_plot;
-pub mod zplane_ui;
+pub mod widgets;
 
-pub use app::{App, ViewState};
-pub use command::Command;
+pub use app::App;
 pub use derived::Derived;
-pub use session::{Role, SavedSession, Session};
-pub use views::Tab;
+pub use state::command::Command;
+pub use state::session::{Role, SavedSession, Session};
+pub use state::{Tab, ViewState};
 
 /// The `--screenshot --view` name of the Diagnosis view's "Where it fails" section.
 const FAILURES_VIEW: &str = "failures";
@@ -104,7 +84,7 @@ pub fn screenshot(
     let mut app = screenshot::screenshot_app(project, add_effects)?;
     app.view.output = output.map(ToOwned::to_owned);
     if failures {
-        app.view.views.diagnosis.section = diagnosis_ui::Section::WhereItFails;
+        app.view.views.diagnosis.section = views::diagnosis::Section::WhereItFails;
     }
     let result = eframe::run_native(
         "jetid",

@@ -2,11 +2,12 @@
 //! hint. Each returns the commands the user asked for.
 use egui::RichText;
 
-use super::app::{ViewState, hint};
-use super::command::{Command, FileAction};
-use super::session::{LoadFailure, Role, Session, file_label};
-use super::setup::History;
-use super::theme;
+use crate::ui::state::ViewState;
+use crate::ui::state::command::{Command, FileAction};
+use crate::ui::state::session::{LoadFailure, Role, Session, file_label};
+use crate::ui::state::setup::History;
+use crate::ui::theme;
+use crate::ui::widgets::hint;
 
 pub fn menu_bar_ui(ui: &mut egui::Ui, history: &History) -> Vec<Command> {
     let mut commands = Vec::new();

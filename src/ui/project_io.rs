@@ -7,11 +7,11 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use super::session::{LoadFailure, Role, Session, SessionRun};
-use super::setup::{ModelSetup, OutputSetup};
 use crate::core::effects::EffectId;
 use crate::io::csv_run::LoadOptions;
 use crate::io::project::{IdentEntry, LoadSpec, OutputSpec, Project, ProjectFile, RunEntry, RunSource};
+use crate::ui::state::session::{LoadFailure, Role, Session, SessionRun};
+use crate::ui::state::setup::{ModelSetup, OutputSetup};
 
 /// The project file text for `session`, to be written at `project_path`; the notes say what a
 /// project file cannot hold (a second identification, chirp or steady run).

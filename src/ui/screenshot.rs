@@ -11,10 +11,10 @@ use anyhow::{Context as _, Result, anyhow};
 
 use crate::core::effects::EffectId;
 
-use super::app::App;
-use super::command::Command;
-use super::session::Session;
-use super::views::Tab;
+use crate::ui::app::App;
+use crate::ui::state::Tab;
+use crate::ui::state::command::Command;
+use crate::ui::state::session::Session;
 
 /// Frames drawn (and time waited) before the picture is taken, so layout and plot bounds settle.
 const WARMUP_FRAMES: u32 = 10;

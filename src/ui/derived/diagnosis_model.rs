@@ -21,8 +21,8 @@ use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
-use super::model_cache::LiveModel;
-use super::session::Role;
+use crate::ui::derived::model_cache::LiveModel;
+use crate::ui::state::session::Role;
 
 /// Every live model gets its own id, so that results computed for a model (the diagnosis, the
 /// residual analysis) can tell when they are stale.

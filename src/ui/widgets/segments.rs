@@ -4,9 +4,9 @@
 use egui::{Align2, RichText};
 use egui_plot::{LineStyle, PlotPoint, PlotUi, Span, Text, VLine};
 
-use super::command::Command;
-use super::theme;
 use crate::core::identification::segment::Segment;
+use crate::ui::state::command::Command;
+use crate::ui::theme;
 
 /// Pointer distance (screen points) that grabs a boundary.
 const GRAB: f32 = 6.0;

@@ -5,23 +5,24 @@
 //! The diagnosis ([`crate::core::diagnose`]) runs in a background [`Job`] for the committed model
 //! it was started on; when the model changes (an effect applied, a cluster moved) the result is
 //! kept but marked stale, with a button to run it again.
+pub mod residuals;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use egui::RichText;
 use egui_plot::{Bar, BarChart, Plot, Text};
 
-use super::command::Command;
-use super::derived::Derived;
-use super::diagnosis_model::DiagnosisInput;
-use super::diagnosis_residuals_ui::{self, ResidualsState};
-use super::jobs::Job;
-use super::model_ui::{self, error_ui, hint};
-use super::session::Session;
-use super::theme;
 use crate::core::diagnose::HistoryStep;
 use crate::core::diagnose::{self, DiagnosisKind, DiagnosisReport};
 use crate::core::effects::EffectId;
+use crate::ui::derived::Derived;
+use crate::ui::derived::diagnosis_model::DiagnosisInput;
+use crate::ui::derived::jobs::Job;
+use crate::ui::state::command::Command;
+use crate::ui::state::session::Session;
+use crate::ui::theme;
+use crate::ui::views::diagnosis::residuals::{self as diagnosis_residuals_ui, ResidualsState};
+use crate::ui::widgets::model::{self as model_ui, error_ui, hint};
 
 /// The two halves of the view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -33,7 +34,7 @@ pub enum Section {
 
 /// A diagnosis that has ended, for the model it was started on.
 pub struct FinishedDiagnosis {
-    /// The live model diagnosed (see [`super::model_cache::LiveModel::id`]).
+    /// The live model diagnosed (see [`crate::ui::derived::model_cache::LiveModel::id`]).
     pub model_id: u64,
     pub outcome: Result<DiagnosisReport, String>,
     /// How long the diagnosis took on its worker thread.
@@ -107,7 +108,7 @@ impl DiagnosisViewState {
         outcome: Result<(DiagnosisReport, Duration), String>,
         elapsed: Duration,
     ) {
-        if outcome.as_ref().err().is_some_and(|e| e == super::jobs::CANCELLED) {
+        if outcome.as_ref().err().is_some_and(|e| e == crate::ui::derived::jobs::CANCELLED) {
             return;
         }
         let duration = outcome.as_ref().map_or(elapsed, |(_, d)| *d);
@@ -157,8 +158,8 @@ fn which_effect_ui(
     ui: &mut egui::Ui,
     output: &str,
     state: &mut DiagnosisViewState,
-    cache: &super::model_cache::OutputCache,
-    live: &super::model_cache::LiveModel,
+    cache: &crate::ui::derived::model_cache::OutputCache,
+    live: &crate::ui::derived::model_cache::LiveModel,
     is_preview: bool,
 ) -> Vec<Command> {
     let mut commands = Vec::new();
@@ -240,7 +241,7 @@ fn job_status_ui(
     ui: &mut egui::Ui,
     output: &str,
     state: &mut DiagnosisViewState,
-    cache: &super::model_cache::OutputCache,
+    cache: &crate::ui::derived::model_cache::OutputCache,
     model_id: u64,
     is_preview: bool,
 ) {

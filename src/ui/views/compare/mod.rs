@@ -6,24 +6,26 @@
 //! thread, one per output, started when the view is first shown for a model. A result is kept with
 //! the model and runs it was computed for ([`CompareKey`]); when the model changes it stays visible,
 //! marked stale, until the user asks for a recomputation.
+pub mod plots;
+pub mod table;
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 
 use egui::RichText;
 
-use super::compare_plots;
-use super::compare_table;
-use super::derived::Derived;
-use super::jobs::{CANCELLED, Job};
-use super::model_ui;
-use super::session::{Role, Session};
-use super::theme;
 use crate::core::compare::{CompareInput, OutputComparison, compare_output, compare_stage};
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::SegmentFits;
 use crate::core::identification::wiener::WienerModel;
 use crate::core::run::Run;
+use crate::ui::derived::Derived;
+use crate::ui::derived::jobs::{CANCELLED, Job};
+use crate::ui::state::session::{Role, Session};
+use crate::ui::theme;
+use crate::ui::views::compare::plots as compare_plots;
+use crate::ui::views::compare::table as compare_table;
+use crate::ui::widgets::model as model_ui;
 
 /// What a comparison is computed for: the committed gray-box model, the segment fits it came from
 /// and the runs (with their roles) it is compared on. Runs and fits are compared by pointer.

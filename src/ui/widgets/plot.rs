@@ -58,6 +58,31 @@ pub fn nice_125(value: f64) -> f64 {
         .unwrap_or(10.0 * decade)
 }
 
+/// Log-ω grid (x is log10 ω): decades labelled, 2…9 thin.
+pub fn log_grid(input: GridInput) -> Vec<GridMark> {
+    let (lo, hi) = input.bounds;
+    let mut marks = Vec::new();
+    let (first, last) = (lo.floor() as i32 - 1, hi.ceil() as i32 + 1);
+    for decade in first..=last {
+        let d = f64::from(decade);
+        marks.push(GridMark { value: d, step_size: 1.0 });
+        for k in 2..10 {
+            marks.push(GridMark { value: d + f64::from(k).log10(), step_size: 0.1 });
+        }
+    }
+    marks.retain(|m| m.value >= lo && m.value <= hi);
+    marks
+}
+
+/// Labels at decades only: 0.1, 1, 10 …
+pub fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+    if (mark.value - mark.value.round()).abs() > 1e-6 {
+        return String::new();
+    }
+    let omega = 10f64.powf(mark.value.round());
+    if omega >= 1.0 { format!("{omega:.0}") } else { format!("{omega}") }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,18 +8,15 @@
 use egui::RichText;
 use egui_plot::{Bar, BarChart, HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
 
-use super::command::Command;
-use super::model_cache::LiveModel;
-use super::model_ui::{error_ui, hint};
-use super::plot_util;
-use super::session::{Role, Session};
-use super::theme;
-use super::traces_ui::run_label;
-use crate::core::residuals::{
-    ChannelCorrelation, Regime, ResidualAnalysis, ResidualSettings, analyse_residuals, steady_noise_sigma,
-    summary_sentences,
-};
+use crate::core::residuals::{ChannelCorrelation, Regime, ResidualAnalysis, summary_sentences};
 use crate::core::run::Run;
+use crate::ui::derived::model_cache::LiveModel;
+pub use crate::ui::derived::residuals::{Analyses, RunAnalysis};
+use crate::ui::state::command::Command;
+use crate::ui::state::session::Session;
+use crate::ui::theme;
+use crate::ui::widgets::model::{error_ui, hint};
+use crate::ui::widgets::plot as plot_util;
 
 /// Most points drawn in one channel scatter (every k-th sample beyond that).
 const MAX_SCATTER_POINTS: usize = 1500;
@@ -49,22 +46,6 @@ impl Picture {
     }
 }
 
-/// One scored run's analysis.
-pub struct RunAnalysis {
-    /// Index of the run in the session.
-    pub index: usize,
-    pub label: String,
-    pub analysis: Result<ResidualAnalysis, String>,
-}
-
-/// The analyses of one model.
-pub struct Analyses {
-    pub model_id: u64,
-    /// Where the noise σ of the band comes from, in words.
-    pub sigma_note: String,
-    pub runs: Vec<RunAnalysis>,
-}
-
 #[derive(Default)]
 pub struct ResidualsState {
     /// The scored run shown (its index in the session).
@@ -85,52 +66,8 @@ impl ResidualsState {
         if stale {
             self.analyses = None;
         }
-        self.analyses.get_or_insert_with(|| analyse(output, session, live))
+        self.analyses.get_or_insert_with(|| Analyses::of(output, session, live))
     }
-}
-
-/// The measurement-noise σ of `output`: the normal fit (maximum likelihood: the standard
-/// deviation) of the first steady run that records it.
-fn steady_sigma(session: &Session, output: &str) -> Option<(f64, String)> {
-    session.runs.iter().filter(|r| r.role == Role::Steady).find_map(|entry| {
-        let sigma = steady_noise_sigma(&entry.run, output)?;
-        Some((
-            sigma,
-            format!("σ = {sigma:.4} from the normal fit of the steady run {}", entry.display_name()),
-        ))
-    })
-}
-
-fn analyse(output: &str, session: &Session, live: &LiveModel) -> Analyses {
-    let steady = steady_sigma(session, output);
-    let sigma_note = steady.as_ref().map_or_else(
-        || {
-            "σ estimated from each run's measured output (second differences): there is no steady run \
-             to fit the sensor noise on"
-                .to_owned()
-        },
-        |(_, note)| note.clone(),
-    );
-    let settings = ResidualSettings::for_model_channels(&live.current_model().required_channels());
-    let runs = live
-        .runs
-        .iter()
-        .map(|scored| {
-            let analysis = match session.runs.get(scored.index) {
-                Some(entry) => analyse_residuals(
-                    &entry.run,
-                    output,
-                    &scored.gray_box.y_hat,
-                    steady.as_ref().map(|(sigma, _)| *sigma),
-                    &settings,
-                )
-                .map_err(|e| e.to_string()),
-                None => Err("the run is no longer in the session".to_owned()),
-            };
-            RunAnalysis { index: scored.index, label: run_label(scored), analysis }
-        })
-        .collect();
-    Analyses { model_id: live.id, sigma_note, runs }
 }
 
 pub fn where_it_fails_ui(

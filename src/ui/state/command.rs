@@ -3,12 +3,12 @@
 //! the session changed).
 use std::path::PathBuf;
 
-use super::session::Role;
-use super::views::Tab;
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::pipeline::OutputSettings;
 use crate::core::identification::segment::Segment;
 use crate::io::csv_run::LoadOptions;
+use crate::ui::state::Tab;
+use crate::ui::state::session::Role;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {

@@ -1,14 +1,15 @@
 //! The Bode view: magnitude and phase of every segment's ARX model (thin, coloured by segment) and
 //! of the reduced linear block G(z) (thick), against ω in rad/s on a log axis; the chirp run's
 //! empirical frequency response on top when the cache has one.
-use egui_plot::{GridInput, GridMark, Legend, Line, MarkerShape, Plot, PlotPoints, Points};
+use crate::ui::widgets::plot::{log_grid, log_label};
+use egui_plot::{Legend, Line, MarkerShape, Plot, PlotPoints, Points};
 
-use super::derived::{Derived, LiveView};
-use super::model_cache::EmpiricalPoint;
-use super::model_ui;
-use super::plot_util;
-use super::theme;
 use crate::core::numerics::tf::BodePoint;
+use crate::ui::derived::model_cache::EmpiricalPoint;
+use crate::ui::derived::{Derived, LiveView};
+use crate::ui::theme;
+use crate::ui::widgets::model as model_ui;
+use crate::ui::widgets::plot as plot_util;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
 /// The legend entry of the chirp's measured points.
@@ -18,31 +19,6 @@ const EMPIRICAL_NAME: &str = "chirp (measured)";
 pub struct BodeViewState {
     /// Draw the segment models (they can hide the reduced model at high frequency).
     pub hide_segments: bool,
-}
-
-/// Log-ω grid (x is log10 ω): decades labelled, 2…9 thin.
-pub(super) fn log_grid(input: GridInput) -> Vec<GridMark> {
-    let (lo, hi) = input.bounds;
-    let mut marks = Vec::new();
-    let (first, last) = (lo.floor() as i32 - 1, hi.ceil() as i32 + 1);
-    for decade in first..=last {
-        let d = f64::from(decade);
-        marks.push(GridMark { value: d, step_size: 1.0 });
-        for k in 2..10 {
-            marks.push(GridMark { value: d + f64::from(k).log10(), step_size: 0.1 });
-        }
-    }
-    marks.retain(|m| m.value >= lo && m.value <= hi);
-    marks
-}
-
-/// Labels at decades only: 0.1, 1, 10 …
-pub(super) fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
-    if (mark.value - mark.value.round()).abs() > 1e-6 {
-        return String::new();
-    }
-    let omega = 10f64.powf(mark.value.round());
-    if omega >= 1.0 { format!("{omega:.0}") } else { format!("{omega}") }
 }
 
 /// The two plots of the view.

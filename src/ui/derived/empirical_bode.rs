@@ -3,11 +3,11 @@
 //! identification run it is checked against) changes, never while clusters are dragged.
 use std::sync::Arc;
 
-use super::model_cache::{DT_TOLERANCE, EmpiricalPoint, OutputCache};
-use super::session::{Role, Session};
 use crate::core::numerics::spectral::{WelchOptions, welch_response};
 use crate::core::numerics::tf::log_space;
 use crate::core::run::Run;
+use crate::ui::derived::model_cache::{DT_TOLERANCE, EmpiricalPoint, OutputCache};
+use crate::ui::state::session::{Role, Session};
 
 /// Grid points from the lowest frequency to 0.9 × Nyquist; those the chirp does not excite are dropped.
 const GRID_POINTS: usize = 64;

@@ -16,18 +16,19 @@ use std::sync::Arc;
 
 use crate::core::identification::cluster::{self, Cluster, ClusterEval};
 use crate::core::identification::pipeline::{
-    self, GrayBoxModel, LiveResult, OutputSettings, RunPrediction, SegmentFits, fit_segments_for,
-    live_update, live_update_proposed, segments_for,
+    self, LiveResult, OutputSettings, SegmentFits, fit_segments_for, live_update, live_update_proposed,
+    segments_for,
 };
 use crate::core::identification::segment::{Segment, SegmentSettings};
 use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::{BodePoint, log_space};
 use crate::core::run::Run;
 
-use super::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
-use super::jobs::Job;
-use super::session::{Role, Session};
-use super::setup::OutputSetup;
+use crate::ui::derived::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
+use crate::ui::derived::jobs::Job;
+pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
+use crate::ui::state::session::{Role, Session};
+use crate::ui::state::setup::OutputSetup;
 
 /// Frequencies of the Bode curves: log-spaced from this to the Nyquist frequency.
 const LOWEST_OMEGA_RAD_S: f64 = 0.05;
@@ -75,7 +76,7 @@ impl IdentCache {
                 };
                 let scored = scored_runs(session, &run, &channel.name, &mut cache.notes);
                 cache.update(&run, &segments, session.setup.output(&channel.name), scored);
-                super::empirical_bode::refresh_empirical_bode(&mut cache, session, &run);
+                crate::ui::derived::empirical_bode::refresh_empirical_bode(&mut cache, session, &run);
                 cache
             })
             .collect();
@@ -150,62 +151,6 @@ fn scored_runs(session: &Session, ident: &Run, output: &str, notes: &mut Vec<Str
     scored
 }
 
-/// A model's simulation of one scored run.
-#[derive(Clone, Debug)]
-pub struct ScoredRun {
-    /// Index of the run in the session.
-    pub index: usize,
-    pub name: String,
-    pub role: Role,
-    /// The model's simulation: the gray-box model with its effects, when it has any.
-    pub gray_box: RunPrediction,
-    /// The gray-box model without its effects (only when effects are in the model).
-    pub without_effects: Option<RunPrediction>,
-    /// Why the model with effects could not be simulated on this run (`gray_box` is then the
-    /// model without effects).
-    pub effects_error: Option<String>,
-    /// The linear block alone (the "linear" baseline).
-    pub linear: Result<RunPrediction, String>,
-}
-
-/// The live path's result for one set of clusters.
-#[derive(Clone, Debug)]
-pub struct LiveModel {
-    /// Tells this model from every other one (see [`diagnosis_model::next_model_id`]).
-    pub id: u64,
-    pub model: GrayBoxModel,
-    /// The effects added to the model, the model with them and the error history.
-    pub effects: EffectsOutcome,
-    /// Bode of the reduced linear block at [`OutputCache::omegas_rad_s`].
-    pub bode: Vec<BodePoint>,
-    pub runs: Vec<ScoredRun>,
-    /// The centroids were polished by simulation error (asked for in the settings, not while
-    /// dragging).
-    pub polish_requested: bool,
-}
-
-impl LiveModel {
-    /// Mean gray-box RMSPE over the validation runs (the figure of merit shown while dragging);
-    /// the model's effects included.
-    pub fn mean_validation_rmspe(&self) -> Option<f64> {
-        let values: Vec<f64> = self
-            .runs
-            .iter()
-            .filter(|r| r.role == Role::Validation)
-            .map(|r| r.gray_box.metrics.rmspe_pct)
-            .collect();
-        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
-    }
-
-    /// The model as the views show it: with its effects when they could be added.
-    pub fn current_model(&self) -> crate::core::effects::ExtendedModel {
-        self.effects
-            .model
-            .clone()
-            .unwrap_or_else(|| crate::core::effects::ExtendedModel::from_gray_box(&self.model))
-    }
-}
-
 /// The automatic proposal of one output: the structure search's result, or its job while it runs.
 pub enum Proposed {
     Running(Job<Arc<Proposal>>),
@@ -277,7 +222,7 @@ pub struct OutputCache {
     pub live: Result<LiveModel, String>,
     /// The chirp run's empirical frequency response; drawn on the Bode view when not empty.
     pub empirical_bode: Vec<EmpiricalPoint>,
-    pub(super) empirical_source: Option<super::empirical_bode::EmpiricalSource>,
+    pub(super) empirical_source: Option<crate::ui::derived::empirical_bode::EmpiricalSource>,
     /// Runs that were not scored, and why.
     pub notes: Vec<String>,
 }

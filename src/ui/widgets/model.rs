@@ -1,15 +1,16 @@
 //! Pieces the model views share: the output selector, error and hint lines, number formats, the
 //! cluster status in words and the metrics table.
+pub use super::hint;
 use egui::RichText;
 use num_complex::Complex64;
 
-use super::command::Command;
-use super::derived::{Derived, LiveView};
-use super::model_cache::ScoredRun;
-use super::theme;
 use crate::core::effects::EffectId;
 use crate::core::identification::cluster::{ClusterEval, ClusterStatus};
 use crate::core::numerics::metrics::Metrics;
+use crate::ui::derived::model_cache::ScoredRun;
+use crate::ui::derived::{Derived, LiveView};
+use crate::ui::state::command::Command;
+use crate::ui::theme;
 
 /// "Output: [shaft_speed_rpm] [thrust_n]"; each output has its own segments fits and clusters.
 pub fn output_bar_ui(ui: &mut egui::Ui, cache: &Derived, selected: &str) -> Option<Command> {
@@ -24,10 +25,6 @@ pub fn output_bar_ui(ui: &mut egui::Ui, cache: &Derived, selected: &str) -> Opti
         }
     });
     command
-}
-
-pub fn hint(ui: &mut egui::Ui, text: &str) {
-    ui.label(RichText::new(text).color(theme::HINT));
 }
 
 pub fn error_ui(ui: &mut egui::Ui, text: &str) {
@@ -144,7 +141,7 @@ pub fn metrics_table_ui(ui: &mut egui::Ui, id: &str, runs: &[ScoredRun]) {
             let rows =
                 [(model, Ok(&run.gray_box), theme::MODEL), ("linear", run.linear.as_ref(), theme::LINEAR)];
             for (model, prediction, colour) in rows {
-                ui.label(super::traces_ui::run_label(run));
+                ui.label(run.label());
                 ui.label(RichText::new(model).color(colour));
                 match prediction {
                     Ok(p) => {

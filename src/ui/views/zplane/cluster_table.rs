@@ -4,14 +4,14 @@
 //! and the note when the roots were fitted directly.
 use egui::{RichText, Sense};
 
-use super::derived::LiveView;
-use super::model_cache::Proposed;
-use super::model_ui::{self, complex_text, hint};
-use super::theme;
-use super::zplane_ui::ZPlaneViewState;
+use super::state::ZPlaneViewState;
 use crate::core::identification::cluster::{ClusterEval, RootKind};
 use crate::core::identification::reduce::RootGroup;
 use crate::core::identification::structure::{Proposal, root_words};
+use crate::ui::derived::LiveView;
+use crate::ui::derived::model_cache::Proposed;
+use crate::ui::theme;
+use crate::ui::widgets::model::{self as model_ui, complex_text, hint};
 
 /// The cluster table, then the free roots of the model (a direct fit), then the proposal's reasons.
 pub fn cluster_table_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewState) {

@@ -6,12 +6,12 @@ use std::collections::BTreeSet;
 use egui::RichText;
 use egui_plot::{Line, Plot, PlotPoints};
 
-use super::command::Command;
-use super::derived::{ChannelKind, Derived, Trace};
-use super::plot_util;
-use super::segments_ui::{self, EdgeDrag, SegmentOverlay};
-use super::session::{Session, SessionRun};
-use super::theme;
+use crate::ui::derived::{ChannelKind, Derived, Trace};
+use crate::ui::state::command::Command;
+use crate::ui::state::session::{Session, SessionRun};
+use crate::ui::theme;
+use crate::ui::widgets::plot as plot_util;
+use crate::ui::widgets::segments::{self as segments_ui, EdgeDrag, SegmentOverlay};
 
 /// Height below which plots stop shrinking and the view scrolls instead.
 const MIN_PLOT_HEIGHT: f32 = 110.0;

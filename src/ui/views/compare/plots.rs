@@ -3,12 +3,14 @@
 //! Monte Carlo histograms with their normal fits.
 use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, MarkerShape, Plot, PlotPoints, Points};
 
-use super::bode_ui::{log_grid, log_label};
-use super::compare_table::{MODELS, model_colour, paper_monte_carlo_std, run_title, significant_digits};
-use super::plot_util;
-use super::theme;
 use crate::core::compare::{FrequencyComparison, ModelKind, OutputComparison};
 use crate::core::monte_carlo::MonteCarloResult;
+use crate::ui::theme;
+use crate::ui::views::compare::table::{
+    MODELS, model_colour, paper_monte_carlo_std, run_title, significant_digits,
+};
+use crate::ui::widgets::plot as plot_util;
+use crate::ui::widgets::plot::{log_grid, log_label};
 
 const Y_AXIS_WIDTH: f32 = 64.0;
 const PLOT_HEIGHT: f32 = 320.0;
@@ -28,7 +30,10 @@ pub fn traces_and_frequency_ui(
             match &comparison.frequency {
                 Some(freq) => frequency_ui(right, comparison, freq),
                 None => {
-                    super::model_ui::hint(right, "No chirp run, so no frequency-domain comparison.");
+                    crate::ui::widgets::model::hint(
+                        right,
+                        "No chirp run, so no frequency-domain comparison.",
+                    );
                 }
             }
         }
@@ -45,7 +50,7 @@ fn traces_ui(
     let runs = &comparison.runs;
     let shown = shown_run.and_then(|name| runs.iter().find(|r| r.run.name == name)).or(runs.first());
     let Some(shown) = shown else {
-        super::model_ui::hint(ui, "No validation or chirp run to simulate the models on.");
+        crate::ui::widgets::model::hint(ui, "No validation or chirp run to simulate the models on.");
         return None;
     };
     let mut picked = None;

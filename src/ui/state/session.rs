@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::setup::ModelSetup;
 use crate::core::run::Run;
 use crate::io::csv_run::{ColumnMap, LoadOptions, RunFileError, load_run};
+use crate::ui::state::setup::ModelSetup;
 
 /// What a run is used for in the identification.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -200,7 +200,7 @@ impl Session {
 
     /// The bundled sample runs, when they are present.
     pub fn bundled() -> Option<(Self, Vec<LoadFailure>)> {
-        let dir = super::bundled_sample_dir()?;
+        let dir = crate::ui::bundled_sample_dir()?;
         let runs = BUNDLED_RUNS
             .iter()
             .map(|(file, role)| RunSource {

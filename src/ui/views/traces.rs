@@ -5,11 +5,11 @@
 use egui::RichText;
 use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints};
 
-use super::derived::Derived;
-use super::model_ui;
-use super::plot_util;
-use super::session::Session;
-use super::theme;
+use crate::ui::derived::Derived;
+use crate::ui::state::session::Session;
+use crate::ui::theme;
+use crate::ui::widgets::model as model_ui;
+use crate::ui::widgets::plot as plot_util;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
 
@@ -62,15 +62,6 @@ fn range_in_window(
     Some((lo - pad, hi + pad))
 }
 
-/// The run's name, and its role when the name does not say it.
-pub fn run_label(run: &super::model_cache::ScoredRun) -> String {
-    if run.name.eq_ignore_ascii_case(run.role.label()) {
-        run.name.clone()
-    } else {
-        format!("{} ({})", run.name, run.role.label())
-    }
-}
-
 fn series(t_secs: &[f64], values: impl Iterator<Item = f64>) -> PlotPoints<'static> {
     t_secs.iter().zip(values).map(|(t, v)| [*t, v]).collect()
 }
@@ -102,10 +93,10 @@ pub fn traces_ui(
     ui.horizontal(|ui| {
         let label = ui.label("Run:");
         egui::ComboBox::from_id_salt("traces_run")
-            .selected_text(run_label(scored))
+            .selected_text(scored.label())
             .show_ui(ui, |ui| {
                 for run in &live.runs {
-                    if ui.selectable_label(run.index == scored.index, run_label(run)).clicked() {
+                    if ui.selectable_label(run.index == scored.index, run.label()).clicked() {
                         state.run = Some(run.index);
                     }
                 }

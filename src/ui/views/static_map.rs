@@ -3,12 +3,12 @@
 use egui::RichText;
 use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
 
-use super::command::Command;
-use super::derived::Derived;
-use super::model_ui;
-use super::plot_util;
-use super::theme;
 use crate::core::identification::pipeline::OutputSettings;
+use crate::ui::derived::Derived;
+use crate::ui::state::command::Command;
+use crate::ui::theme;
+use crate::ui::widgets::model as model_ui;
+use crate::ui::widgets::plot as plot_util;
 
 const CURVE_POINTS: usize = 200;
 const TABLE_WIDTH: f32 = 330.0;

@@ -11,13 +11,13 @@ use egui_plot::{
 };
 use num_complex::Complex64;
 
-use super::command::Command;
-use super::derived::LiveView;
-use super::plot_util;
-use super::theme;
-use super::zplane_ui::{ClusterDrag, Handle, ZPlaneViewState, ZoomView};
+use super::state::{ClusterDrag, Handle, ZPlaneViewState, ZoomView};
 use crate::core::identification::cluster::{Cluster, RootKind};
 use crate::core::identification::pipeline::SegmentFits;
+use crate::ui::derived::LiveView;
+use crate::ui::state::command::Command;
+use crate::ui::theme;
+use crate::ui::widgets::plot as plot_util;
 
 /// Angle rays at these frequencies (rad/s), where below the Nyquist frequency.
 const RAY_OMEGAS_RAD_S: [f64; 9] = [0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 20.0, 25.0];

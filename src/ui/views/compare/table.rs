@@ -3,9 +3,9 @@
 //! (−3 dB cut-offs, the input noise used, the Monte Carlo spreads).
 use egui::{Color32, RichText};
 
-use super::theme;
 use crate::core::compare::{ModelKind, OutputComparison, PaperOutput, PaperRow, RunComparison};
 use crate::core::numerics::noise_fit::Distribution;
+use crate::ui::theme;
 
 /// The models in the order of the table's rows.
 pub const MODELS: [ModelKind; 4] = ModelKind::ALL;
@@ -141,7 +141,7 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
             },
         );
         if PaperOutput::of(&comparison.output).is_some() {
-            super::model_ui::hint(
+            crate::ui::widgets::model::hint(
                 ui,
                 "The paper's values are from its SR-30 bench data (a mean over its validation test); ours from \
                  this session's runs.",

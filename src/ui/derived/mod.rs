@@ -1,14 +1,20 @@
 //! Data computed from the session and recomputed when its revision changes: the plot traces of
 //! each run and the identification (see [`model_cache`](super::model_cache)), plus the live preview
 //! of a cluster drag.
+pub mod diagnosis_model;
+pub mod empirical_bode;
+pub mod jobs;
+pub mod live_model;
+pub mod model_cache;
+pub mod residuals;
 use std::sync::Arc;
 
 use egui_plot::PlotPoint;
 
-use super::model_cache::{IdentCache, LiveModel, OutputCache, Preview};
-use super::session::Session;
 use crate::core::identification::cluster::{Cluster, ClusterEval};
 use crate::core::run::{Channel, Run};
+use crate::ui::derived::model_cache::{IdentCache, LiveModel, OutputCache, Preview};
+use crate::ui::state::session::Session;
 
 /// Which part of a run a channel is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,6 +2,8 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use egui::accesskit::Role as A11yRole;
@@ -45,9 +47,7 @@ fn session_with(paths: &[(&Path, Role)]) -> Session {
 }
 
 fn harness(app: App) -> Harness<'static, App> {
-    Harness::builder()
-        .with_size(egui::vec2(1200.0, 800.0))
-        .build_ui_state(|ui, app: &mut App| app.ui(ui), app)
+    common::app::harness_sized(app, [1200.0, 800.0])
 }
 
 #[test]

@@ -4,6 +4,8 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::sync::Arc;
@@ -25,13 +27,7 @@ const SPEED: &str = "shaft_speed_rpm";
 const MAX_FRAMES: usize = 12_000;
 
 fn sample_harness(tab: Tab) -> Harness<'static, App> {
-    let mut app = App::startup(None);
-    assert_eq!(app.session.runs.len(), 4, "the bundled sample runs load: {:?}", app.view.failures);
-    app.settle();
-    app.view.tab = tab;
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1400.0, 900.0))
-        .build_ui_state(|ui, app: &mut App| app.ui(ui), app);
+    let mut harness = common::app::sample_app(tab);
     harness.step();
     harness
 }

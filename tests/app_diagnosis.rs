@@ -4,7 +4,7 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::{Path, PathBuf};
+mod common;
 
 use egui::accesskit::Role as A11yRole;
 use egui_kittest::Harness;
@@ -15,15 +15,8 @@ use jetid::ui::{App, Command, Role, Session, Tab};
 
 const SPEED: &str = "shaft_speed_rpm";
 
-fn sample(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs").join(path)
-}
-
-fn harness(app: App) -> Harness<'static, App> {
-    Harness::builder()
-        .with_size(egui::vec2(1400.0, 900.0))
-        .build_ui_state(|ui, app: &mut App| app.ui(ui), app)
-}
+use common::app::harness;
+use common::sample;
 
 /// The app on a sample project, opened through the app's own command, on the Diagnosis view.
 fn open_sample(project: &str) -> Harness<'static, App> {

@@ -1,6 +1,8 @@
 //! The black-box baselines: recovery of known systems, determinism, every user error, and the bundled
 //! SR-30 runs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+mod common;
+
 use std::path::Path;
 
 use jetid::core::baselines::{
@@ -13,7 +15,6 @@ use jetid::io::csv_run::{LoadOptions, load_run};
 use num_complex::Complex64;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 
 const DT: f64 = 1.0 / 8.85;
 
@@ -30,11 +31,7 @@ fn random_levels(n: usize, lo: f64, hi: f64, hold: (usize, usize), seed: u64) ->
     u
 }
 
-fn noisy(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let normal = Normal::new(0.0, sigma).unwrap();
-    x.iter().map(|v| v + normal.sample(&mut rng)).collect()
-}
+use common::noisy;
 
 fn rmspe(y: &[f64], yhat: &[f64]) -> f64 {
     metrics(y, yhat).unwrap().rmspe_pct

@@ -1,5 +1,7 @@
 //! The gray-box pipeline on systems with known truth.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+mod common;
+
 use jetid::core::identification::cluster::RootKind;
 use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
 use jetid::core::identification::segment::SegmentSettings;
@@ -7,8 +9,6 @@ use jetid::core::numerics::metrics::metrics;
 use jetid::core::numerics::tf::DiscreteTf;
 use jetid::core::run::{Channel, Run};
 use num_complex::Complex64;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
 
 const DT: f64 = 1.0 / 8.85;
 
@@ -23,11 +23,7 @@ fn staircase(levels: &[(f64, f64)]) -> Vec<f64> {
     levels.iter().flat_map(|&(level, secs)| std::iter::repeat_n(level, (secs / DT) as usize)).collect()
 }
 
-fn noisy(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let n = Normal::new(0.0, sigma).unwrap();
-    x.iter().map(|v| v + n.sample(&mut rng)).collect()
-}
+use common::noisy;
 
 fn run(name: &str, u: Vec<f64>, y: Vec<f64>) -> Run {
     Run {

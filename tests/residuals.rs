@@ -2,7 +2,8 @@
 //! resonance, a drifting inlet temperature, errors only in decelerations; and every error a caller
 //! can cause.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use std::path::Path;
+mod common;
+
 use std::sync::OnceLock;
 
 use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
@@ -31,8 +32,7 @@ fn validation_run(seed: u64, effects: &[&str]) -> SimOutput {
 }
 
 fn sample(path: &str) -> Run {
-    load_run(&Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs").join(path), &LoadOptions::default())
-        .unwrap()
+    load_run(&common::sample(path), &LoadOptions::default()).unwrap()
 }
 
 fn identify(ident: &Run, output: &str) -> WienerModel {

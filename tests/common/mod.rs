@@ -1,0 +1,47 @@
+//! Set-up shared by the integration tests: sample paths, noise, and the app under a test harness.
+//! Each test crate uses a part of it.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+/// A file or folder under the bundled `sample_runs/`.
+pub fn sample(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs").join(path)
+}
+
+/// `x` with seeded white Gaussian noise of standard deviation `sigma`.
+pub fn noisy(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let normal = Normal::new(0.0, sigma).unwrap_or_else(|e| panic!("σ = {sigma}: {e}"));
+    x.iter().map(|v| v + normal.sample(&mut rng)).collect()
+}
+
+#[cfg(feature = "gui")]
+pub mod app {
+    use egui_kittest::Harness;
+    use jetid::ui::{App, Tab};
+
+    /// The app under a harness of the given window size, not yet stepped.
+    pub fn harness_sized(app: App, size: [f32; 2]) -> Harness<'static, App> {
+        Harness::builder()
+            .with_size(egui::vec2(size[0], size[1]))
+            .build_ui_state(|ui, app: &mut App| app.ui(ui), app)
+    }
+
+    /// The app under a harness the size of the app's window, not yet stepped.
+    pub fn harness(app: App) -> Harness<'static, App> {
+        harness_sized(app, [1400.0, 900.0])
+    }
+
+    /// The app on the bundled sample runs, every model built, showing `tab`; not yet stepped.
+    pub fn sample_app(tab: Tab) -> Harness<'static, App> {
+        let mut app = App::startup(None);
+        assert_eq!(app.session.runs.len(), 4, "the bundled sample runs load: {:?}", app.view.failures);
+        app.settle();
+        app.view.tab = tab;
+        harness(app)
+    }
+}

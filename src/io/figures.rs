@@ -202,6 +202,29 @@ pub(crate) fn padded_range(values: impl IntoIterator<Item = f64>, pad: f64) -> O
 }
 
 /// A number for an axis tick: few digits, no trailing zeros; rounding noise around zero is zero.
+/// The house style of every chart's axes: tick labels, fonts and the grid. Axis descriptions and
+/// label counts stay with each chart.
+pub(crate) fn house_style<'m, 'a, 'b, X, Y, DB>(
+    mesh: &'m mut plotters::chart::MeshStyle<'a, 'b, X, Y, DB>,
+) -> &'m mut plotters::chart::MeshStyle<'a, 'b, X, Y, DB>
+where
+    X: plotters::coord::ranged1d::Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+    Y: plotters::coord::ranged1d::Ranged<ValueType = f64> + plotters::coord::ranged1d::ValueFormatter<f64>,
+    DB: DrawingBackend,
+{
+    mesh.x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .label_style(label_font())
+        .axis_desc_style(desc_font())
+        .bold_line_style(palette::GRID_BOLD)
+        .light_line_style(palette::GRID_LIGHT)
+        .max_light_lines(LIGHT_LINES)
+}
+
+fn tick(v: &f64) -> String {
+    tick_label(*v)
+}
+
 pub(crate) fn tick_label(v: f64) -> String {
     let a = v.abs();
     if a < ZERO_TICK {

@@ -6,8 +6,8 @@ use plotters::prelude::*;
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, check_len, desc_font, draw_note,
-    label_font, padded_range, palette, render, tick_label, titled_with_legend,
+    Area, DrawResult, FIGURE_SIZE, FigureError, chart_builder, check_len, draw_note, house_style,
+    padded_range, palette, render, titled_with_legend,
 };
 use crate::core::numerics::tf::BodePoint;
 
@@ -126,18 +126,7 @@ fn draw_panel(
         }));
     let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
     let mut chart = chart_builder(area).build_cartesian_2d((w_lo..w_hi).log_scale(), y_lo..y_hi)?;
-    chart
-        .configure_mesh()
-        .x_desc("ω (rad/s)")
-        .y_desc(panel.desc())
-        .x_label_formatter(&|v| tick_label(*v))
-        .y_label_formatter(&|v| tick_label(*v))
-        .label_style(label_font())
-        .axis_desc_style(desc_font())
-        .bold_line_style(palette::GRID_BOLD)
-        .light_line_style(palette::GRID_LIGHT)
-        .max_light_lines(LIGHT_LINES)
-        .draw()?;
+    house_style(chart.configure_mesh().x_desc("ω (rad/s)").y_desc(panel.desc())).draw()?;
     // Thin curves first so the emphasised ones stay on top.
     for pass_emphasis in [false, true] {
         for (curve, color) in coloured(curves).filter(|(c, _)| c.emphasis == pass_emphasis) {

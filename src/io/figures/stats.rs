@@ -9,8 +9,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, desc_font, draw_note, font, label_font,
-    padded_range, palette, render, sig, tick_label, titled_with_legend,
+    FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, desc_font, draw_note, font, house_style,
+    label_font, padded_range, palette, render, sig, tick_label, titled_with_legend,
 };
 use crate::core::numerics::metrics::BoxStats;
 
@@ -57,18 +57,7 @@ pub fn histogram_png(
         let (x_lo, x_hi) = padded_range(x_values, 0.03).unwrap_or((lo, hi));
         let peak = counts.iter().map(|c| *c as f64).chain(curve.iter().map(|p| p.1)).fold(1.0, f64::max);
         let mut chart = chart_builder(&chart_area).build_cartesian_2d(x_lo..x_hi, 0.0..1.08 * peak)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc("count")
-            .x_label_formatter(&|v| tick_label(*v))
-            .y_label_formatter(&|v| tick_label(*v))
-            .label_style(label_font())
-            .axis_desc_style(desc_font())
-            .bold_line_style(palette::GRID_BOLD)
-            .light_line_style(palette::GRID_LIGHT)
-            .max_light_lines(LIGHT_LINES)
-            .draw()?;
+        house_style(chart.configure_mesh().x_desc(x_label).y_desc("count")).draw()?;
         let bars = counts.iter().enumerate().map(|(i, c)| {
             let x0 = lo + i as f64 * width;
             [(x0, 0.0), (x0 + width, *c as f64)]

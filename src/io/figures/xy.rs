@@ -5,8 +5,8 @@ use plotters::prelude::*;
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, check_len, desc_font, draw_note,
-    label_font, padded_range, palette, render, tick_label, titled_with_legend,
+    Area, DrawResult, FIGURE_SIZE, FigureError, chart_builder, check_len, draw_note, house_style,
+    padded_range, palette, render, titled_with_legend,
 };
 
 /// Share of the traces figure's height given to the traces; the residual panel gets the rest.
@@ -37,18 +37,7 @@ pub fn static_map_png(
             return Ok(());
         };
         let mut chart = chart_builder(&chart_area).build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .x_label_formatter(&|v| tick_label(*v))
-            .y_label_formatter(&|v| tick_label(*v))
-            .label_style(label_font())
-            .axis_desc_style(desc_font())
-            .bold_line_style(palette::GRID_BOLD)
-            .light_line_style(palette::GRID_LIGHT)
-            .max_light_lines(LIGHT_LINES)
-            .draw()?;
+        house_style(chart.configure_mesh().x_desc(x_label).y_desc(y_label)).draw()?;
         chart.draw_series(points.iter().map(|p| Circle::new(*p, 5, palette::MEASURED.filled())))?;
         chart.draw_series(LineSeries::new(curve.iter().copied(), palette::FIT.stroke_width(3)))?;
         let entries = [
@@ -137,18 +126,7 @@ fn draw_lines(
     let values = series.iter().flat_map(|(y, _, _)| y.iter().copied());
     let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
     let mut chart = chart_builder(area).build_cartesian_2d(t_lo..t_hi, y_lo..y_hi)?;
-    chart
-        .configure_mesh()
-        .x_desc("time (s)")
-        .y_desc(y_desc)
-        .x_label_formatter(&|v| tick_label(*v))
-        .y_label_formatter(&|v| tick_label(*v))
-        .label_style(label_font())
-        .axis_desc_style(desc_font())
-        .bold_line_style(palette::GRID_BOLD)
-        .light_line_style(palette::GRID_LIGHT)
-        .max_light_lines(LIGHT_LINES)
-        .draw()?;
+    house_style(chart.configure_mesh().x_desc("time (s)").y_desc(y_desc)).draw()?;
     for (y, color, width) in series {
         let points: Vec<(f64, f64)> = t_secs.iter().zip(y.iter()).map(|(t, y)| (*t, *y)).collect();
         // Separate two-point paths: plotters joins a wide polyline with mitres, which spike at

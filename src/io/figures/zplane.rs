@@ -9,8 +9,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, CHART_MARGIN, DrawResult, FigureError, LIGHT_LINES, X_LABEL_AREA, Y_LABEL_AREA, chart_builder,
-    desc_font, font, label_font, palette, render, sig, tick_label, titled_with_legend,
+    Area, CHART_MARGIN, DrawResult, FigureError, X_LABEL_AREA, Y_LABEL_AREA, chart_builder, desc_font, font,
+    house_style, palette, render, sig, tick_label, titled_with_legend,
 };
 use crate::core::identification::cluster::{ClusterEval, RootKind, SegmentRoots};
 
@@ -52,20 +52,7 @@ pub fn zplane_png(
         let (chart_region, legend_area) = titled_with_legend(root, title)?;
         let mut chart =
             chart_builder(&square(&chart_region)).build_cartesian_2d(-LIMIT..LIMIT, -LIMIT..LIMIT)?;
-        chart
-            .configure_mesh()
-            .x_desc("Re z")
-            .y_desc("Im z")
-            .x_labels(12)
-            .y_labels(12)
-            .x_label_formatter(&|v| tick_label(*v))
-            .y_label_formatter(&|v| tick_label(*v))
-            .label_style(label_font())
-            .axis_desc_style(desc_font())
-            .bold_line_style(palette::GRID_BOLD)
-            .light_line_style(palette::GRID_LIGHT)
-            .max_light_lines(LIGHT_LINES)
-            .draw()?;
+        house_style(chart.configure_mesh().x_desc("Re z").y_desc("Im z").x_labels(12).y_labels(12)).draw()?;
         draw_reference(&mut chart, dt_secs)?;
         for eval in evals {
             draw_cluster(&mut chart, eval, evals)?;

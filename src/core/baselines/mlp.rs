@@ -24,12 +24,7 @@ impl MlpShape {
         // Index loops on checked lengths: this is the training hot path, run unoptimised in tests.
         let mut y = w[out0 + self.hidden];
         for j in 0..self.hidden {
-            let unit = j * stride;
-            let mut a = w[unit + n];
-            for i in 0..n {
-                a += w[unit + i] * x[i];
-            }
-            y += w[out0 + j] * a.tanh();
+            y += w[out0 + j] * pre_activation(w, x, j * stride, n).tanh();
         }
         y
     }
@@ -44,11 +39,7 @@ impl MlpShape {
         let mut y = w[out0 + self.hidden];
         for j in 0..self.hidden {
             let unit = j * stride;
-            let mut a = w[unit + n];
-            for i in 0..n {
-                a += w[unit + i] * x[i];
-            }
-            let h = a.tanh();
+            let h = pre_activation(w, x, unit, n).tanh();
             let v = w[out0 + j];
             y += v * h;
             grad[out0 + j] = h;
@@ -79,6 +70,17 @@ impl MlpShape {
     pub fn output_bound(&self, w: &[f64]) -> f64 {
         w.iter().skip(self.hidden * (self.n_inputs + 1)).map(|v| v.abs()).sum()
     }
+}
+
+/// Hidden unit `unit`'s input: its bias `w[unit + n]` plus its weights times `x` (lengths checked by
+/// the callers).
+#[inline]
+fn pre_activation(w: &[f64], x: &[f64], unit: usize, n: usize) -> f64 {
+    let mut a = w[unit + n];
+    for i in 0..n {
+        a += w[unit + i] * x[i];
+    }
+    a
 }
 
 #[cfg(test)]

@@ -1,8 +1,7 @@
 //! The Bode view: magnitude and phase of every segment's ARX model (thin, coloured by segment) and
 //! of the reduced linear block G(z) (thick), against ω in rad/s on a log axis; the chirp run's
 //! empirical frequency response on top when the cache has one.
-use crate::ui::widgets::plot::{log_grid, log_label};
-use egui_plot::{Legend, Line, MarkerShape, Plot, PlotPoints, Points};
+use egui_plot::{Legend, Line, MarkerShape, PlotPoints, Points};
 
 use crate::core::numerics::tf::BodePoint;
 use crate::ui::derived::model_cache::EmpiricalPoint;
@@ -60,15 +59,7 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
     let unit = &view.output.unit;
     for part in [Part::Magnitude, Part::Phase] {
         let last = part == Part::Phase;
-        let y_label = if last { "phase [deg]" } else { "magnitude [dB]" };
-        let mut plot = Plot::new(("bode", last, output))
-            .height(height)
-            .link_axis(group, [true, false])
-            .link_cursor(group, [true, false])
-            .x_grid_spacer(log_grid)
-            .x_axis_formatter(log_label)
-            .y_grid_spacer(plot_util::grid_125_y)
-            .y_axis_label(y_label)
+        let mut plot = plot_util::bode_panel(("bode", last, output), group, height, last)
             .y_axis_min_width(Y_AXIS_WIDTH)
             .show_axes([last, true]);
         if last {

@@ -83,6 +83,24 @@ pub fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> Stri
     if omega >= 1.0 { format!("{omega:.0}") } else { format!("{omega}") }
 }
 
+/// One panel of a Bode pair on a log-ω axis, its x axis and cursor linked with the other panel of
+/// `group`: magnitude in dB, or phase in degrees.
+pub fn bode_panel<'a>(
+    id: impl std::hash::Hash + std::fmt::Debug,
+    group: egui::Id,
+    height: f32,
+    phase: bool,
+) -> egui_plot::Plot<'a> {
+    egui_plot::Plot::new(id)
+        .height(height)
+        .link_axis(group, [true, false])
+        .link_cursor(group, [true, false])
+        .x_grid_spacer(log_grid)
+        .x_axis_formatter(log_label)
+        .y_grid_spacer(grid_125_y)
+        .y_axis_label(if phase { "phase [deg]" } else { "magnitude [dB]" })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,7 +10,6 @@ use crate::ui::views::compare::table::{
     MODELS, model_colour, paper_monte_carlo_std, run_title, significant_digits,
 };
 use crate::ui::widgets::plot as plot_util;
-use crate::ui::widgets::plot::{log_grid, log_label};
 
 const Y_AXIS_WIDTH: f32 = 64.0;
 const PLOT_HEIGHT: f32 = 320.0;
@@ -102,16 +101,10 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
     let group = egui::Id::unique(("compare_freq_axis", &comparison.output));
     let height = (PLOT_HEIGHT - ui.spacing().interact_size.y - ui.spacing().item_spacing.y) / 2.0;
     for phase in [false, true] {
-        let mut plot = Plot::new(("compare_freq", phase, &comparison.output))
-            .height(height)
-            .link_axis(group, [true, false])
-            .link_cursor(group, [true, false])
-            .x_grid_spacer(log_grid)
-            .x_axis_formatter(log_label)
-            .y_grid_spacer(plot_util::grid_125_y)
-            .y_axis_label(if phase { "phase [deg]" } else { "magnitude [dB]" })
-            .y_axis_min_width(Y_AXIS_WIDTH)
-            .show_axes([phase, true]);
+        let mut plot =
+            plot_util::bode_panel(("compare_freq", phase, &comparison.output), group, height, phase)
+                .y_axis_min_width(Y_AXIS_WIDTH)
+                .show_axes([phase, true]);
         if phase {
             plot = plot.x_axis_label("ω [rad/s]");
         } else {

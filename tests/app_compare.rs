@@ -96,6 +96,10 @@ fn showing_compare_starts_a_job_with_progress_and_fills_table_1() {
     assert!(comparison.noise.as_ref().is_some_and(|n| n.used.is_some()));
     // The table is on screen with the paper's values beside ours.
     assert!(harness.query_all_by_label("Hammerstein–Wiener").count() >= 1);
+    // The simple references are rows of the same table.
+    for reference in ["ARX(2,2)", "Hammerstein ARX", "static cubic"] {
+        assert!(harness.query_all_by_label(reference).count() >= 1, "{reference}");
+    }
     assert!(harness.query_all_by_label("1.3429").count() >= 1);
 }
 

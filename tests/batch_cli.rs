@@ -54,6 +54,19 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         assert!(gray < linear, "{output}: the static map should help ({gray} vs {linear})");
         assert!(report["outputs"][output]["error_history"][0]["rmspe_pct"].as_f64().is_some());
     }
+    // The simple references stand beside every model, scored on the same runs, in both reports.
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for output in ["shaft_speed_rpm", "thrust_n"] {
+        for model in ["arx", "hammerstein_arx", "static_cubic"] {
+            for run in ["validation", "chirp"] {
+                let m = &report["outputs"][output]["models"][model][run];
+                assert!(m["rmspe_pct"].as_f64().is_some_and(f64::is_finite), "{output}/{model}/{run}: {m}");
+            }
+        }
+    }
+    for title in ["reference: linear ARX(2,2)", "reference: Hammerstein ARX", "reference: static cubic map"] {
+        assert!(md.contains(title), "report.md lacks {title}");
+    }
     for channel in ["fuel_flow_gph", "shaft_speed_rpm", "thrust_n"] {
         let best = report["noise_fit"][channel]["best_by_log_likelihood"].as_str().unwrap();
         assert!(

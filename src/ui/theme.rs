@@ -89,6 +89,10 @@ pub const LINEAR: Color32 = Color32::from_rgb(180, 180, 90);
 /// The black-box baselines of the Compare view.
 pub const HAMMERSTEIN_WIENER: Color32 = Color32::from_rgb(170, 130, 230);
 pub const NNARX: Color32 = Color32::from_rgb(90, 200, 190);
+/// The simple references: greys and muted tones, drawn thin and dashed under the models.
+pub const ARX: Color32 = Color32::from_rgb(150, 150, 150);
+pub const HAMMERSTEIN_ARX: Color32 = Color32::from_rgb(205, 140, 95);
+pub const STATIC_CUBIC: Color32 = Color32::from_rgb(120, 160, 120);
 /// Measurements drawn under a model.
 pub const MEASURED: Color32 = Color32::from_rgb(70, 150, 230);
 /// Static-map steady-state points and the chirp's empirical frequency response.

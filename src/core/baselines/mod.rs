@@ -17,6 +17,7 @@ pub mod hammerstein_wiener;
 mod mlp;
 pub mod nnarx;
 mod nnarx_train;
+pub mod references;
 mod spd;
 
 pub use hammerstein_wiener::{

@@ -143,8 +143,8 @@ pub fn compare_output(
     let mut monte_carlo = BTreeMap::new();
     if let (Some(steady), Some(noise)) = (input.steady.as_deref(), noise.as_ref().and_then(|n| n.used)) {
         let u0 = steady.input.values.iter().sum::<f64>() / steady.input.values.len().max(1) as f64;
-        let share = (1.0 - NNARX_END) / ModelKind::ALL.len() as f64;
-        for (k, kind) in ModelKind::ALL.into_iter().enumerate() {
+        let share = (1.0 - NNARX_END) / ModelKind::MONTE_CARLO.len() as f64;
+        for (k, kind) in ModelKind::MONTE_CARLO.into_iter().enumerate() {
             let (lo, hi) = (NNARX_END + share * k as f64, NNARX_END + share * (k + 1) as f64);
             let mut part = scaled(progress, lo, hi);
             match monte_carlo_with_progress(&models, kind, u0, steady.dt_secs, &noise, &mut part) {

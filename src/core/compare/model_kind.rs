@@ -11,6 +11,12 @@ pub enum ModelKind {
     Linear,
     HammersteinWiener,
     Nnarx,
+    /// Reference: the linear ARX(2,2).
+    Arx,
+    /// Reference: ARX(2,2) on `[u, u², u³]`.
+    HammersteinArx,
+    /// Reference: the static cubic map `y = p(u)`.
+    StaticCubic,
 }
 
 /// One row of the paper's Table 1: RMSPE % and SE on the time-domain validation, then on the chirp.
@@ -50,8 +56,25 @@ impl PaperOutput {
 }
 
 impl ModelKind {
-    /// In the order of the comparison tables.
-    pub const ALL: [Self; 4] = [Self::GrayBox, Self::Linear, Self::HammersteinWiener, Self::Nnarx];
+    /// In the order of the comparison tables: the gray-box model and its linear block, the paper's
+    /// baselines, then the simple references.
+    pub const ALL: [Self; 7] = [
+        Self::GrayBox,
+        Self::Linear,
+        Self::HammersteinWiener,
+        Self::Nnarx,
+        Self::Arx,
+        Self::HammersteinArx,
+        Self::StaticCubic,
+    ];
+
+    /// The models of the paper's Monte Carlo study (section 7), and the linear block.
+    pub const MONTE_CARLO: [Self; 4] = [Self::GrayBox, Self::Linear, Self::HammersteinWiener, Self::Nnarx];
+
+    /// The simple references (not in the paper): a user sees whether the gray-box beats them.
+    pub fn is_reference(self) -> bool {
+        matches!(self, Self::Arx | Self::HammersteinArx | Self::StaticCubic)
+    }
 
     /// The key in report.json.
     pub fn report_name(self) -> &'static str {
@@ -60,6 +83,9 @@ impl ModelKind {
             Self::Linear => "linear",
             Self::HammersteinWiener => "hammerstein_wiener",
             Self::Nnarx => "nnarx",
+            Self::Arx => "arx",
+            Self::HammersteinArx => "hammerstein_arx",
+            Self::StaticCubic => "static_cubic",
         }
     }
 
@@ -74,6 +100,9 @@ impl ModelKind {
             Self::Linear => "linear",
             Self::HammersteinWiener => "Hammerstein–Wiener",
             Self::Nnarx => "NNARX",
+            Self::Arx => "ARX(2,2)",
+            Self::HammersteinArx => "Hammerstein ARX",
+            Self::StaticCubic => "static cubic",
         }
     }
 
@@ -82,6 +111,9 @@ impl ModelKind {
         match self {
             Self::GrayBox => "gray-box (Wiener)",
             Self::Linear => "linear (reduced TF alone)",
+            Self::Arx => "reference: linear ARX(2,2)",
+            Self::HammersteinArx => "reference: Hammerstein ARX [u, u², u³], na = nb = 2",
+            Self::StaticCubic => "reference: static cubic map",
             Self::HammersteinWiener | Self::Nnarx => self.label(),
         }
     }
@@ -97,7 +129,7 @@ impl ModelKind {
             (Self::GrayBox, PaperOutput::Thrust) => row(4.3739, 0.0580, 6.4324, 0.0309),
             (Self::HammersteinWiener, PaperOutput::Thrust) => row(8.0221, 0.1431, 14.838, 0.0552),
             (Self::Nnarx, PaperOutput::Thrust) => row(7.4271, 0.1466, 17.136, 0.0489),
-            (Self::Linear, _) => return None,
+            (Self::Linear | Self::Arx | Self::HammersteinArx | Self::StaticCubic, _) => return None,
         })
     }
 
@@ -110,7 +142,7 @@ impl ModelKind {
             (Self::GrayBox, PaperOutput::Thrust) => 0.0136,
             (Self::HammersteinWiener, PaperOutput::Thrust) => 0.0352,
             (Self::Nnarx, PaperOutput::Thrust) => 0.1064,
-            (Self::Linear, _) => return None,
+            (Self::Linear | Self::Arx | Self::HammersteinArx | Self::StaticCubic, _) => return None,
         })
     }
 }
@@ -132,6 +164,6 @@ mod tests {
             let json = serde_json::to_string(&kind).unwrap_or_default();
             assert_eq!(json, format!("\"{}\"", kind.report_name()));
         }
-        assert_eq!(ModelKind::from_report_name("arx"), None);
+        assert_eq!(ModelKind::from_report_name("armax"), None);
     }
 }

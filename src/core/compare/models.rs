@@ -1,8 +1,10 @@
-//! Every model of one output that the comparison simulates: the gray-box model, its linear block
-//! and the two baselines fitted on the same identification range.
+//! Every model of one output that the comparison simulates: the gray-box model, its linear block,
+//! the two baselines of the paper and the three simple references, all fitted on the same
+//! identification range.
 use crate::core::baselines::BaselineError;
 use crate::core::baselines::hammerstein_wiener::{HwModel, HwOptions, HwOrders, fit_hammerstein_wiener};
 use crate::core::baselines::nnarx::{NnarxModel, NnarxOptions, fit_nnarx};
+use crate::core::baselines::references::References;
 use crate::core::effects::ExtendedModel;
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::{Identified, SegmentFits};
@@ -24,6 +26,7 @@ pub struct OutputModels {
     pub extended: Option<ExtendedModel>,
     pub hw: Option<HwModel>,
     pub nnarx: Option<NnarxModel>,
+    pub references: References,
 }
 
 impl OutputModels {
@@ -38,6 +41,27 @@ impl OutputModels {
         }
         if let Some(nn) = &self.nnarx {
             out.push((ModelKind::Nnarx, nn.simulate(u)));
+        }
+        out.extend(self.references_simulated(u, None));
+        out
+    }
+
+    /// The references that were fitted, simulated on `u`; the ARX models start from `measured` when
+    /// it is given (the estimated start), else from the steady state of `u[0]`.
+    fn references_simulated(&self, u: &[f64], measured: Option<&[f64]>) -> Vec<(ModelKind, Vec<f64>)> {
+        let refs = &self.references;
+        let arx = |m: &crate::core::baselines::references::PolyArx| {
+            measured.map_or_else(|| m.simulate(u), |y| m.simulate_from_measured(u, y))
+        };
+        let mut out = Vec::with_capacity(3);
+        if let Some(m) = &refs.arx {
+            out.push((ModelKind::Arx, arx(m)));
+        }
+        if let Some(m) = &refs.hammerstein_arx {
+            out.push((ModelKind::HammersteinArx, arx(m)));
+        }
+        if let Some(m) = &refs.static_cubic {
+            out.push((ModelKind::StaticCubic, m.simulate(u)));
         }
         out
     }
@@ -55,7 +79,7 @@ impl OutputModels {
         let u = &run.input.values;
         let measured = run.output(&self.output).map(|c| c.values.as_slice());
         let estimated = measured.filter(|_| self.initial_state == InitialState::Estimated);
-        let mut out = Vec::with_capacity(4);
+        let mut out = Vec::with_capacity(ModelKind::ALL.len());
         if let Ok(y) = self.gray_box_model().simulate_scored(run, self.initial_state) {
             out.push((ModelKind::GrayBox, y));
         }
@@ -76,6 +100,7 @@ impl OutputModels {
                 estimated.map_or_else(|| nn.simulate(u), |y| nn.simulate_from_measured(u, y)),
             ));
         }
+        out.extend(self.references_simulated(u, estimated));
         out
     }
 
@@ -86,6 +111,9 @@ impl OutputModels {
             ModelKind::Linear => Some(self.wiener.linear.simulate(u)),
             ModelKind::HammersteinWiener => self.hw.as_ref().map(|m| m.simulate(u)),
             ModelKind::Nnarx => self.nnarx.as_ref().map(|m| m.simulate(u)),
+            ModelKind::Arx => self.references.arx.as_ref().map(|m| m.simulate(u)),
+            ModelKind::HammersteinArx => self.references.hammerstein_arx.as_ref().map(|m| m.simulate(u)),
+            ModelKind::StaticCubic => self.references.static_cubic.as_ref().map(|m| m.simulate(u)),
         }
     }
 }
@@ -107,6 +135,7 @@ pub fn fit_baselines(
             extended: None,
             hw: None,
             nnarx: None,
+            references: References::default(),
         },
     )
 }
@@ -161,6 +190,7 @@ pub fn fit_baselines_with_progress(
             None
         }
     };
+    let references = References::fit(u, y, output, notes);
     Ok(OutputModels {
         output: output.to_owned(),
         initial_state: InitialState::default(),
@@ -168,6 +198,7 @@ pub fn fit_baselines_with_progress(
         extended: None,
         hw,
         nnarx,
+        references,
     })
 }
 

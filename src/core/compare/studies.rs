@@ -149,7 +149,7 @@ pub fn monte_carlo_all(
     notes: &mut Vec<String>,
 ) -> BTreeMap<String, MonteCarloResult> {
     let mut out = BTreeMap::new();
-    for kind in ModelKind::ALL {
+    for kind in ModelKind::MONTE_CARLO {
         match monte_carlo_for(models, kind, u0, dt_secs, noise) {
             Some(Ok(r)) => {
                 out.insert(kind.report_name().to_owned(), r);

@@ -168,8 +168,16 @@ fn table1_section(out: &mut String, report: &Report) {
     let cell = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.4}"));
     let mut cutoffs = Vec::new();
     for (name, o) in &report.outputs {
-        // The paper's models first, the linear block last.
-        for kind in [ModelKind::GrayBox, ModelKind::HammersteinWiener, ModelKind::Nnarx, ModelKind::Linear] {
+        // The paper's models first, then the linear block and the simple references.
+        for kind in [
+            ModelKind::GrayBox,
+            ModelKind::HammersteinWiener,
+            ModelKind::Nnarx,
+            ModelKind::Linear,
+            ModelKind::Arx,
+            ModelKind::HammersteinArx,
+            ModelKind::StaticCubic,
+        ] {
             let model = kind.report_name();
             if !o.models.contains_key(model) {
                 continue;

@@ -85,8 +85,11 @@ fn traces_ui(
                 let Some(run) = shown.models.iter().find(|m| m.model == *model) else { continue };
                 let mut line =
                     Line::new(model.label(), series(&run.y_hat)).color(model_colour(*model)).width(1.3);
-                if *model == ModelKind::Linear {
+                if *model == ModelKind::Linear || model.is_reference() {
                     line = line.style(LineStyle::Dashed { length: 8.0 });
+                }
+                if model.is_reference() {
+                    line = line.width(1.0);
                 }
                 plot_ui.line(line);
             }
@@ -160,8 +163,10 @@ pub fn monte_carlo_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &s
         ))
         .strong(),
     );
-    let shown: Vec<(ModelKind, &MonteCarloResult)> =
-        MODELS.iter().filter_map(|m| comparison.monte_carlo.get(m.report_name()).map(|r| (*m, r))).collect();
+    let shown: Vec<(ModelKind, &MonteCarloResult)> = ModelKind::MONTE_CARLO
+        .iter()
+        .filter_map(|m| comparison.monte_carlo.get(m.report_name()).map(|r| (*m, r)))
+        .collect();
     ui.columns(shown.len(), |columns| {
         for (ui, (model, result)) in columns.iter_mut().zip(&shown) {
             histogram_ui(ui, &comparison.output, *model, result);

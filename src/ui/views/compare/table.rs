@@ -8,7 +8,7 @@ use crate::core::numerics::noise_fit::Distribution;
 use crate::ui::theme;
 
 /// The models in the order of the table's rows.
-pub const MODELS: [ModelKind; 4] = ModelKind::ALL;
+pub const MODELS: [ModelKind; ModelKind::ALL.len()] = ModelKind::ALL;
 
 pub fn model_colour(model: ModelKind) -> Color32 {
     match model {
@@ -16,6 +16,9 @@ pub fn model_colour(model: ModelKind) -> Color32 {
         ModelKind::Linear => theme::LINEAR,
         ModelKind::HammersteinWiener => theme::HAMMERSTEIN_WIENER,
         ModelKind::Nnarx => theme::NNARX,
+        ModelKind::Arx => theme::ARX,
+        ModelKind::HammersteinArx => theme::HAMMERSTEIN_ARX,
+        ModelKind::StaticCubic => theme::STATIC_CUBIC,
     }
 }
 
@@ -34,7 +37,7 @@ pub struct Table1Column {
     pub group: String,
     /// "RMSPE %" or "SE".
     pub what: &'static str,
-    pub values: [Option<f64>; 4],
+    pub values: [Option<f64>; ModelKind::ALL.len()],
 }
 
 impl Table1Column {

@@ -234,6 +234,34 @@ fn resample_makes_a_jittered_time_axis_uniform() {
 }
 
 #[test]
+fn repeated_time_stamps_are_refused_with_advice_or_merged_with_resample() {
+    // A logger that writes some ticks twice (the two-shaft turbine's T07 logs): the same time stamp
+    // on two rows, the second with a fresh reading.
+    let mut text = String::from("time_s,fuel_flow_gph,shaft_speed_rpm\n");
+    for k in 0..40 {
+        let t = k as f64 * 0.1;
+        text.push_str(&format!("{t},{},{}\n", 2.0 * t + 1.0, 5.0 * t));
+        if k % 10 == 5 {
+            text.push_str(&format!("{t},{},{}\n", 2.0 * t + 1.2, 5.0 * t + 1.0));
+        }
+    }
+    let err = parse(&text, &LoadOptions::default()).unwrap_err();
+    assert!(matches!(err, RunFileError::NonIncreasingTime { .. }), "{err}");
+    assert_mentions(&err, &["does not increase", "--resample"]);
+    let opts = LoadOptions { resample: true, ..LoadOptions::default() };
+    let (run, notes) = parse_run_with_notes(NAME, text.as_bytes(), &opts).unwrap();
+    assert_eq!(notes.merged_repeats, 4);
+    assert_eq!(run.len(), 40);
+    assert!((run.dt_secs - 0.1).abs() < 1e-9);
+    // A repeated tick holds the mean of its rows.
+    assert!((run.input.values[5] - (2.0 * 0.5 + 1.1)).abs() < 1e-9, "{}", run.input.values[5]);
+    // A time that goes back is not a repeat: still refused with resample.
+    let back = text.replacen("0.30000000000000004,", "0.1,", 1);
+    let back = if back == text { text.replacen("\n0.3,", "\n0.1,", 1) } else { back };
+    assert!(matches!(parse(&back, &opts), Err(RunFileError::NonIncreasingTime { .. })));
+}
+
+#[test]
 fn rounded_time_stamps_within_one_percent_are_uniform() {
     let run = parse(&with_cell(30, 10, 0, "0.9005"), &LoadOptions::default()).unwrap();
     assert!((run.dt_secs - 0.1).abs() < 1e-9);

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use anyhow::{Context, Result, bail};
 
 use crate::core::run::Run;
-use crate::io::csv_run::load_run;
+use crate::io::csv_run::load_run_with_notes;
 use crate::io::project::{Project, RunSource};
 
 /// The loaded runs of a project, by role.
@@ -16,6 +16,8 @@ pub struct Runs {
     pub validate: Vec<Run>,
     pub chirp: Option<Run>,
     pub steady: Option<Run>,
+    /// What reading the files changed, in words (resampled time axes, merged time stamps, repairs).
+    pub notes: Vec<String>,
 }
 
 impl Runs {
@@ -46,9 +48,22 @@ impl Runs {
     }
 }
 
-fn load_source(source: &RunSource) -> Result<Run> {
+fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
     let opts = source.load.to_options()?;
-    Ok(load_run(&source.path, &opts)?)
+    let (run, read) = load_run_with_notes(&source.path, &opts)?;
+    if read.resampled || read.merged_repeats > 0 {
+        notes.push(format!(
+            "run '{}': time axis resampled onto a uniform {:.4} s grid ({} rows sharing a time stamp merged into their mean)",
+            run.name, run.dt_secs, read.merged_repeats
+        ));
+    }
+    if read.repaired_samples > 0 {
+        notes.push(format!(
+            "run '{}': {} samples flagged bad were interpolated",
+            run.name, read.repaired_samples
+        ));
+    }
+    Ok(run)
 }
 
 /// Load every run of the project; runs sampled differently from the identification run are refused
@@ -57,7 +72,9 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
     if project.ident.is_empty() {
         bail!("the project names no identification run (give one with --ident FILE)");
     }
-    let parts = project.ident.iter().map(load_source).collect::<Result<Vec<_>>>()?;
+    let mut notes = Vec::new();
+    let mut load = |source: &RunSource| load_source(source, &mut notes);
+    let parts = project.ident.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let (ident, ident_junctions) =
         crate::core::run::join_runs(&parts).context("joining the identification runs")?;
     if let Some(name) = &project.steps_from
@@ -68,9 +85,9 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             ident.name
         );
     }
-    let validate = project.validate.iter().map(load_source).collect::<Result<Vec<_>>>()?;
-    let chirp = project.chirp.as_ref().map(load_source).transpose()?;
-    let steady = project.steady.as_ref().map(load_source).transpose()?;
+    let validate = project.validate.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
+    let chirp = project.chirp.as_ref().map(&mut load).transpose()?;
+    let steady = project.steady.as_ref().map(&mut load).transpose()?;
     for run in validate.iter().chain(&chirp).chain(&steady) {
         let ratio = run.dt_secs / ident.dt_secs;
         if (ratio - 1.0).abs() > 0.02 {
@@ -82,7 +99,7 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             );
         }
     }
-    Ok(Runs { ident, ident_junctions, validate, chirp, steady })
+    Ok(Runs { ident, ident_junctions, validate, chirp, steady, notes })
 }
 
 /// Outputs to model: the project's list (each must exist), else every output of the ident run.

@@ -61,6 +61,7 @@ pub fn run(mut project: Project, out_dir: &Path) -> Result<()> {
 
     let mut model_file = report::new_model_file(&runs);
     let mut report = report::new_report(&project, &runs, cluster_notes);
+    report.diagnostics.splice(0..0, runs.notes.iter().cloned());
     let noise = runs.steady.as_ref().map(|s| noise_fits(s, &mut report.diagnostics));
     let input_noise = noise
         .as_ref()

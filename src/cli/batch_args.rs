@@ -40,6 +40,10 @@ pub struct BatchArgs {
     /// Sample time in seconds, for files without a time column.
     #[arg(long)]
     pub sample_time: Option<f64>,
+    /// Read logs with repeated or irregular time stamps: rows sharing a time stamp are merged into
+    /// their mean and the time axis is resampled onto a uniform grid (for every run).
+    #[arg(long)]
+    pub resample: bool,
     /// Where results go.
     #[arg(long, default_value = "jetid-out")]
     pub out: PathBuf,
@@ -67,8 +71,12 @@ impl BatchArgs {
             },
             (None, None) => load_project(&bundled_project_path()?)?,
         };
-        let cli_load =
-            LoadSpec { map: self.maps.clone(), sample_time: self.sample_time, ..LoadSpec::default() };
+        let cli_load = LoadSpec {
+            map: self.maps.clone(),
+            sample_time: self.sample_time,
+            resample: self.resample,
+            ..LoadSpec::default()
+        };
         cli_load.to_options().context("command-line load options")?;
         let cwd = PathBuf::from(".");
         let src = |p: &PathBuf| RunSource { path: cwd.join(p), load: cli_load.clone() };
@@ -90,6 +98,12 @@ impl BatchArgs {
         project.add_effects.extend(self.add_effects.iter().cloned());
         if let Some(p) = &self.clusters_from {
             project.clusters_from = Some(p.clone());
+        }
+        if self.resample {
+            let sources = project.ident.iter_mut().chain(&mut project.validate);
+            for source in sources.chain(&mut project.chirp).chain(&mut project.steady) {
+                source.load.resample = true;
+            }
         }
         Ok(project)
     }

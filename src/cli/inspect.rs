@@ -63,7 +63,12 @@ pub fn summary(run: &Run, notes: &LoadNotes) -> String {
     let _ = writeln!(out, "dt        {:.6} s ({:.4} Hz)", run.dt_secs, 1.0 / run.dt_secs);
     let _ = writeln!(out, "duration  {:.3} s (t = {t0} s to {t_end} s)", t_end - t0);
     let time_source = notes.time_column.as_ref().map_or("sample time".to_owned(), |c| format!("column {c}"));
-    let _ = writeln!(out, "time      from {time_source}{}", if notes.resampled { ", resampled" } else { "" });
+    let merged = match notes.merged_repeats {
+        0 => String::new(),
+        n => format!(" ({n} rows repeating a time stamp merged into their mean)"),
+    };
+    let resampled = if notes.resampled { ", resampled" } else { "" };
+    let _ = writeln!(out, "time      from {time_source}{resampled}{merged}");
     if notes.repaired_samples + notes.trimmed_bad_start + notes.trimmed_bad_end > 0 {
         let _ = writeln!(
             out,

@@ -117,6 +117,8 @@ pub struct LoadNotes {
     pub trimmed_bad_end: usize,
     /// Whether the time axis was resampled onto a uniform grid.
     pub resampled: bool,
+    /// Rows merged into the row before them because they repeat its time stamp (with `resample`).
+    pub merged_repeats: usize,
     pub dropped_columns: Vec<DroppedColumn>,
 }
 

@@ -56,7 +56,7 @@ pub enum RunFileError {
     #[error("{}: quality column \"{column}\": {bad} of {total} samples are flagged bad (more than {max_pct} %)", file.display())]
     TooManyBadSamples { file: PathBuf, column: String, bad: usize, total: usize, max_pct: f64 },
 
-    #[error("{}: line {line} (data row {row}), column \"{column}\": time {value} s does not increase (previous sample {previous} s)", file.display())]
+    #[error("{}: line {line} (data row {row}), column \"{column}\": time {value} s does not increase (previous sample {previous} s); a log with repeated or irregular time stamps is read with resample = true in the project's [load] or --resample", file.display())]
     NonIncreasingTime { file: PathBuf, line: u64, row: usize, column: String, previous: f64, value: f64 },
 
     #[error("{}: line {line} (data row {row}), column \"{column}\": time step {step} s differs from the sample time {expected} s by more than {tolerance_pct} %; use --resample to resample onto a uniform grid", file.display())]

@@ -3,7 +3,7 @@ use std::ops::Range;
 use std::path::Path;
 
 use super::column_map::{Layout, TimeBase, resolve_layout};
-use super::repair::{TimeProblem, check_time, fill_gaps, median_step, resample};
+use super::repair::{TimeProblem, check_time, fill_gaps, median_step, merge_repeated_times, resample};
 use super::{
     DroppedColumn, LoadNotes, LoadOptions, MAX_BAD_FRACTION, MIN_SAMPLES, RunFileError, TIME_TOLERANCE,
 };
@@ -254,6 +254,10 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
     let Channels { names, mut values, dropped: dropped_columns } =
         read_channels(&ctx, &layout, kept.clone(), &good)?;
     let mut resampled = false;
+    let mut merged_repeats = 0;
+    if opts.resample && matches!(layout.time, TimeBase::Column(_)) {
+        merged_repeats = merge_repeated_times(&mut t_secs, &mut values).unwrap_or(0);
+    }
     let dt_secs = match layout.time {
         TimeBase::Fixed { dt_secs } => dt_secs,
         TimeBase::Column(col) => match check_time(&t_secs, TIME_TOLERANCE) {
@@ -290,6 +294,7 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
         trimmed_bad_start: kept.start - window.start,
         trimmed_bad_end: window.end - kept.end,
         resampled,
+        merged_repeats,
         dropped_columns,
     };
     Ok((Run { name, dt_secs, t_secs, input, outputs, aux }, notes))

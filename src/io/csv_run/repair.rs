@@ -87,6 +87,37 @@ pub(super) fn check_time(t: &[f64], tolerance: f64) -> Result<f64, TimeProblem> 
     Ok(dt)
 }
 
+/// Merge samples that share a time stamp (a logger that writes several rows per tick): each run of
+/// equal times becomes one sample whose channels are the mean of the run's. Returns how many rows
+/// were merged away; `None` when the time goes back or is not finite somewhere (that is not a
+/// repeat, and is left for [`check_time`] to report).
+pub(super) fn merge_repeated_times(t: &mut Vec<f64>, channels: &mut [Vec<f64>]) -> Option<usize> {
+    if pairs(t).any(|(previous, value)| value < previous || !value.is_finite()) {
+        return None;
+    }
+    let mut groups: Vec<(usize, usize)> = Vec::new();
+    let mut start = 0;
+    for k in 1..=t.len() {
+        if k == t.len() || t.get(k) != t.get(start) {
+            groups.push((start, k));
+            start = k;
+        }
+    }
+    let merged = t.len() - groups.len();
+    if merged == 0 {
+        return Some(0);
+    }
+    let mean = |values: &[f64], (a, b): (usize, usize)| {
+        let part = values.get(a..b).unwrap_or(&[]);
+        part.iter().sum::<f64>() / part.len().max(1) as f64
+    };
+    *t = groups.iter().map(|&(a, _)| t.get(a).copied().unwrap_or(f64::NAN)).collect();
+    for values in channels.iter_mut() {
+        *values = groups.iter().map(|&g| mean(values, g)).collect();
+    }
+    Some(merged)
+}
+
 /// Resample every channel onto the uniform grid `t[0] + k·dt` (up to the last time) by linear
 /// interpolation; `t` must strictly increase. Returns the new time axis.
 pub(super) fn resample(t: &[f64], channels: &mut [Vec<f64>], dt_secs: f64) -> Vec<f64> {
@@ -154,6 +185,11 @@ mod tests {
         };
         assert_eq!(k, 3);
         assert!(check_time(&[0.0, 0.106, 0.213, 0.319, 0.425], 0.01).is_ok());
+        // Repeated stamps are merged into their mean; a time going back is not a repeat.
+        let (mut t, mut ch) = (vec![0.0, 1.0, 1.0, 1.0, 2.0], vec![vec![0.0, 3.0, 4.0, 5.0, 6.0]]);
+        assert_eq!(merge_repeated_times(&mut t, &mut ch), Some(2));
+        assert_eq!((t, ch), (vec![0.0, 1.0, 2.0], vec![vec![0.0, 4.0, 6.0]]));
+        assert_eq!(merge_repeated_times(&mut vec![0.0, 2.0, 1.0], &mut []), None);
     }
 
     #[test]

@@ -262,6 +262,58 @@ fn repeated_time_stamps_are_refused_with_advice_or_merged_with_resample() {
 }
 
 #[test]
+fn invalid_sentinels_become_gaps_and_are_counted_or_refused_with_reason() {
+    // A logger that writes ±3276.8 when a channel has no reading (the two-shaft turbine's T_inlet_C).
+    let mut text = String::from("time_s,fuel_flow_gph,shaft_speed_rpm,t_inlet_c\n");
+    for k in 0..40 {
+        let t = k as f64 * 0.1;
+        let inlet = match k {
+            7 => "3276.8".to_owned(),
+            8 => "-3276.8".to_owned(),
+            _ => format!("{}", 20.0 + 0.1 * k as f64),
+        };
+        text.push_str(&format!("{t},{},{},{inlet}\n", 2.0 * t + 1.0, 5.0 * t));
+    }
+    let opts = LoadOptions::from_cli(&["aux=t_inlet_c"], None, None, None, false)
+        .unwrap()
+        .with_invalid_specs(&["t_inlet_c=-3276.8,3276.8"])
+        .unwrap();
+    let (run, notes) = parse_run_with_notes(NAME, text.as_bytes(), &opts).unwrap();
+    assert_eq!(notes.invalid_samples, vec![("t_inlet_c".to_owned(), 2)]);
+    let inlet = &run.channel("t_inlet_c").unwrap().values;
+    for k in [7, 8] {
+        let want = 20.0 + 0.1 * k as f64;
+        assert!((inlet[k] - want).abs() < 1e-9, "sample {k} interpolated: {}", inlet[k]);
+    }
+
+    // A sentinel for a channel the run lacks is named with the channels that are there.
+    let typo = LoadOptions::default().with_invalid_specs(&["t_inlet=3276.8"]).unwrap();
+    let err = parse(&text, &typo).unwrap_err();
+    assert!(matches!(err, RunFileError::UnknownInvalidChannel { .. }), "{err}");
+    assert_mentions(&err, &["t_inlet", "t_inlet_c"]);
+
+    // A channel with nothing but sentinels has no reading: refused, not silently flat.
+    let dead: String = text
+        .lines()
+        .enumerate()
+        .map(|(k, line)| {
+            if k == 0 {
+                format!("{line}\n")
+            } else {
+                format!("{},3276.8\n", line.rsplit_once(',').unwrap().0)
+            }
+        })
+        .collect();
+    let err = parse(&dead, &opts).unwrap_err();
+    assert!(matches!(err, RunFileError::AllInvalid { .. }), "{err}");
+
+    // A malformed spec is refused before any file is read.
+    for spec in ["t_inlet_c", "t_inlet_c=", "t_inlet_c=abc", "=1"] {
+        assert!(LoadOptions::default().with_invalid_specs(&[spec]).is_err(), "{spec}");
+    }
+}
+
+#[test]
 fn rounded_time_stamps_within_one_percent_are_uniform() {
     let run = parse(&with_cell(30, 10, 0, "0.9005"), &LoadOptions::default()).unwrap();
     assert!((run.dt_secs - 0.1).abs() < 1e-9);

@@ -57,6 +57,12 @@ fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
             run.name, run.dt_secs, read.merged_repeats
         ));
     }
+    for (channel, count) in &read.invalid_samples {
+        notes.push(format!(
+            "run '{}': {count} samples of {channel} held its invalid-value sentinel and were interpolated",
+            run.name
+        ));
+    }
     if read.repaired_samples > 0 {
         notes.push(format!(
             "run '{}': {} samples flagged bad were interpolated",

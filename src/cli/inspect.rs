@@ -27,6 +27,9 @@ pub struct InspectArgs {
     /// Resample a non-uniform time axis onto a uniform grid.
     #[arg(long)]
     pub resample: bool,
+    /// Values a channel's logger writes for "no reading", which become gaps (repeatable).
+    #[arg(long = "invalid", value_name = "CHANNEL=V1,V2")]
+    pub invalid: Vec<String>,
 }
 
 pub fn run(args: &InspectArgs) -> Result<()> {
@@ -36,7 +39,8 @@ pub fn run(args: &InspectArgs) -> Result<()> {
         args.window.as_deref(),
         args.quality.as_deref(),
         args.resample,
-    )?;
+    )?
+    .with_invalid_specs(&args.invalid)?;
     // The loader's errors already name the file, row and column.
     let (run, notes) = load_run_with_notes(&args.file, &opts).context("cannot load the run file")?;
     print!("{}", summary(&run, &notes));
@@ -75,6 +79,9 @@ pub fn summary(run: &Run, notes: &LoadNotes) -> String {
             "quality   {} bad samples interpolated, {} trimmed at the start, {} at the end",
             notes.repaired_samples, notes.trimmed_bad_start, notes.trimmed_bad_end
         );
+    }
+    for (channel, count) in &notes.invalid_samples {
+        let _ = writeln!(out, "invalid   {channel}: {count} sentinel samples interpolated");
     }
     for dropped in &notes.dropped_columns {
         let _ = writeln!(out, "left out  {}: {}", dropped.name, dropped.reason);

@@ -63,6 +63,9 @@ pub struct LoadOptions {
     pub quality: Option<String>,
     /// Resample a non-uniform time axis instead of refusing it.
     pub resample: bool,
+    /// Per channel, values the logger writes when the channel has no valid reading (a sentinel such
+    /// as ±3276.8): they become gaps, interpolated like bad samples.
+    pub invalid: std::collections::BTreeMap<String, Vec<f64>>,
 }
 
 /// A bad option string given to [`LoadOptions::from_cli`].
@@ -72,6 +75,8 @@ pub enum LoadOptionsError {
     Map(#[from] ColumnMapError),
     #[error(transparent)]
     Window(#[from] WindowSpecError),
+    #[error("bad --invalid \"{spec}\": expected CHANNEL=VALUE[,VALUE...], e.g. T_inlet_C=-3276.8,3276.8")]
+    Invalid { spec: String },
 }
 
 impl LoadOptions {
@@ -90,7 +95,27 @@ impl LoadOptions {
             window: window.map(str::parse).transpose()?,
             quality: quality.map(str::to_owned),
             resample,
+            invalid: std::collections::BTreeMap::new(),
         })
+    }
+
+    /// `self` with the sentinels of `--invalid CHANNEL=V1,V2` strings added.
+    pub fn with_invalid_specs<S: AsRef<str>>(mut self, specs: &[S]) -> Result<Self, LoadOptionsError> {
+        for spec in specs {
+            let spec = spec.as_ref();
+            let bad = || LoadOptionsError::Invalid { spec: spec.to_owned() };
+            let (channel, list) = spec.split_once('=').ok_or_else(bad)?;
+            let values: Vec<f64> = list
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| bad())?;
+            if channel.trim().is_empty() || values.iter().any(|v| !v.is_finite()) {
+                return Err(bad());
+            }
+            self.invalid.entry(channel.trim().to_owned()).or_default().extend(values);
+        }
+        Ok(self)
     }
 }
 
@@ -119,6 +144,8 @@ pub struct LoadNotes {
     pub resampled: bool,
     /// Rows merged into the row before them because they repeat its time stamp (with `resample`).
     pub merged_repeats: usize,
+    /// Per channel, the samples that held an invalid-value sentinel and were interpolated.
+    pub invalid_samples: Vec<(String, usize)>,
     pub dropped_columns: Vec<DroppedColumn>,
 }
 

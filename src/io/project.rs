@@ -50,6 +50,10 @@ pub struct LoadSpec {
     pub window: Option<String>,
     pub quality: Option<String>,
     pub resample: bool,
+    /// Per channel, the values its logger writes for "no reading" (e.g. `T_inlet_C = [-3276.8,
+    /// 3276.8]`): they become gaps.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub invalid: BTreeMap<String, Vec<f64>>,
 }
 
 impl LoadSpec {
@@ -58,13 +62,15 @@ impl LoadSpec {
     }
 
     pub fn to_options(&self) -> Result<LoadOptions> {
-        Ok(LoadOptions::from_cli(
+        let mut options = LoadOptions::from_cli(
             &self.map,
             self.sample_time,
             self.window.as_deref(),
             self.quality.as_deref(),
             self.resample,
-        )?)
+        )?;
+        options.invalid = self.invalid.clone();
+        Ok(options)
     }
 
     /// `self` with the fields `over` sets taken from `over`.
@@ -75,6 +81,7 @@ impl LoadSpec {
             window: over.window.clone().or_else(|| self.window.clone()),
             quality: over.quality.clone().or_else(|| self.quality.clone()),
             resample: self.resample || over.resample,
+            invalid: if over.invalid.is_empty() { self.invalid.clone() } else { over.invalid.clone() },
         }
     }
 }

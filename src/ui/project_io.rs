@@ -94,6 +94,7 @@ fn load_spec(options: &LoadOptions) -> LoadSpec {
         window: options.window.as_ref().map(ToString::to_string),
         quality: options.quality.clone(),
         resample: options.resample,
+        invalid: options.invalid.clone(),
     }
 }
 

@@ -57,6 +57,7 @@ fn options() -> impl Strategy<Value = LoadOptions> {
             window: window.map(|w| w.parse().unwrap()),
             quality: quality.then(|| "ok".to_owned()),
             resample,
+            invalid: Default::default(),
         })
 }
 

@@ -73,6 +73,12 @@ pub enum RunFileError {
     #[error("{}: {found} samples, at least {needed} are needed", file.display())]
     TooFewSamples { file: PathBuf, found: usize, needed: usize },
 
+    #[error("{}: invalid values are given for channel \"{channel}\", which the run does not have (channels: {})", file.display(), present.join(", "))]
+    UnknownInvalidChannel { file: PathBuf, channel: String, present: Vec<String> },
+
+    #[error("{}: channel \"{channel}\" holds only its invalid-value sentinels ({values}): it has no reading to use", file.display())]
+    AllInvalid { file: PathBuf, channel: String, values: String },
+
     #[error("{}: bad --window {window}: {reason}", file.display())]
     BadWindow { file: PathBuf, window: String, reason: String },
 

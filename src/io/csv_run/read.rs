@@ -253,6 +253,7 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
     };
     let Channels { names, mut values, dropped: dropped_columns } =
         read_channels(&ctx, &layout, kept.clone(), &good)?;
+    let invalid_samples = mark_invalid(file, &names, &mut values, &opts.invalid)?;
     let mut resampled = false;
     let mut merged_repeats = 0;
     if opts.resample && matches!(layout.time, TimeBase::Column(_)) {
@@ -295,9 +296,47 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
         trimmed_bad_end: window.end - kept.end,
         resampled,
         merged_repeats,
+        invalid_samples,
         dropped_columns,
     };
     Ok((Run { name, dt_secs, t_secs, input, outputs, aux }, notes))
+}
+
+/// Turn every sentinel of `invalid` (channel → values, compared to one part in 10⁹) into a gap and
+/// interpolate it; returns how many samples of each channel held one. A sentinel for a channel the
+/// run does not have, or a channel with nothing but sentinels, is an error.
+fn mark_invalid(
+    file: &Path,
+    names: &[String],
+    values: &mut [Vec<f64>],
+    invalid: &std::collections::BTreeMap<String, Vec<f64>>,
+) -> Result<Vec<(String, usize)>, RunFileError> {
+    let mut counts = Vec::new();
+    for (channel, sentinels) in invalid {
+        let Some(index) = names.iter().position(|n| n == channel) else {
+            return Err(RunFileError::UnknownInvalidChannel {
+                file: file.to_owned(),
+                channel: channel.clone(),
+                present: names.to_vec(),
+            });
+        };
+        let Some(column) = values.get_mut(index) else { continue };
+        let is_sentinel = |v: f64| sentinels.iter().any(|s| (v - s).abs() <= 1e-9 * s.abs().max(1.0));
+        let mut count = 0;
+        for v in column.iter_mut().filter(|v| is_sentinel(**v)) {
+            *v = f64::NAN;
+            count += 1;
+        }
+        if count == column.len() && count > 0 {
+            let values = sentinels.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ");
+            return Err(RunFileError::AllInvalid { file: file.to_owned(), channel: channel.clone(), values });
+        }
+        fill_gaps(column);
+        if count > 0 {
+            counts.push((channel.clone(), count));
+        }
+    }
+    Ok(counts)
 }
 
 fn too_few_samples(file: &Path, found: usize) -> RunFileError {

@@ -64,6 +64,9 @@ pub struct SavedLoadOptions {
     pub window: Option<String>,
     pub quality: Option<String>,
     pub resample: bool,
+    /// Per channel, its invalid-value sentinels.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub invalid: std::collections::BTreeMap<String, Vec<f64>>,
 }
 
 impl From<&LoadOptions> for SavedLoadOptions {
@@ -77,6 +80,7 @@ impl From<&LoadOptions> for SavedLoadOptions {
             window: opts.window.as_ref().map(ToString::to_string),
             quality: opts.quality.clone(),
             resample: opts.resample,
+            invalid: opts.invalid.clone(),
         }
     }
 }
@@ -95,6 +99,7 @@ impl From<&SavedLoadOptions> for LoadOptions {
             window: saved.window.as_deref().and_then(|w| w.parse().ok()),
             quality: saved.quality.clone(),
             resample: saved.resample,
+            invalid: saved.invalid.clone(),
         }
     }
 }

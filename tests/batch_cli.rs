@@ -437,3 +437,53 @@ fn an_unknown_screenshot_view_lists_the_views() {
     );
     assert!(!png.exists());
 }
+
+#[test]
+fn the_missing_physics_loop_chooses_on_validation_runs_and_scores_held_out_runs() {
+    // The sr30 samples: identification, validation and chirp; the chirp run is also given as a
+    // held-out run. The loop may add only what the diagnosis of the validation run finds
+    // significant, and each round it takes must lower the validation error it records.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let s = samples();
+    let path = |name: &str| s.join(name).to_str().unwrap().to_owned();
+    let (ident, validate, held) = (path("ident.csv"), path("validation.csv"), path("chirp.csv"));
+    let o = jetid(&[
+        "--batch",
+        "--ident",
+        &ident,
+        "--validate",
+        &validate,
+        "--held-out",
+        &held,
+        "--output",
+        "shaft_speed_rpm",
+        "--auto-effects",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["runs"]["held-out 1"], "chirp");
+    let speed = &report["outputs"]["shaft_speed_rpm"];
+    let held_out = &speed["models"]["gray_box"]["chirp"]["rmse"];
+    assert!(held_out.as_f64().is_some_and(f64::is_finite), "the held-out run is scored: {held_out}");
+    let history = speed["error_history"].as_array().unwrap();
+    assert!(!history.is_empty() && history.len() <= 3, "{history:?}");
+    for pair in history.windows(2) {
+        let (before, after) =
+            (pair[0]["rmspe_pct"].as_f64().unwrap(), pair[1]["rmspe_pct"].as_f64().unwrap());
+        assert!(after < before, "a round of the loop must lower the validation error: {history:?}");
+        assert!(pair[1]["step"].as_str().unwrap().ends_with("(auto)"), "{history:?}");
+    }
+    let notes = report["diagnostics"].to_string();
+    assert!(
+        notes.contains("missing-physics loop") || history.len() == 3,
+        "the loop says why it stopped: {notes}"
+    );
+    // A negative number of rounds is refused by the command line.
+    let bad = jetid(&["--batch", "--ident", &ident, "--auto-effects", "-1"]);
+    assert!(!bad.status.success());
+}

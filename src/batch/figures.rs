@@ -18,7 +18,7 @@ pub fn output_figures(
     output: &str,
     identified: &Identified,
     models: &OutputModels,
-    validation: &[Run],
+    validation: &[&Run],
     freq: Option<&FrequencyComparison>,
     boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
 ) -> (Vec<String>, Vec<String>) {

@@ -14,6 +14,8 @@ pub struct Runs {
     /// Where each further identification run starts when several were joined.
     pub ident_junctions: Vec<usize>,
     pub validate: Vec<Run>,
+    /// Scored like the validation runs, never used to choose an effect or a refinement.
+    pub held_out: Vec<Run>,
     pub chirp: Option<Run>,
     pub steady: Option<Run>,
     /// What reading the files changed, in words (resampled time axes, merged time stamps, repairs).
@@ -21,9 +23,14 @@ pub struct Runs {
 }
 
 impl Runs {
-    /// Runs the models are scored on: validation runs, then the chirp run.
+    /// Runs the models are scored on: validation runs, held-out runs, then the chirp run.
     pub fn scored(&self) -> Vec<&Run> {
-        self.validate.iter().chain(&self.chirp).collect()
+        self.compared().into_iter().chain(&self.chirp).collect()
+    }
+
+    /// Runs every model's traces are compared on: validation runs, then held-out runs.
+    pub fn compared(&self) -> Vec<&Run> {
+        self.validate.iter().chain(&self.held_out).collect()
     }
 
     /// The validation runs that record `output`.
@@ -37,6 +44,9 @@ impl Runs {
         roles.insert("identification".to_owned(), self.ident.name.clone());
         for (i, r) in self.validate.iter().enumerate() {
             roles.insert(format!("validation {}", i + 1), r.name.clone());
+        }
+        for (i, r) in self.held_out.iter().enumerate() {
+            roles.insert(format!("held-out {}", i + 1), r.name.clone());
         }
         if let Some(r) = &self.chirp {
             roles.insert("chirp".into(), r.name.clone());
@@ -91,12 +101,24 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             ident.name
         );
     }
-    let validate = project.validate.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
-    let chirp = project.chirp.as_ref().map(&mut load).transpose()?;
-    let steady = project.steady.as_ref().map(&mut load).transpose()?;
-    for run in validate.iter().chain(&chirp).chain(&steady) {
+    let mut validate = project.validate.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
+    let mut held_out = project.held_out.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
+    let mut chirp = project.chirp.as_ref().map(&mut load).transpose()?;
+    let mut steady = project.steady.as_ref().map(&mut load).transpose()?;
+    let sources =
+        project.validate.iter().chain(&project.held_out).chain(&project.chirp).chain(&project.steady);
+    let runs = validate.iter_mut().chain(&mut held_out).chain(&mut chirp).chain(&mut steady);
+    for (run, source) in runs.zip(sources) {
         let ratio = run.dt_secs / ident.dt_secs;
-        if (ratio - 1.0).abs() > 0.02 {
+        if (ratio - 1.0).abs() > 0.02 && source.load.resample {
+            // Both were resampled from irregular logs, each onto its own median step: put this one on
+            // the identification run's grid.
+            notes.push(format!(
+                "run '{}': resampled again from {:.5} s onto the identification run's {:.5} s grid",
+                run.name, run.dt_secs, ident.dt_secs
+            ));
+            *run = run.resampled(ident.dt_secs);
+        } else if (ratio - 1.0).abs() > 0.02 {
             bail!(
                 "run '{}' is sampled every {:.5} s but the identification run every {:.5} s; models are discrete-time, so resample it first",
                 run.name,
@@ -105,7 +127,7 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             );
         }
     }
-    Ok(Runs { ident, ident_junctions, validate, chirp, steady, notes })
+    Ok(Runs { ident, ident_junctions, validate, held_out, chirp, steady, notes })
 }
 
 /// Outputs to model: the project's list (each must exist), else every output of the ident run.

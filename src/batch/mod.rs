@@ -107,6 +107,10 @@ impl Batch<'_> {
             last.wiener = extended.wiener.clone();
             last.static_map_beta = extended.wiener.map.beta();
             last.effects = extended.records();
+            // A structural refinement the loop added changes the roots.
+            if let Ok((poles, zeros)) = extended.roots() {
+                (last.poles, last.zeros) = (poles, zeros);
+            }
         }
         let mut models = timings
             .time(&format!("baselines_{output}"), || fit_baselines(&identified, &runs.ident, output, notes));
@@ -149,7 +153,7 @@ impl Batch<'_> {
                 output,
                 &identified,
                 &models,
-                &runs.validate,
+                &runs.compared(),
                 studies.frequency.as_ref(),
                 &out.error_boxes,
             )

@@ -18,6 +18,9 @@ pub struct BatchArgs {
     /// Validation run (repeatable).
     #[arg(long = "validate")]
     pub validate: Vec<PathBuf>,
+    /// Held-out run: scored beside the validation runs, never used to choose anything (repeatable).
+    #[arg(long = "held-out", value_name = "RUN.csv")]
+    pub held_out: Vec<PathBuf>,
     /// Frequency-domain validation (chirp) run.
     #[arg(long)]
     pub chirp: Option<PathBuf>,
@@ -30,6 +33,10 @@ pub struct BatchArgs {
     /// Apply an effect from the catalog, parameters fitted (repeatable).
     #[arg(long = "add-effect", value_enum, value_name = "ID")]
     pub add_effects: Vec<EffectId>,
+    /// Rounds of the missing-physics loop: diagnose, add the top significant effect or structural
+    /// refinement (refitted), repeat; stops early when nothing is significant.
+    #[arg(long = "auto-effects", value_name = "ROUNDS")]
+    pub auto_effects: Option<usize>,
     /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
     #[arg(long = "map")]
     pub maps: Vec<String>,
@@ -59,10 +66,12 @@ impl BatchArgs {
                 name: "command line".into(),
                 ident: vec![],
                 validate: vec![],
+                held_out: vec![],
                 chirp: None,
                 steady: None,
                 outputs: vec![],
                 add_effects: vec![],
+                auto_effects: 0,
                 settings: BTreeMap::new(),
                 segments: BTreeMap::new(),
                 clusters: BTreeMap::new(),
@@ -86,6 +95,12 @@ impl BatchArgs {
         if !self.validate.is_empty() {
             project.validate = self.validate.iter().map(src).collect();
         }
+        if !self.held_out.is_empty() {
+            project.held_out = self.held_out.iter().map(src).collect();
+        }
+        if let Some(rounds) = self.auto_effects {
+            project.auto_effects = rounds;
+        }
         if let Some(p) = &self.chirp {
             project.chirp = Some(src(p));
         }
@@ -100,7 +115,7 @@ impl BatchArgs {
             project.clusters_from = Some(p.clone());
         }
         if self.resample {
-            let sources = project.ident.iter_mut().chain(&mut project.validate);
+            let sources = project.ident.iter_mut().chain(&mut project.validate).chain(&mut project.held_out);
             for source in sources.chain(&mut project.chirp).chain(&mut project.steady) {
                 source.load.resample = true;
             }

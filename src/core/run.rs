@@ -45,6 +45,38 @@ impl Run {
         self.aux.iter().find(|c| c.name == name)
     }
 
+    /// The run linearly interpolated onto a uniform grid of `dt_secs` over the same span (for runs
+    /// already resampled from an irregular log onto a slightly different grid).
+    pub fn resampled(&self, dt_secs: f64) -> Run {
+        let (Some(&t0), Some(&t_end)) = (self.t_secs.first(), self.t_secs.last()) else {
+            return self.clone();
+        };
+        if dt_secs.is_nan() || dt_secs <= 0.0 || self.len() < 2 {
+            return self.clone();
+        }
+        let n = ((t_end - t0) / dt_secs).floor() as usize + 1;
+        let t_secs: Vec<f64> = (0..n).map(|k| t0 + k as f64 * dt_secs).collect();
+        let at = |values: &[f64], t: f64| {
+            let x = ((t - t0) / self.dt_secs).max(0.0);
+            let i = (x.floor() as usize).min(values.len().saturating_sub(2));
+            let (a, b) = (values.get(i).copied().unwrap_or(0.0), values.get(i + 1).copied().unwrap_or(0.0));
+            a + (b - a) * (x - i as f64).clamp(0.0, 1.0)
+        };
+        let regrid = |c: &Channel| Channel {
+            name: c.name.clone(),
+            unit: c.unit.clone(),
+            values: t_secs.iter().map(|&t| at(&c.values, t)).collect(),
+        };
+        Run {
+            name: self.name.clone(),
+            dt_secs,
+            input: regrid(&self.input),
+            outputs: self.outputs.iter().map(regrid).collect(),
+            aux: self.aux.iter().map(regrid).collect(),
+            t_secs,
+        }
+    }
+
     /// Any channel (input, output or auxiliary) by name.
     pub fn channel(&self, name: &str) -> Option<&Channel> {
         std::iter::once(&self.input).chain(&self.outputs).chain(&self.aux).find(|c| c.name == name)
@@ -147,6 +179,18 @@ mod tests {
             outputs: vec![Channel::new("rpm", (0..n).map(|k| k as f64).collect())],
             aux: vec![Channel::new("egt_c", vec![500.0; n])],
         }
+    }
+
+    #[test]
+    fn resampling_onto_another_grid_keeps_a_line_a_line() {
+        let mut r = run("a", 50, 0.1);
+        r.input.values = r.t_secs.iter().map(|t| 2.0 * t + 1.0).collect();
+        let fine = r.resampled(0.0975);
+        assert!((fine.dt_secs - 0.0975).abs() < 1e-12 && fine.len() == 51, "{}", fine.len());
+        for (t, u) in fine.t_secs.iter().zip(&fine.input.values) {
+            assert!((u - (2.0 * t + 1.0)).abs() < 1e-9, "{t}: {u}");
+        }
+        assert_eq!(r.resampled(-1.0), r, "a bad step leaves the run as it is");
     }
 
     #[test]

@@ -132,10 +132,16 @@ pub struct ProjectFile {
     pub name: Option<String>,
     pub ident: Option<IdentEntry>,
     pub validate: Vec<RunEntry>,
+    /// Held-out runs: scored beside the validation runs, never used to choose anything.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub held_out: Vec<RunEntry>,
     pub chirp: Option<RunEntry>,
     pub steady: Option<RunEntry>,
     pub outputs: Vec<String>,
     pub add_effects: Vec<EffectId>,
+    /// Rounds of the missing-physics loop: take the top significant diagnosis, refit, repeat.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auto_effects: Option<usize>,
     pub clusters_from: Option<String>,
     pub steps_from: Option<String>,
     pub load: LoadSpec,
@@ -155,11 +161,18 @@ pub struct Project {
     pub name: String,
     /// The identification run(s); several are joined end to end.
     pub ident: Vec<RunSource>,
+    /// Runs the effects and the diagnosis are scored on (and every model is compared on).
     pub validate: Vec<RunSource>,
+    /// Runs every model is compared on but nothing is chosen by: a fair test of the final model.
+    pub held_out: Vec<RunSource>,
     pub chirp: Option<RunSource>,
     pub steady: Option<RunSource>,
     pub outputs: Vec<String>,
     pub add_effects: Vec<EffectId>,
+    /// Rounds of the missing-physics loop after `add_effects` (0: none): each round adds the
+    /// diagnosis's top significant effect or refinement, refitted, and the next round diagnoses the
+    /// result; it stops early when nothing is significant.
+    pub auto_effects: usize,
     pub settings: BTreeMap<String, OutputSettings>,
     pub segments: BTreeMap<String, Vec<Segment>>,
     pub clusters: BTreeMap<String, Vec<Cluster>>,
@@ -275,10 +288,12 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
             }
         },
         validate: file.validate.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?,
+        held_out: file.held_out.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?,
         chirp: opt(&file.chirp)?,
         steady: opt(&file.steady)?,
         outputs: file.outputs.clone(),
         add_effects: file.add_effects.clone(),
+        auto_effects: file.auto_effects.unwrap_or(0),
         settings,
         segments,
         clusters,

@@ -22,7 +22,14 @@ const fn spec(name: &'static str, default: f64, min: f64, max: f64) -> ParamSpec
 }
 
 /// The effects the simulator can switch on: METHOD.md's catalog, keyed on the model's own ids.
-pub const EFFECT_IDS: [EffectId; 6] = EffectId::CATALOG;
+pub const EFFECT_IDS: [EffectId; 6] = [
+    EffectId::TransportDelay,
+    EffectId::ThermalSoak,
+    EffectId::AmbientCorrection,
+    EffectId::AsymmetricDynamics,
+    EffectId::SensorDynamics,
+    EffectId::StaticMapOrder,
+];
 
 const TRANSPORT_DELAY: &[ParamSpec] = &[spec("delay_s", 0.45, 0.0, 5.0)];
 const THERMAL_SOAK: &[ParamSpec] = &[spec("gain", 0.10, 0.0, 0.5), spec("tau_s", 40.0, 1.0, 1000.0)];
@@ -88,7 +95,9 @@ impl Effect {
             EffectId::AsymmetricDynamics => Ok(ASYMMETRIC_DYNAMICS),
             EffectId::SensorDynamics => Ok(SENSOR_DYNAMICS),
             EffectId::StaticMapOrder => Ok(STATIC_MAP_ORDER),
-            EffectId::ScheduledTimeConstant => Err(unknown_effect(id.name())),
+            // Not simulated: the scheduled time constant is the engine's own behaviour (always on);
+            // a calibration drift is a property of a test day, not of the engine.
+            EffectId::ScheduledTimeConstant | EffectId::CalibrationDrift => Err(unknown_effect(id.name())),
         }
     }
 
@@ -118,7 +127,7 @@ impl Effect {
             EffectId::SensorDynamics => {
                 Self::SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2), buffet_n: at(3) }
             }
-            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant => {
+            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant | EffectId::CalibrationDrift => {
                 Self::StaticMapOrder { bleed_rpm: at(0), gain: at(1) }
             }
         }

@@ -46,10 +46,12 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         name: project_path.file_stem().map(|s| s.to_string_lossy().into_owned()),
         ident: ident.map(IdentEntry::One),
         validate,
+        held_out: Vec::new(),
         chirp,
         steady,
         outputs,
         add_effects,
+        auto_effects: None,
         clusters_from: None,
         steps_from: None,
         load: LoadSpec::default(),
@@ -125,7 +127,8 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
         .ident
         .iter()
         .map(|s| (s, Role::Identification))
-        .chain(project.validate.iter().map(|s| (s, Role::Validation)))
+        // The app has no held-out role yet: held-out runs are shown (and scored) as validation runs.
+        .chain(project.validate.iter().chain(&project.held_out).map(|s| (s, Role::Validation)))
         .chain(project.chirp.iter().map(|s| (s, Role::Chirp)))
         .chain(project.steady.iter().map(|s| (s, Role::Steady)));
     for (source, role) in sources {

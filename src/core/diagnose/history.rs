@@ -6,7 +6,7 @@ use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
-use super::{DiagnoseError, apply, validation_rmspe};
+use super::{DiagnoseError, DiagnosisKind, apply, diagnose, validation_rmspe};
 
 /// The mean validation RMSPE of the model after one step ("base", "+thermal_soak", …).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -53,6 +53,54 @@ pub fn apply_in_order(
         sequence.record(&format!("+{id}"), validation, settings);
     }
     sequence
+}
+
+/// One round of the missing-physics loop: what the diagnosis ranked first among the significant
+/// entries and was added, with its evidence.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AutoRound {
+    /// The effect id or structural refinement added.
+    pub added: String,
+    /// "physics" or "structure".
+    pub kind: String,
+    /// Validation RMSPE before and after, %.
+    pub rmspe_before_pct: f64,
+    pub rmspe_after_pct: f64,
+    /// The evidence sentence the diagnosis gave for it.
+    pub evidence: String,
+}
+
+/// The missing-physics loop run on `sequence`'s model for up to `rounds` rounds: diagnose, add the
+/// top significant entry (physics or structure, already refitted on the identification data by the
+/// diagnosis), record the validation error, repeat. Stops early when nothing is significant; every
+/// choice is made on `validation`, so held-out runs stay a fair test. Returns the rounds taken.
+pub fn auto_effects(
+    sequence: &mut EffectSequence,
+    rounds: usize,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+    validation: &[&Run],
+) -> Result<Vec<AutoRound>, DiagnoseError> {
+    let mut taken = Vec::new();
+    for _ in 0..rounds {
+        let report = diagnose(&sequence.model, ident, fits, validation, settings)?;
+        let Some(top) = report.entries.iter().find(|d| d.significant) else { break };
+        taken.push(AutoRound {
+            added: top.effect.clone(),
+            kind: match top.kind {
+                DiagnosisKind::Physics => "physics",
+                DiagnosisKind::Structure => "structure",
+            }
+            .to_owned(),
+            rmspe_before_pct: top.rmspe_before_pct,
+            rmspe_after_pct: top.rmspe_after_pct,
+            evidence: top.evidence.clone(),
+        });
+        sequence.model = top.model.clone();
+        sequence.record(&format!("+{} (auto)", top.effect), validation, settings);
+    }
+    Ok(taken)
 }
 
 impl EffectSequence {

@@ -18,32 +18,53 @@ pub struct AsymmetricDynamics {
     pub decel_factor: f64,
 }
 
-/// The unit-gain linear block split into the spool pole and the rest.
+/// The unit-gain linear block split into the spool's root and the rest.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplitShape {
-    /// The spool pole (real, in (0, 1)).
-    pub pole: f64,
-    /// Unit-gain remainder; `None` when the spool pole is the only root.
+    /// The spool: a real pole in (0, 1), or the upper root of the slowest complex pair when the
+    /// linear block has no real pole there (see [`AsymmetricDynamics::split`]).
+    pub spool: Complex64,
+    /// Unit-gain remainder; `None` when the spool is the only root (group).
     pub rest: Option<DiscreteTf>,
 }
 
+impl SplitShape {
+    /// Whether the spool is a complex pair rather than a real pole.
+    pub fn is_pair(&self) -> bool {
+        self.spool.im.abs() > 1e-9
+    }
+}
+
 impl AsymmetricDynamics {
-    /// Split off the slowest real pole in (0, 1).
+    /// Split off the spool: the slowest real pole in (0, 1); when there is none, the slowest
+    /// complex pair. A spool identified from closed-loop data (an ECU that overshoots its fuel
+    /// command at every set-point change) or behind a fast actuator often shows as a damped pair
+    /// rather than one real pole; its time scale follows the operating point by the same power
+    /// balance, so the whole pair is what is scheduled (both its roots' time constants scale
+    /// together, `p → p^(1/factor)`, which keeps its damping ratio).
     pub fn split(poles: &[Complex64], zeros: &[Complex64], dt_secs: f64) -> Result<SplitShape, EffectError> {
         let not_applicable = |reason: &str| EffectError::NotApplicable {
             effect: <Self as super::Block>::ID.name().to_owned(),
             reason: reason.to_owned(),
         };
-        let index = poles
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.im.abs() <= 1e-9 && p.re > 0.0 && p.re < 1.0)
-            .max_by(|a, b| a.1.re.total_cmp(&b.1.re))
-            .map(|(i, _)| i)
-            .ok_or_else(|| not_applicable("the linear block has no real pole between 0 and 1"))?;
-        let pole = poles.get(index).map_or(0.0, |p| p.re);
-        let others: Vec<Complex64> =
-            poles.iter().enumerate().filter(|(i, _)| *i != index).map(|(_, p)| *p).collect();
+        let slowest = |pick: &dyn Fn(&Complex64) -> bool| {
+            poles.iter().filter(|p| pick(p)).max_by(|a, b| a.norm().total_cmp(&b.norm())).copied()
+        };
+        let real = slowest(&|p| p.im.abs() <= 1e-9 && p.re > 0.0 && p.re < 1.0);
+        let spool = real.or_else(|| slowest(&|p| p.im > 1e-9 && p.norm() < 1.0)).ok_or_else(|| {
+            not_applicable("the linear block has neither a real pole between 0 and 1 nor a complex pair")
+        })?;
+        let is_spool = |p: &Complex64| (p - spool).norm() <= 1e-12 || (p - spool.conj()).norm() <= 1e-12;
+        let mut others: Vec<Complex64> = Vec::with_capacity(poles.len());
+        let mut taken = 0;
+        let group = if real.is_some() { 1 } else { 2 };
+        for p in poles {
+            if taken < group && is_spool(p) {
+                taken += 1;
+            } else {
+                others.push(*p);
+            }
+        }
         if zeros.len() > others.len() {
             return Err(not_applicable("the linear block has as many zeros as poles"));
         }
@@ -55,7 +76,7 @@ impl AsymmetricDynamics {
                     .map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?,
             )
         };
-        Ok(SplitShape { pole, rest })
+        Ok(SplitShape { spool, rest })
     }
 
     /// Unit-gain response of the split block to `u`, from the steady state of `u[0]`.
@@ -159,15 +180,24 @@ mod tests {
         let tf = unit_gain_tf(&poles, &[], 0.1).unwrap();
         let u: Vec<f64> = (0..200).map(|k| if (k / 40) % 2 == 0 { 1.0 } else { 3.0 }).collect();
         let split = AsymmetricDynamics::split(&poles, &[], 0.1).unwrap();
-        assert!((split.pole - 0.9).abs() < 1e-12);
+        assert!((split.spool.re - 0.9).abs() < 1e-12 && !split.is_pair());
         let same = AsymmetricDynamics { decel_factor: 1.0 }.respond(&split, &u);
         for (a, b) in same.iter().zip(tf.simulate_from_steady(&u)) {
             assert!((a - b).abs() < 1e-9, "{a} vs {b}");
         }
         let slow = AsymmetricDynamics { decel_factor: 3.0 }.respond(&split, &u);
         assert!(slow[90] > same[90] + 0.1 && (slow[50] - same[50]).abs() < 1e-9);
+        // A block of one complex pair schedules the pair; one whose only pole is negative has no spool.
+        let pair = [Complex64::new(0.8, 0.15), Complex64::new(0.8, -0.15)];
+        let split = AsymmetricDynamics::split(&pair, &[], 0.1).unwrap();
+        assert!(split.is_pair() && split.rest.is_none());
+        let pair_tf = unit_gain_tf(&pair, &[], 0.1).unwrap();
+        let same = AsymmetricDynamics { decel_factor: 1.0 }.respond(&split, &u);
+        for (a, b) in same.iter().zip(pair_tf.simulate_from_steady(&u)) {
+            assert!((a - b).abs() < 1e-9, "pair: {a} vs {b}");
+        }
         assert!(matches!(
-            AsymmetricDynamics::split(&[Complex64::new(0.5, 0.3), Complex64::new(0.5, -0.3)], &[], 0.1),
+            AsymmetricDynamics::split(&[Complex64::new(-0.5, 0.0)], &[], 0.1),
             Err(EffectError::NotApplicable { .. })
         ));
     }

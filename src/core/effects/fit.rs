@@ -14,8 +14,8 @@ use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, ScheduledTimeConstant,
-    SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
+    AmbientCorrection, AsymmetricDynamics, CalibrationDrift, EffectBlock, EffectError, EffectId,
+    ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
 };
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::identification::refine::RootParams;
@@ -239,7 +239,7 @@ pub(super) fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
 }
 
 fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Option<Assembled> {
-    let (pole_params, theta_p) = RootParams::from_roots(&start.poles);
+    let (pole_params, theta_p) = PoleParams::from_roots(&start.poles);
     let (zero_params, theta_z) = RootParams::from_roots(&start.zeros);
     let mut theta0: Vec<f64> = theta_p.iter().chain(&theta_z).copied().collect();
     let lens: Vec<usize> = start.effects.iter().map(|e| e.free_params().len()).collect();
@@ -264,6 +264,56 @@ fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Opti
         LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
     let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;
     assemble(&unpack(&fitted.theta)?, data)
+}
+
+/// Poles as refinement parameters: a real pole is one parameter, a complex pair the two
+/// coefficients `(s, p)` of its quadratic `z² − s·z + p`. Unlike (re, im), these let a pair become
+/// two real poles when the data want it: a damped pair found on closed-loop data (an ECU that
+/// overshoots its command at every set-point change) may be an overdamped spool once the effect
+/// that was missing is in the model.
+struct PoleParams {
+    /// For each root group: true for a quadratic (pair, or two real poles that were one).
+    quadratic: Vec<bool>,
+}
+
+impl PoleParams {
+    fn from_roots(roots: &[Complex64]) -> (Self, Vec<f64>) {
+        let mut quadratic = Vec::new();
+        let mut theta = Vec::new();
+        for r in roots {
+            if r.im.abs() <= 1e-12 {
+                quadratic.push(false);
+                theta.push(r.re);
+            } else if r.im > 0.0 {
+                quadratic.push(true);
+                theta.extend([2.0 * r.re, r.norm_sqr()]);
+            }
+        }
+        (Self { quadratic }, theta)
+    }
+
+    fn roots(&self, theta: &[f64]) -> Vec<Complex64> {
+        let mut out = Vec::new();
+        let mut values = theta.iter().copied();
+        for &quadratic in &self.quadratic {
+            let first = values.next().unwrap_or(0.0);
+            if !quadratic {
+                out.push(Complex64::new(first, 0.0));
+                continue;
+            }
+            let (half, product) = (0.5 * first, values.next().unwrap_or(0.0));
+            let disc = half * half - product;
+            if disc >= 0.0 {
+                out.extend([
+                    Complex64::new(half + disc.sqrt(), 0.0),
+                    Complex64::new(half - disc.sqrt(), 0.0),
+                ]);
+            } else {
+                out.extend([Complex64::new(half, (-disc).sqrt()), Complex64::new(half, -(-disc).sqrt())]);
+            }
+        }
+        out
+    }
 }
 
 /// Refit every parameter of the model's structure (roots, effect parameters, gain, offset, static
@@ -433,7 +483,10 @@ fn neutral_block(id: EffectId, data: &FitData) -> Option<EffectBlock> {
             zeta: 0.7,
             lag_s: 0.01,
         })),
-        EffectId::TransportDelay | EffectId::AmbientCorrection | EffectId::StaticMapOrder => None,
+        EffectId::TransportDelay
+        | EffectId::AmbientCorrection
+        | EffectId::StaticMapOrder
+        | EffectId::CalibrationDrift => None,
     }
 }
 
@@ -462,6 +515,12 @@ fn starting_points(
                 .into_iter()
                 .map(EffectBlock::ScheduledTimeConstant)
                 .collect()
+        }
+        EffectId::CalibrationDrift => {
+            // The slowest root's time constant sets how long a hold must last to count as steady.
+            let slowest = base.poles.iter().map(|p| p.norm()).fold(0.0, f64::max);
+            let tau_s = if slowest > 0.0 && slowest < 1.0 { -data.dt_secs / slowest.ln() } else { 1.0 };
+            vec![EffectBlock::CalibrationDrift(CalibrationDrift::for_time_constant(tau_s))]
         }
         EffectId::SensorDynamics => {
             let y_hat = current.simulate(&data.run)?;

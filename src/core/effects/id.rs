@@ -9,6 +9,7 @@ use super::EffectError;
 /// refinement of the model's own structure that the diagnosis tries as structure).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum EffectId {
+    CalibrationDrift,
     TransportDelay,
     ThermalSoak,
     AmbientCorrection,
@@ -20,7 +21,8 @@ pub enum EffectId {
 
 impl EffectId {
     /// Every block, in signal-path order.
-    pub const ALL: [Self; 7] = [
+    pub const ALL: [Self; 8] = [
+        Self::CalibrationDrift,
         Self::TransportDelay,
         Self::ThermalSoak,
         Self::AmbientCorrection,
@@ -31,18 +33,20 @@ impl EffectId {
     ];
 
     /// The physics the diagnosis tries, in the order of METHOD.md's catalog.
-    pub const CATALOG: [Self; 6] = [
+    pub const CATALOG: [Self; 7] = [
         Self::TransportDelay,
         Self::ThermalSoak,
         Self::AmbientCorrection,
         Self::AsymmetricDynamics,
         Self::SensorDynamics,
         Self::StaticMapOrder,
+        Self::CalibrationDrift,
     ];
 
     /// The id as files and the command line spell it.
     pub fn name(self) -> &'static str {
         match self {
+            Self::CalibrationDrift => "calibration_drift",
             Self::TransportDelay => "transport_delay",
             Self::ThermalSoak => "thermal_soak",
             Self::AmbientCorrection => "ambient_correction",

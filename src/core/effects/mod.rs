@@ -45,6 +45,7 @@ macro_rules! block_impl {
 
 mod ambient_correction;
 mod asymmetric_dynamics;
+mod calibration_drift;
 mod fit;
 mod id;
 mod model;
@@ -58,6 +59,7 @@ pub mod transport_delay;
 
 pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;
+pub use calibration_drift::CalibrationDrift;
 pub use fit::{FitData, apply_effect, refit, refit_static};
 pub use id::EffectId;
 pub use model::ExtendedModel;
@@ -184,6 +186,7 @@ impl<B: Block> BlockValues for B {
 impl EffectId {
     fn info(self) -> BlockInfo {
         match self {
+            Self::CalibrationDrift => BlockInfo::of::<CalibrationDrift>(),
             Self::TransportDelay => BlockInfo::of::<TransportDelay>(),
             Self::ThermalSoak => BlockInfo::of::<ThermalSoak>(),
             Self::AmbientCorrection => BlockInfo::of::<AmbientCorrection>(),
@@ -214,6 +217,8 @@ impl EffectId {
 /// One effect of the catalog with its fitted parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EffectBlock {
+    /// See [`CalibrationDrift`].
+    CalibrationDrift(CalibrationDrift),
     /// See [`TransportDelay`].
     TransportDelay(TransportDelay),
     /// See [`ThermalSoak`].
@@ -288,6 +293,7 @@ impl EffectBlock {
 
     fn as_values(&self) -> &dyn BlockValues {
         match self {
+            Self::CalibrationDrift(b) => b,
             Self::TransportDelay(b) => b,
             Self::ThermalSoak(b) => b,
             Self::AmbientCorrection(b) => b,
@@ -318,6 +324,7 @@ impl EffectBlock {
     pub fn from_params(id: EffectId, params: &BTreeMap<String, f64>) -> Result<Self, EffectError> {
         let v = checked_values(id, params)?;
         Ok(match id {
+            EffectId::CalibrationDrift => Self::CalibrationDrift(Block::from_values(&v)),
             EffectId::TransportDelay => Self::TransportDelay(Block::from_values(&v)),
             EffectId::ThermalSoak => Self::ThermalSoak(Block::from_values(&v)),
             EffectId::AmbientCorrection => Self::AmbientCorrection(Block::from_values(&v)),
@@ -355,7 +362,7 @@ impl EffectBlock {
             Self::SensorDynamics(b) => b.free_params(),
             Self::StaticMapOrder(b) => b.free_params(),
             Self::ScheduledTimeConstant(b) => b.free_params(),
-            Self::AmbientCorrection(_) => Vec::new(),
+            Self::AmbientCorrection(_) | Self::CalibrationDrift(_) => Vec::new(),
         }
     }
 
@@ -368,7 +375,7 @@ impl EffectBlock {
             Self::SensorDynamics(b) => Self::SensorDynamics(b.with_free_params(theta, dt_secs)?),
             Self::StaticMapOrder(b) => Self::StaticMapOrder(b.with_free_params(theta)?),
             Self::ScheduledTimeConstant(b) => Self::ScheduledTimeConstant(b.with_free_params(theta)?),
-            Self::AmbientCorrection(_) => self.clone(),
+            Self::AmbientCorrection(_) | Self::CalibrationDrift(_) => self.clone(),
         })
     }
 }
@@ -390,6 +397,7 @@ mod tests {
             EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.8 }),
             EffectBlock::SensorDynamics(SensorDynamics { freq_hz: 1.4, zeta: 0.06, lag_s: 0.3 }),
             EffectBlock::StaticMapOrder(StaticMapOrder { knot_v: 80_000.0, slope_change: -0.5 }),
+            EffectBlock::CalibrationDrift(CalibrationDrift { hold_s: 4.0 }),
         ];
         for (block, id) in blocks.iter().zip(EffectId::CATALOG) {
             assert_eq!(block.id(), id);

@@ -134,7 +134,11 @@ impl ExtendedModel {
 
     /// Simulate and also return the linear block's output `v` (what the static map reads).
     pub fn simulate_with_v(&self, run: &Run) -> Result<(Vec<f64>, Vec<f64>), EffectError> {
-        let (u, conditions) = input_stage(&self.effects, run)?;
+        let (mut u, conditions) = input_stage(&self.effects, run)?;
+        let offset = self.calibration_offset(run, &u);
+        if offset != 0.0 {
+            u.iter_mut().for_each(|x| *x += offset);
+        }
         let split = if needs_split(&self.effects) {
             let (poles, zeros) = self.roots()?;
             Some(AsymmetricDynamics::split(&poles, &zeros, run.dt_secs)?)
@@ -144,6 +148,29 @@ impl ExtendedModel {
         let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, run.dt_secs)?;
         let y = output_stage(&self.effects, &self.wiener.map, &v, conditions.as_ref(), run.dt_secs);
         Ok((v, y))
+    }
+}
+
+impl ExtendedModel {
+    /// The input offset a [`CalibrationDrift`] block gives this run (from the run's own steady
+    /// holds of the measured output); zero without the block, the output or a usable linear block.
+    pub fn calibration_offset(&self, run: &Run, u: &[f64]) -> f64 {
+        let Some(EffectBlock::CalibrationDrift(block)) = self.effect(EffectId::CalibrationDrift) else {
+            return 0.0;
+        };
+        let (Some(y), Ok(dc)) = (run.output(&self.output), self.wiener.linear.tf.dc_gain()) else {
+            return 0.0;
+        };
+        let kink = self.effects.iter().find_map(|e| match e {
+            EffectBlock::StaticMapOrder(k) => Some(k),
+            _ => None,
+        });
+        let offset = self.wiener.linear.offset;
+        let steady = |x: f64| {
+            let v = dc * x + offset;
+            self.wiener.map.eval(v) + kink.map_or(0.0, |k| k.eval(v))
+        };
+        block.run_offset(u, &y.values, run.dt_secs, steady)
     }
 }
 

@@ -4,6 +4,7 @@ use super::asymmetric_dynamics::SplitShape;
 use super::stats::ResidualTrace;
 use super::stats::mean;
 use super::{AsymmetricDynamics, ParamSpec};
+use num_complex::Complex64;
 
 /// A turbojet's spool is slower at low speed. Its power balance J ω ω̇ = P_t(w) − P_c(N), with
 /// compressor power ∝ N³, linearised at speed N gives a time constant τ ∝ 1/N; over a large step
@@ -65,9 +66,12 @@ impl ScheduledTimeConstant {
         })
     }
 
-    /// Starting ratios: time constants 1.4, 2 and 3 times longer at the low end, and the reverse.
+    /// Starting ratios: time constants 1.4, 2, 3, 5, 9 and 16 times longer at the low end (τ ∝ 1/N
+    /// alone gives the ratio of the top to the bottom speed, 3 on a turbojet from idle to full power;
+    /// scheduling on the speed heading for, over a range the spool crosses slowly, gives more), and
+    /// 1.4 and 2 times shorter.
     pub(super) fn guesses(u: &[f64]) -> Vec<Self> {
-        [0.35, 0.7, 1.1, -0.35, -0.7].iter().map(|&r| Self::for_input(u, r)).collect()
+        [0.35, 0.7, 1.1, 1.6, 2.2, 2.8, -0.35, -0.7].iter().map(|&r| Self::for_input(u, r)).collect()
     }
 }
 
@@ -84,19 +88,29 @@ pub fn respond(
         Some(tf) => tf.simulate_from_steady(u),
         None => u.to_vec(),
     };
-    let ln_pole = shape.pole.max(f64::MIN_POSITIVE).ln();
+    // The spool's root as a continuous-time rate: scaling the time constant by `factor` divides it.
+    let ln_root = Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
+    let pair = shape.is_pair();
     let decel = asymmetric.map_or(1.0, |a| a.decel_factor);
-    let mut x = r.first().copied().unwrap_or(0.0);
-    let mut prev = x;
+    let start = r.first().copied().unwrap_or(0.0);
+    // State: the section's output now and one sample ago; its input one and two samples ago.
+    let (mut x, mut x_old, mut prev, mut prev_old) = (start, start, start, start);
     r.iter()
         .map(|rk| {
             let mut factor = scheduled.map_or(1.0, |s| s.factor(x, prev));
             if prev < x {
                 factor *= decel;
             }
-            let a = (ln_pole / factor.max(f64::MIN_POSITIVE)).exp();
-            x = a * x + (1.0 - a) * prev;
-            prev = *rk;
+            let root = (ln_root / factor.max(f64::MIN_POSITIVE)).exp();
+            let next = if pair {
+                // Unit-gain pair (1 − a₁ + a₂) z⁻² / (1 − a₁ z⁻¹ + a₂ z⁻²), as `unit_gain_tf` builds it.
+                let (a1, a2) = (2.0 * root.re, root.norm_sqr());
+                a1 * x - a2 * x_old + (1.0 - a1 + a2) * prev_old
+            } else {
+                root.re * x + (1.0 - root.re) * prev
+            };
+            (x_old, x) = (x, next);
+            (prev_old, prev) = (prev, *rk);
             x
         })
         .collect()

@@ -1,0 +1,170 @@
+//! `calibration_drift`: the input's calibration moves between test days.
+use super::stats::{ResidualTrace, mean, plateaus};
+use super::{Evidence, ParamSpec};
+
+/// The logged input is not the same fuel flow on every run: a pump-voltage → fuel relation that
+/// drifts with the pump, the fuel's temperature or the battery, or a flow meter re-zeroed between
+/// test days. The engine is the same, so the model's dynamics and map stay; what moves is an
+/// offset of the input, constant over a run. The block adds to each simulated run's input the
+/// offset that puts the model's steady states on the run's own measured steady stretches (holds of
+/// the output longer than `hold_s`, averaged over their second half): a calibration taken from the
+/// run itself, as a test engineer would take it from the idle hold at the start of a test day.
+/// The identification data define the calibration (their offset is zero: the map is fitted on
+/// them); a run without the output, or without a hold, is simulated uncalibrated.
+///
+/// Only an offset, not a gain: with the holds of a typical run (two to six, often near one end of
+/// the range where the map is flat) a gain is poorly determined, and on the JetCat runs fitting one
+/// made every run worse than the offset alone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CalibrationDrift {
+    /// Shortest hold of the output that counts as a steady stretch, s.
+    pub hold_s: f64,
+}
+
+/// Gauss–Newton iterations for a run's offset (one unknown; converges in a handful).
+const MAX_ITERATIONS: usize = 30;
+
+/// Largest offset, as a share of the run's input range: a calibration that moved by more than half
+/// the operating range is not a drift but another engine or a wrong column.
+const MAX_OFFSET_SHARE: f64 = 0.5;
+
+impl CalibrationDrift {
+    /// The block for a linear block whose slowest time constant is `tau_s`: a hold counts when it
+    /// lasts five time constants (the response has settled to within e⁻⁵ < 1 % of the step), at
+    /// least 2 s and at most 10 s.
+    pub fn for_time_constant(tau_s: f64) -> Self {
+        Self { hold_s: (5.0 * tau_s).clamp(2.0, 10.0) }
+    }
+
+    /// The steady stretches of a measured output: second halves of holds longer than `hold_s`.
+    pub fn steady_stretches(&self, y: &[f64], dt_secs: f64) -> Vec<(usize, usize)> {
+        plateaus(y, dt_secs, self.hold_s, 0.5 * self.hold_s)
+    }
+
+    /// The input offset that best puts `steady(u + offset)` on the measured holds of `y` (least
+    /// squares over the holds); zero without holds, or when no admissible offset is found.
+    pub fn run_offset(&self, u: &[f64], y: &[f64], dt_secs: f64, steady: impl Fn(f64) -> f64) -> f64 {
+        let holds: Vec<(f64, f64)> = self
+            .steady_stretches(y, dt_secs)
+            .into_iter()
+            .filter_map(|(a, b)| Some((mean(u.get(a..b)?), mean(y.get(a..b)?))))
+            .collect();
+        let (lo, hi) = u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+        let span = (hi - lo).max(f64::MIN_POSITIVE);
+        if holds.is_empty() || !span.is_finite() {
+            return 0.0;
+        }
+        let cost = |b: f64| holds.iter().map(|(u, y)| (y - steady(u + b)).powi(2)).sum::<f64>();
+        let h = 1e-4 * span;
+        let mut offset = 0.0;
+        for _ in 0..MAX_ITERATIONS {
+            let (mut jtj, mut jtr) = (0.0, 0.0);
+            for (u, y) in &holds {
+                let r = y - steady(u + offset);
+                let j = (steady(u + offset + h) - steady(u + offset - h)) / (2.0 * h);
+                jtj += j * j;
+                jtr += j * r;
+            }
+            if jtj <= f64::MIN_POSITIVE {
+                break;
+            }
+            let mut step = (jtr / jtj).clamp(-0.1 * span, 0.1 * span);
+            // Halve a step that does not lower the cost (the map may bend back at its ends).
+            while step.abs() > 1e-12 * span && cost(offset + step) > cost(offset) {
+                step *= 0.5;
+            }
+            offset += step;
+            if step.abs() <= 1e-9 * span {
+                break;
+            }
+        }
+        if offset.is_finite() && offset.abs() <= MAX_OFFSET_SHARE * span { offset } else { 0.0 }
+    }
+}
+
+/// A run's steady-state residual, %: mean over its holds, and the standard error of that mean from
+/// the scatter between holds. `None` without holds.
+fn steady_residual(t: &ResidualTrace, hold_s: f64) -> Option<(f64, f64, usize)> {
+    let e = t.residual_pct();
+    let per_hold: Vec<f64> = plateaus(&t.y, t.dt_secs, hold_s, 0.5 * hold_s)
+        .into_iter()
+        .filter_map(|(a, b)| e.get(a..b).map(mean))
+        .collect();
+    let n = per_hold.len();
+    if n == 0 {
+        return None;
+    }
+    let m = mean(&per_hold);
+    let sd = if n > 1 {
+        (per_hold.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+    } else {
+        0.0
+    };
+    Some((m, sd / (n as f64).sqrt(), n))
+}
+
+/// Hold that counts as steady for the evidence, s (the block's own default for a 1 s spool).
+const EVIDENCE_HOLD_S: f64 = 5.0;
+
+/// Runs disagree on the steady state when their mean steady residuals differ by more than this
+/// many standard errors of the difference (about p < 10⁻⁴ for normal errors: a drift, not the
+/// scatter of the holds) …
+const DISAGREE_SE: f64 = 4.0;
+/// … and by more than this, %: smaller offsets are within what a bench's calibration holds.
+const DISAGREE_MIN_PCT: f64 = 0.5;
+
+/// Whether the runs' steady-state residuals disagree: the run-to-run part of the steady error.
+pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
+    let runs: Vec<(&str, f64, f64)> = traces
+        .iter()
+        .filter_map(|t| steady_residual(t, EVIDENCE_HOLD_S).map(|(m, se, _)| (t.run.as_str(), m, se)))
+        .collect();
+    if runs.len() < 2 {
+        return Evidence::none("fewer than two runs hold a steady state long enough to compare runs");
+    }
+    let listed: Vec<String> = runs.iter().map(|(name, m, _)| format!("{m:+.2} % on '{name}'")).collect();
+    let (Some(low), Some(high)) =
+        (runs.iter().min_by(|a, b| a.1.total_cmp(&b.1)), runs.iter().max_by(|a, b| a.1.total_cmp(&b.1)))
+    else {
+        return Evidence::none("no steady states to compare");
+    };
+    let gap = high.1 - low.1;
+    let se = (high.2.powi(2) + low.2.powi(2)).sqrt();
+    let differ = gap > DISAGREE_MIN_PCT && gap > DISAGREE_SE * se;
+    let meaning = if differ {
+        "the runs disagree on the steady state: a calibration drift between test days"
+    } else {
+        "the runs agree on the steady state within their scatter"
+    };
+    Evidence { sentence: format!("steady-state residual {}: {meaning}", listed.join(", ")), supports: differ }
+}
+
+block_impl!(
+    CalibrationDrift { hold_s },
+    params: &[ParamSpec::real("hold_s", 0.5, 120.0)],
+    physics: "the input's calibration drifts between runs (pump voltage to fuel, flow-meter zero): each run's \
+         input gets the offset its own steady holds call for",
+    evidence: evidence
+);
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn the_offset_puts_the_steady_states_on_the_holds() {
+        // Holds at 1, 2 and 3 input units, the engine's steady output y = 10 + 5u + u², logged with
+        // the input reading 0.2 low.
+        let steady = |u: f64| 10.0 + 5.0 * u + u * u;
+        let u: Vec<f64> = (0..600).map(|k| 1.0 + (k / 200) as f64).collect();
+        let y: Vec<f64> = u.iter().map(|u| steady(u + 0.2)).collect();
+        let block = CalibrationDrift { hold_s: 5.0 };
+        let offset = block.run_offset(&u, &y, 0.1, steady);
+        assert!((offset - 0.2).abs() < 1e-6, "{offset}");
+        // No hold (a ramp): no calibration.
+        let ramp: Vec<f64> = (0..600).map(|k| k as f64 * 0.01).collect();
+        let y_ramp: Vec<f64> = ramp.iter().map(|u| steady(*u)).collect();
+        assert!(block.run_offset(&ramp, &y_ramp, 0.1, steady).abs() < 1e-12);
+    }
+}

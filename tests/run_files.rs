@@ -314,6 +314,28 @@ fn invalid_sentinels_become_gaps_and_are_counted_or_refused_with_reason() {
 }
 
 #[test]
+fn units_given_per_channel_replace_the_guess_from_the_name_and_a_typo_is_named() {
+    let text = "time_s,fuel_flow_Lpm,PR,power_kW\n".to_owned()
+        + &(0..40).map(|k| format!("{},{},{},{}\n", k as f64 * 0.1, 0.3, 1.5, 10.0)).collect::<String>();
+    let mut opts = LoadOptions::from_cli(&["input=fuel_flow_Lpm", "output=PR", "output=power_kW"], None, None, None, false)
+        .unwrap();
+    let guessed = parse(&text, &opts).unwrap();
+    assert_eq!(guessed.input.unit, "L/min", "the suffix _Lpm names litres per minute");
+    assert_eq!(guessed.output("power_kW").unwrap().unit, "kW");
+    assert_eq!(guessed.output("PR").unwrap().unit, "", "a bare name has no unit to guess");
+
+    opts.units.insert("PR".to_owned(), "-".to_owned());
+    let given = parse(&text, &opts).unwrap();
+    assert_eq!(given.output("PR").unwrap().unit, "-");
+    assert_eq!(given.output("power_kW").unwrap().unit, "kW", "channels without a given unit keep the guess");
+
+    opts.units.insert("P_R".to_owned(), "-".to_owned());
+    let err = parse(&text, &opts).unwrap_err();
+    assert!(matches!(err, RunFileError::UnknownUnitChannel { .. }), "{err}");
+    assert_mentions(&err, &["P_R", "PR", "power_kW"]);
+}
+
+#[test]
 fn rounded_time_stamps_within_one_percent_are_uniform() {
     let run = parse(&with_cell(30, 10, 0, "0.9005"), &LoadOptions::default()).unwrap();
     assert!((run.dt_secs - 0.1).abs() < 1e-9);

@@ -9,6 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 
 use crate::core::compare::{fit_baselines, noise_fits};
+use crate::core::diagnose as core_diagnose;
 use crate::core::numerics::noise_fit::Distribution;
 use crate::core::residuals::steady_noise_sigma;
 use crate::io::model_file::ModelFile;
@@ -130,6 +131,13 @@ impl Batch<'_> {
                 notes.extend(skipped);
             }
             Err(e) => notes.push(format!("diagnosis of '{output}': {e}")),
+        }
+        let described: Vec<&_> =
+            std::iter::once(&runs.ident).chain(runs.compared()).filter(|r| r.output(output).is_some()).collect();
+        match core_diagnose::steady_state_agreement(&extended, &described, project.settings_for(output).initial_state)
+        {
+            Ok(evidence) => out.steady_states = Some(evidence.sentence),
+            Err(e) => notes.push(format!("steady states of '{output}' across runs: {e}")),
         }
         let studies =
             compare::compare(&models, runs, output, self.input_noise.as_ref(), &mut out, notes, timings);

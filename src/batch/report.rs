@@ -55,6 +55,7 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
             .and_then(|v| v.as_str().map(str::to_owned))
             .unwrap_or_default(),
         initial_state_meaning: models.initial_state.describe().to_owned(),
+        steady_states: None,
     }
 }
 

@@ -145,10 +145,15 @@ pub fn join_runs(runs: &[Run]) -> Result<(Run, Vec<usize>), RunError> {
     Ok((joined, junctions))
 }
 
+/// ` [unit]` to follow a quantity's name, or nothing when the unit is unknown (never ` []`).
+pub fn bracketed_unit(unit: &str) -> String {
+    if unit.is_empty() { String::new() } else { format!(" [{unit}]") }
+}
+
 /// The unit implied by a canonical column-name suffix; empty when unknown.
 pub fn unit_from_column_name(name: &str) -> &'static str {
     let lower = name.to_ascii_lowercase();
-    const SUFFIXES: [(&str, &str); 12] = [
+    const SUFFIXES: [(&str, &str); 15] = [
         ("_gph", "gal/h"),
         ("_rpm", "rpm"),
         ("_n", "N"),
@@ -161,6 +166,9 @@ pub fn unit_from_column_name(name: &str) -> &'static str {
         ("_a", "A"),
         ("_krpm", "krpm"),
         ("_bar", "bar"),
+        ("_kw", "kW"),
+        ("_lpm", "L/min"),
+        ("_psi", "psi"),
     ];
     SUFFIXES.iter().find(|(suffix, _)| lower.ends_with(suffix)).map_or("", |(_, unit)| unit)
 }
@@ -229,6 +237,8 @@ mod tests {
         assert_eq!(unit_from_column_name("fuel_flow_gph"), "gal/h");
         assert_eq!(unit_from_column_name("ambient_pressure_kpa"), "kPa");
         assert_eq!(unit_from_column_name("egt_C"), "°C");
+        assert_eq!(unit_from_column_name("power_kW"), "kW");
+        assert_eq!(unit_from_column_name("fuel_flow_Lpm"), "L/min");
         assert_eq!(unit_from_column_name("mystery"), "");
     }
 }

@@ -66,6 +66,8 @@ pub struct LoadOptions {
     /// Per channel, values the logger writes when the channel has no valid reading (a sentinel such
     /// as ±3276.8): they become gaps, interpolated like bad samples.
     pub invalid: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Per channel, its unit where the column name does not say it (`PR = "-"`, `power_kW = "kW"`).
+    pub units: std::collections::BTreeMap<String, String>,
 }
 
 /// A bad option string given to [`LoadOptions::from_cli`].
@@ -96,6 +98,7 @@ impl LoadOptions {
             quality: quality.map(str::to_owned),
             resample,
             invalid: std::collections::BTreeMap::new(),
+            units: std::collections::BTreeMap::new(),
         })
     }
 

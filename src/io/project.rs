@@ -54,6 +54,9 @@ pub struct LoadSpec {
     /// 3276.8]`): they become gaps.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub invalid: BTreeMap<String, Vec<f64>>,
+    /// Per channel, its unit where the column name does not say it (`units = { PR = "-" }`).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub units: BTreeMap<String, String>,
 }
 
 impl LoadSpec {
@@ -70,6 +73,7 @@ impl LoadSpec {
             self.resample,
         )?;
         options.invalid = self.invalid.clone();
+        options.units = self.units.clone();
         Ok(options)
     }
 
@@ -82,6 +86,7 @@ impl LoadSpec {
             quality: over.quality.clone().or_else(|| self.quality.clone()),
             resample: self.resample || over.resample,
             invalid: if over.invalid.is_empty() { self.invalid.clone() } else { over.invalid.clone() },
+            units: if over.units.is_empty() { self.units.clone() } else { over.units.clone() },
         }
     }
 }

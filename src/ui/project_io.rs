@@ -97,6 +97,7 @@ fn load_spec(options: &LoadOptions) -> LoadSpec {
         quality: options.quality.clone(),
         resample: options.resample,
         invalid: options.invalid.clone(),
+        units: options.units.clone(),
     }
 }
 

@@ -58,6 +58,7 @@ fn options() -> impl Strategy<Value = LoadOptions> {
             quality: quality.then(|| "ok".to_owned()),
             resample,
             invalid: Default::default(),
+            units: Default::default(),
         })
 }
 

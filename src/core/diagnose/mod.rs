@@ -44,7 +44,7 @@
 //! credited even when the refinement comes within 10 % of it.
 use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
 use crate::core::effects::{
-    AmbientCorrection, EffectError, EffectId, ExtendedModel, FitData, StructuralChange, apply_effect,
+    AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FitData, StructuralChange, apply_effect,
     refine_structure, refit,
 };
 use crate::core::identification::initial_state::InitialState;
@@ -245,6 +245,18 @@ fn not_applicable(id: EffectId, current: &ExtendedModel, runs: &[&Run]) -> Optio
     None
 }
 
+/// Whether `runs` (the identification run first) agree on the steady state under `current`: the
+/// sentence of the calibration-drift evidence ("runs disagree on the steady state by X %: …"). A
+/// description of the runs, so held-out runs may be among them: nothing is chosen from it.
+pub fn steady_state_agreement(
+    current: &ExtendedModel,
+    runs: &[&Run],
+    initial: InitialState,
+) -> Result<Evidence, DiagnoseError> {
+    let traces = run_traces(current, runs.iter().copied(), initial)?;
+    Ok(crate::core::effects::steady_state_agreement(&traces))
+}
+
 /// The current model's residual traces: identification range first, then the validation runs.
 fn residual_traces(
     current: &ExtendedModel,
@@ -252,8 +264,15 @@ fn residual_traces(
     validation: &[&Run],
     initial: InitialState,
 ) -> Result<Vec<ResidualTrace>, DiagnoseError> {
-    std::iter::once(&data.run)
-        .chain(validation.iter().copied())
+    run_traces(current, std::iter::once(&data.run).chain(validation.iter().copied()), initial)
+}
+
+fn run_traces<'a>(
+    current: &ExtendedModel,
+    runs: impl Iterator<Item = &'a Run>,
+    initial: InitialState,
+) -> Result<Vec<ResidualTrace>, DiagnoseError> {
+    runs
         .map(|run| {
             let y = measured(run, &current.output)?.to_vec();
             let y_hat = current

@@ -114,7 +114,7 @@ const DISAGREE_SE: f64 = 4.0;
 const DISAGREE_MIN_PCT: f64 = 0.5;
 
 /// Whether the runs' steady-state residuals disagree: the run-to-run part of the steady error.
-pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
+pub fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let runs: Vec<(&str, f64, f64)> = traces
         .iter()
         .filter_map(|t| steady_residual(t, EVIDENCE_HOLD_S).map(|(m, se, _)| (t.run.as_str(), m, se)))
@@ -132,9 +132,16 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let se = (high.2.powi(2) + low.2.powi(2)).sqrt();
     let differ = gap > DISAGREE_MIN_PCT && gap > DISAGREE_SE * se;
     let meaning = if differ {
-        "the runs disagree on the steady state: a calibration drift between test days"
+        format!(
+            "runs disagree on the steady state by {gap:.1} % ('{}' against '{}'): a calibration drift or a \
+             different engine build",
+            high.0, low.0
+        )
     } else {
-        "the runs agree on the steady state within their scatter"
+        format!(
+            "the runs' steady states are {gap:.1} % apart, within {DISAGREE_SE} standard errors of the scatter \
+             between their holds (SE {se:.1} %): no consistent offset between runs"
+        )
     };
     Evidence { sentence: format!("steady-state residual {}: {meaning}", listed.join(", ")), supports: differ }
 }

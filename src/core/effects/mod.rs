@@ -59,7 +59,7 @@ pub mod transport_delay;
 
 pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;
-pub use calibration_drift::CalibrationDrift;
+pub use calibration_drift::{CalibrationDrift, evidence as steady_state_agreement};
 pub use fit::{FitData, apply_effect, refit, refit_static};
 pub use id::EffectId;
 pub use model::ExtendedModel;

@@ -76,6 +76,9 @@ pub enum RunFileError {
     #[error("{}: invalid values are given for channel \"{channel}\", which the run does not have (channels: {})", file.display(), present.join(", "))]
     UnknownInvalidChannel { file: PathBuf, channel: String, present: Vec<String> },
 
+    #[error("{}: a unit is given for channel \"{channel}\", which the run does not have (channels: {})", file.display(), present.join(", "))]
+    UnknownUnitChannel { file: PathBuf, channel: String, present: Vec<String> },
+
     #[error("{}: channel \"{channel}\" holds only its invalid-value sentinels ({values}): it has no reading to use", file.display())]
     AllInvalid { file: PathBuf, channel: String, values: String },
 

@@ -276,7 +276,17 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
         return Err(too_few_samples(file, t_secs.len()));
     }
 
-    let mut channels = names.iter().zip(values).map(|(name, v)| Channel::new(name, v));
+    if let Some(channel) = opts.units.keys().find(|c| !names.contains(c)) {
+        return Err(RunFileError::UnknownUnitChannel {
+            file: file.to_owned(),
+            channel: channel.clone(),
+            present: names.clone(),
+        });
+    }
+    let mut channels = names.iter().zip(values).map(|(name, v)| match opts.units.get(name) {
+        Some(unit) => Channel { name: name.clone(), unit: unit.clone(), values: v },
+        None => Channel::new(name, v),
+    });
     // The input is always the first channel; this branch only keeps indexing out of the code.
     let Some(input) = channels.next() else {
         return Err(RunFileError::NoOutput { file: file.to_owned(), present: table.header.clone() });

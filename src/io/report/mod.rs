@@ -62,6 +62,10 @@ pub struct OutputReport {
     pub initial_state: String,
     #[serde(default)]
     pub initial_state_meaning: String,
+    /// Whether the scored runs agree on the steady state (the calibration-drift evidence, in
+    /// words: "runs disagree on the steady state by X %: …" or "… agree …").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steady_states: Option<String>,
 }
 
 /// The residual analysis of one output's final model on one run, as the report keeps it (the
@@ -323,7 +327,7 @@ pub fn render_markdown(report: &Report) -> String {
         let _ = writeln!(out, "- {role}: `{run}`");
     }
     for (name, o) in &report.outputs {
-        let _ = writeln!(out, "\n## Output `{name}` [{}]\n", o.unit);
+        let _ = writeln!(out, "\n## Output `{name}`{}\n", crate::core::run::bracketed_unit(&o.unit));
         ident_section(&mut out, &o.identified, &o.unit);
         let _ = writeln!(
             out,
@@ -331,6 +335,9 @@ pub fn render_markdown(report: &Report) -> String {
             o.initial_state, o.initial_state_meaning
         );
         metrics_table(&mut out, o);
+        if let Some(sentence) = &o.steady_states {
+            let _ = writeln!(out, "\n**Steady states across runs:** {sentence}.");
+        }
         if !o.error_history.is_empty() {
             let _ = writeln!(
                 out,

@@ -67,6 +67,9 @@ pub struct SavedLoadOptions {
     /// Per channel, its invalid-value sentinels.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub invalid: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Per channel, a unit given by the user.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub units: std::collections::BTreeMap<String, String>,
 }
 
 impl From<&LoadOptions> for SavedLoadOptions {
@@ -81,6 +84,7 @@ impl From<&LoadOptions> for SavedLoadOptions {
             quality: opts.quality.clone(),
             resample: opts.resample,
             invalid: opts.invalid.clone(),
+            units: opts.units.clone(),
         }
     }
 }
@@ -100,6 +104,7 @@ impl From<&SavedLoadOptions> for LoadOptions {
             quality: saved.quality.clone(),
             resample: saved.resample,
             invalid: saved.invalid.clone(),
+            units: saved.units.clone(),
         }
     }
 }

@@ -175,7 +175,7 @@ pub fn traces_ui(
         .link_axis(group, [true, false])
         .link_cursor(group, [true, false])
         .x_axis_label("time [s]")
-        .y_axis_label(format!("residual y − ŷ [{}]", view.output.unit))
+        .y_axis_label(format!("residual y − ŷ{}", crate::core::run::bracketed_unit(&view.output.unit)))
         .y_axis_min_width(Y_AXIS_WIDTH)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)

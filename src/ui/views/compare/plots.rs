@@ -156,7 +156,7 @@ pub fn monte_carlo_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &s
         ui.label(egui::RichText::new(why).color(theme::WARNING));
         return;
     }
-    let unit = if unit.is_empty() { String::new() } else { format!(" [{unit}]") };
+    let unit = crate::core::run::bracketed_unit(unit);
     ui.label(
         egui::RichText::new(format!(
             "Monte Carlo error propagation: noisy − nominal output{unit}, 100 runs of 20 s at the steady input level"

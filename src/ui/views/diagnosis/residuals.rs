@@ -155,7 +155,7 @@ fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize)
     Plot::new(("diagnosis_residual", &a.run, &a.output))
         .height(height)
         .x_axis_label("time [s]")
-        .y_axis_label(format!("residual y − ŷ [{}]", a.unit))
+        .y_axis_label(format!("residual y − ŷ{}", crate::core::run::bracketed_unit(&a.unit)))
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
         .legend(Legend::default().position(egui_plot::Corner::LeftTop))
@@ -434,14 +434,14 @@ fn channel_scatter_ui(
         );
         let points: PlotPoints =
             channel.values.iter().zip(&a.residual).step_by(step).map(|(x, r)| [*x, *r]).collect();
-        let unit = if c.unit.is_empty() { String::new() } else { format!(" [{}]", c.unit) };
+        let unit = crate::core::run::bracketed_unit(&c.unit);
         Plot::new(("diagnosis_channel", &c.channel))
             .width(320.0)
             .height(220.0)
             .x_grid_spacer(plot_util::grid_125_x)
             .y_grid_spacer(plot_util::grid_125_y)
             .x_axis_label(format!("{}{unit}", c.channel))
-            .y_axis_label(format!("residual [{}]", a.unit))
+            .y_axis_label(format!("residual{}", crate::core::run::bracketed_unit(&a.unit)))
             .show(ui, |plot_ui| {
                 plot_ui.points(Points::new(&c.channel, points).radius(1.2).color(theme::MEASURED));
             });

@@ -317,8 +317,14 @@ fn invalid_sentinels_become_gaps_and_are_counted_or_refused_with_reason() {
 fn units_given_per_channel_replace_the_guess_from_the_name_and_a_typo_is_named() {
     let text = "time_s,fuel_flow_Lpm,PR,power_kW\n".to_owned()
         + &(0..40).map(|k| format!("{},{},{},{}\n", k as f64 * 0.1, 0.3, 1.5, 10.0)).collect::<String>();
-    let mut opts = LoadOptions::from_cli(&["input=fuel_flow_Lpm", "output=PR", "output=power_kW"], None, None, None, false)
-        .unwrap();
+    let mut opts = LoadOptions::from_cli(
+        &["input=fuel_flow_Lpm", "output=PR", "output=power_kW"],
+        None,
+        None,
+        None,
+        false,
+    )
+    .unwrap();
     let guessed = parse(&text, &opts).unwrap();
     assert_eq!(guessed.input.unit, "L/min", "the suffix _Lpm names litres per minute");
     assert_eq!(guessed.output("power_kW").unwrap().unit, "kW");

@@ -132,10 +132,15 @@ impl Batch<'_> {
             }
             Err(e) => notes.push(format!("diagnosis of '{output}': {e}")),
         }
-        let described: Vec<&_> =
-            std::iter::once(&runs.ident).chain(runs.compared()).filter(|r| r.output(output).is_some()).collect();
-        match core_diagnose::steady_state_agreement(&extended, &described, project.settings_for(output).initial_state)
-        {
+        let described: Vec<&_> = std::iter::once(&runs.ident)
+            .chain(runs.compared())
+            .filter(|r| r.output(output).is_some())
+            .collect();
+        match core_diagnose::steady_state_agreement(
+            &extended,
+            &described,
+            project.settings_for(output).initial_state,
+        ) {
             Ok(evidence) => out.steady_states = Some(evidence.sentence),
             Err(e) => notes.push(format!("steady states of '{output}' across runs: {e}")),
         }

@@ -44,8 +44,8 @@
 //! credited even when the refinement comes within 10 % of it.
 use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
 use crate::core::effects::{
-    AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FitData, StructuralChange, apply_effect,
-    refine_structure, refit,
+    AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FitData, StructuralChange,
+    apply_effect, refine_structure, refit,
 };
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
@@ -272,22 +272,21 @@ fn run_traces<'a>(
     runs: impl Iterator<Item = &'a Run>,
     initial: InitialState,
 ) -> Result<Vec<ResidualTrace>, DiagnoseError> {
-    runs
-        .map(|run| {
-            let y = measured(run, &current.output)?.to_vec();
-            let y_hat = current
-                .simulate_scored(run, initial)
-                .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
-            Ok(ResidualTrace {
-                run: run.name.clone(),
-                dt_secs: run.dt_secs,
-                u: run.input.values.clone(),
-                y,
-                y_hat,
-                aux: run.aux.clone(),
-            })
+    runs.map(|run| {
+        let y = measured(run, &current.output)?.to_vec();
+        let y_hat = current
+            .simulate_scored(run, initial)
+            .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
+        Ok(ResidualTrace {
+            run: run.name.clone(),
+            dt_secs: run.dt_secs,
+            u: run.input.values.clone(),
+            y,
+            y_hat,
+            aux: run.aux.clone(),
         })
-        .collect()
+    })
+    .collect()
 }
 
 /// Try every applicable effect of the catalog on `current`: refit on the identification data of

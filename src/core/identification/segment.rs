@@ -70,8 +70,44 @@ pub fn segment_label(i: usize) -> String {
 }
 
 /// Sample indices where the input steps (the first sample at the new level), sorted.
+///
+/// Steps are looked for as changes between the means of the previous and the next second. When
+/// there are none, the input may still move between holds by ramps (a closed-loop engine follows a
+/// ramped set-point): a ramp of rate r changes one-second means by only r·1 s, but means of half the
+/// minimum hold apart by r·(hold/2), so the same threshold is tried again at that scale. A ramp is
+/// then a step at the start of the ramp (where the half-hold means first differ by the threshold),
+/// and its segment holds the ramp and the hold after it; ramps closer than a hold merge into one.
 pub fn detect_steps(u: &[f64], dt_secs: f64, settings: &SegmentSettings) -> Result<Vec<usize>, SegmentError> {
     let w = ((1.0 / dt_secs).round() as usize).max(3);
+    match steps_at_scale(u, w, dt_secs, settings, Landmark::LargestJump) {
+        Err(SegmentError::NoSteps { largest, threshold }) => {
+            let w_ramp = ((0.5 * settings.min_hold_secs / dt_secs).round() as usize).max(w);
+            match steps_at_scale(u, w_ramp, dt_secs, settings, Landmark::FirstAboveThreshold) {
+                Ok(steps) if w_ramp > w => Ok(steps),
+                // The first scale's figures say what a user can act on (the size of a step).
+                _ => Err(SegmentError::NoSteps { largest, threshold }),
+            }
+        }
+        found => found,
+    }
+}
+
+/// Where in a stretch of large mean differences a step is placed.
+#[derive(Clone, Copy)]
+enum Landmark {
+    /// At the largest single-sample jump: the edge of a step.
+    LargestJump,
+    /// Where the means first differ by the threshold: the start of a ramp.
+    FirstAboveThreshold,
+}
+
+fn steps_at_scale(
+    u: &[f64],
+    w: usize,
+    dt_secs: f64,
+    settings: &SegmentSettings,
+    landmark: Landmark,
+) -> Result<Vec<usize>, SegmentError> {
     if u.len() < 4 * w {
         return Err(SegmentError::TooShort { samples: u.len() });
     }
@@ -97,9 +133,12 @@ pub fn detect_steps(u: &[f64], dt_secs: f64, settings: &SegmentSettings) -> Resu
             k += 1;
         }
         let (lo, hi) = (run_start + w, (k + w).min(u.len() - 1));
-        let at = (lo.max(1)..=hi)
-            .max_by(|&a, &b| (u[a] - u[a - 1]).abs().total_cmp(&(u[b] - u[b - 1]).abs()))
-            .unwrap_or(lo);
+        let at = match landmark {
+            Landmark::LargestJump => (lo.max(1)..=hi)
+                .max_by(|&a, &b| (u[a] - u[a - 1]).abs().total_cmp(&(u[b] - u[b - 1]).abs()))
+                .unwrap_or(lo),
+            Landmark::FirstAboveThreshold => lo.min(u.len() - 1),
+        };
         let size = diff[run_start..k].iter().fold(0.0f64, |m, d| m.max(d.abs()));
         steps.push((at, size));
     }
@@ -266,6 +305,37 @@ mod tests {
             assert_eq!(segs[0].label, "A");
             assert!(segs[0].start < segs[0].step_at && segs[4].end == u.len());
             check_segments(&segs, u.len()).unwrap();
+        }
+    }
+
+    #[test]
+    fn ramps_between_holds_are_steps_at_the_ramp_starts() {
+        // Holds joined by ramps of 0.2 /s (a closed loop following a ramped set-point): no
+        // one-second change reaches the step threshold, but each ramp moves the level by 5–10 %.
+        let dt = 0.143;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let normal = Normal::new(0.0, 0.02).unwrap();
+        let plan = [(56.0, 40.0), (62.0, 30.0), (60.5, 35.0), (65.0, 30.0), (72.0, 40.0)];
+        let (mut u, mut starts) = (Vec::new(), Vec::new());
+        let mut level: f64 = plan[0].0;
+        for &(target, hold_s) in &plan {
+            if target != level {
+                starts.push(u.len());
+                let n_ramp = ((target - level).abs() / 0.2 / dt).round() as usize;
+                for i in 1..=n_ramp {
+                    u.push(level + (target - level) * i as f64 / n_ramp as f64 + normal.sample(&mut rng));
+                }
+                level = target;
+            }
+            u.extend((0..(hold_s / dt) as usize).map(|_| level + normal.sample(&mut rng)));
+        }
+        let one_second = steps_at_scale(&u, 7, dt, &SegmentSettings::default(), Landmark::LargestJump);
+        assert!(matches!(one_second, Err(SegmentError::NoSteps { .. })), "the ramps are no 1-s steps");
+        let steps = detect_steps(&u, dt, &SegmentSettings::default()).unwrap();
+        assert_eq!(steps.len(), starts.len(), "{steps:?} vs ramp starts {starts:?}");
+        let half_hold = (4.0 / dt) as usize;
+        for (got, start) in steps.iter().zip(&starts) {
+            assert!(got.abs_diff(*start) <= half_hold, "{steps:?} vs ramp starts {starts:?}");
         }
     }
 

@@ -82,3 +82,56 @@ fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
     let identified = &report["outputs"]["rpm"]["identified"];
     assert!(!identified["candidates"].as_array().unwrap().is_empty() || identified["direct_fit"].is_string());
 }
+
+/// `window = "auto"` on the two-shaft turbine's test-cell logs, judged against the PLC's own stage
+/// column, which the window finder never reads: the window must end at the fuel cut (within 2 s of
+/// the stage leaving 60, "running") and start once the start sequence has reached its last stages
+/// (stage 50 or 60) but no later than 5 s after the stage reaches 60.
+#[test]
+fn t07_running_windows_found_from_the_signals_agree_with_the_controller_stage() {
+    use jetid::io::csv_run::{LoadOptions, load_run_with_notes};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let data = root.join("../shared/realdata/micro_gas_turbine_twoshaft_20kW");
+    if !data.is_dir() {
+        eprintln!("SKIPPED: the T07 dataset is not at {}", data.display());
+        return;
+    }
+    let map = ["time=time_s", "input=fuel_flow_Lpm", "output=PR", "output=N2_krpm", "output=power_kW"];
+    let mut judged = 0;
+    for log in
+        ["T07_2023-02-10_run01", "T07_2023-02-10_run02", "T07_2023-04-05_run01", "T07_2023-04-05_run02"]
+    {
+        let path = data.join(format!("{log}.csv"));
+        let whole = LoadOptions::from_cli(
+            &["time=time_s", "input=fuel_flow_Lpm", "output=stage"],
+            None,
+            None,
+            None,
+            true,
+        )
+        .unwrap();
+        let (full, _) = load_run_with_notes(&path, &whole).unwrap();
+        let stage = &full.output("stage").unwrap().values;
+        let at = |k: usize| full.t_secs[k];
+        let Some(first60) = stage.iter().position(|s| *s >= 59.5) else { continue };
+        let last60 = stage.iter().rposition(|s| *s >= 59.5).unwrap();
+        let auto = LoadOptions::from_cli(&map, None, Some("auto"), None, true).unwrap();
+        let (run, notes) = load_run_with_notes(&path, &auto).unwrap();
+        let window = notes.running_window.expect("the notes say how the window was found");
+        let (start, end) = (run.t_secs[0], *run.t_secs.last().unwrap());
+        assert!(
+            (end - at(last60)).abs() <= 2.0,
+            "{log}: ends {end:.1} s, stage leaves 60 at {:.1} s",
+            at(last60)
+        );
+        let stage_at_start = stage[full.t_secs.iter().position(|t| *t >= start).unwrap()];
+        assert!(
+            stage_at_start >= 49.5,
+            "{log}: starts at {start:.1} s in stage {stage_at_start} ({})",
+            window.reason
+        );
+        assert!(start <= at(first60) + 5.0, "{log}: starts {start:.1} s, stage 60 from {:.1} s", at(first60));
+        judged += 1;
+    }
+    assert_eq!(judged, 4, "every judged log reaches stage 60");
+}

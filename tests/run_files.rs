@@ -187,7 +187,7 @@ fn window_in_samples_and_in_seconds() {
 
 #[test]
 fn window_strings_parse_and_print_back() {
-    for spec in ["935:2603", "12.5s:80s", ":100", "3s:"] {
+    for spec in ["935:2603", "12.5s:80s", ":100", "3s:", "auto"] {
         let window: Window = spec.parse().unwrap();
         assert_eq!(window.to_string(), spec);
     }

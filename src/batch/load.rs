@@ -67,6 +67,9 @@ fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
             run.name, run.dt_secs, read.merged_repeats
         ));
     }
+    if let Some(window) = &read.running_window {
+        notes.push(format!("run '{}': running window found: {}", run.name, window.reason));
+    }
     for (channel, count) in &read.invalid_samples {
         notes.push(format!(
             "run '{}': {count} samples of {channel} held its invalid-value sentinel and were interpolated",

@@ -18,7 +18,8 @@ pub struct InspectArgs {
     /// Sample time in seconds, for files without a time column.
     #[arg(long, value_name = "SECONDS")]
     pub sample_time: Option<f64>,
-    /// Keep only samples START:END (0-based, END excluded), or seconds with `s`: 12.5s:80s.
+    /// Keep only samples START:END (0-based, END excluded), or seconds with `s`: 12.5s:80s; or
+    /// `auto`: from the end of the start-up run-up to the fuel cut, found from the signals.
     #[arg(long, value_name = "START:END")]
     pub window: Option<String>,
     /// A 0/1 column marking good samples; bad ones are interpolated.
@@ -79,6 +80,9 @@ pub fn summary(run: &Run, notes: &LoadNotes) -> String {
             "quality   {} bad samples interpolated, {} trimmed at the start, {} at the end",
             notes.repaired_samples, notes.trimmed_bad_start, notes.trimmed_bad_end
         );
+    }
+    if let Some(window) = &notes.running_window {
+        let _ = writeln!(out, "window    auto: {}", window.reason);
     }
     for (channel, count) in &notes.invalid_samples {
         let _ = writeln!(out, "invalid   {channel}: {count} sentinel samples interpolated");

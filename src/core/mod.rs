@@ -8,3 +8,4 @@ pub mod monte_carlo;
 pub mod numerics;
 pub mod residuals;
 pub mod run;
+pub mod running_window;

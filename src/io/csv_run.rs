@@ -150,6 +150,8 @@ pub struct LoadNotes {
     /// Per channel, the samples that held an invalid-value sentinel and were interpolated.
     pub invalid_samples: Vec<(String, usize)>,
     pub dropped_columns: Vec<DroppedColumn>,
+    /// With `window = "auto"`: the running part kept, and how it was found.
+    pub running_window: Option<crate::core::running_window::RunningWindow>,
 }
 
 /// Read a run file. The run is named after the file stem.

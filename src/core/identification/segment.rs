@@ -319,7 +319,7 @@ mod tests {
         let (mut u, mut starts) = (Vec::new(), Vec::new());
         let mut level: f64 = plan[0].0;
         for &(target, hold_s) in &plan {
-            if target != level {
+            if (target - level).abs() > 1e-9 {
                 starts.push(u.len());
                 let n_ramp = ((target - level).abs() / 0.2 / dt).round() as usize;
                 for i in 1..=n_ramp {

@@ -6,8 +6,10 @@ use super::column_map::{Layout, TimeBase, resolve_layout};
 use super::repair::{TimeProblem, check_time, fill_gaps, median_step, merge_repeated_times, resample};
 use super::{
     DroppedColumn, LoadNotes, LoadOptions, MAX_BAD_FRACTION, MIN_SAMPLES, RunFileError, TIME_TOLERANCE,
+    Window,
 };
 use crate::core::run::{Channel, Run};
+use crate::core::running_window::running_window;
 
 /// The raw table: trimmed header names, and the data records with their line numbers.
 struct Table {
@@ -291,8 +293,25 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
     let Some(input) = channels.next() else {
         return Err(RunFileError::NoOutput { file: file.to_owned(), present: table.header.clone() });
     };
-    let outputs: Vec<Channel> = channels.by_ref().take(layout.outputs.len()).collect();
-    let aux: Vec<Channel> = channels.collect();
+    let mut outputs: Vec<Channel> = channels.by_ref().take(layout.outputs.len()).collect();
+    let mut aux: Vec<Channel> = channels.collect();
+    let mut input = input;
+    let running_window = matches!(opts.window, Some(Window::Running)).then(|| {
+        let ys: Vec<&[f64]> = outputs.iter().map(|c| c.values.as_slice()).collect();
+        let found = running_window(&input.values, &ys, dt_secs, t_secs.first().copied().unwrap_or(0.0));
+        let keep = |v: &mut Vec<f64>| {
+            v.truncate(found.end);
+            v.drain(..found.start);
+        };
+        keep(&mut t_secs);
+        for c in std::iter::once(&mut input).chain(&mut outputs).chain(&mut aux) {
+            keep(&mut c.values);
+        }
+        found
+    });
+    if t_secs.len() < MIN_SAMPLES {
+        return Err(too_few_samples(file, t_secs.len()));
+    }
     let name = file.file_stem().map_or_else(|| file.to_string_lossy(), |s| s.to_string_lossy()).into_owned();
     let notes = LoadNotes {
         time_column: match layout.time {
@@ -308,6 +327,7 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
         merged_repeats,
         invalid_samples,
         dropped_columns,
+        running_window,
     };
     Ok((Run { name, dt_secs, t_secs, input, outputs, aux }, notes))
 }

@@ -1,4 +1,5 @@
-//! `--window START:END`: the part of a run to keep, in samples (`935:2603`) or seconds (`12.5s:80s`).
+//! `--window START:END`: the part of a run to keep, in samples (`935:2603`) or seconds (`12.5s:80s`),
+//! or `auto`: the running part of a whole-run log (`core::running_window`).
 use std::fmt;
 use std::ops::Range;
 use std::str::FromStr;
@@ -10,14 +11,22 @@ use std::str::FromStr;
 /// is kept when `start <= t < end`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Window {
-    Samples { start: Option<usize>, end: Option<usize> },
-    Seconds { start: Option<f64>, end: Option<f64> },
+    Samples {
+        start: Option<usize>,
+        end: Option<usize>,
+    },
+    Seconds {
+        start: Option<f64>,
+        end: Option<f64>,
+    },
+    /// `auto`: from the end of the start-up run-up to the fuel cut, found once the channels are read.
+    Running,
 }
 
 /// A `--window` string that does not parse.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "bad --window \"{spec}\": {reason} (expected START:END in samples, e.g. 935:2603, or in seconds, e.g. 12.5s:80s)"
+    "bad --window \"{spec}\": {reason} (expected START:END in samples, e.g. 935:2603, in seconds, e.g. 12.5s:80s, or auto)"
 )]
 pub struct WindowSpecError {
     pub spec: String,
@@ -29,6 +38,9 @@ impl FromStr for Window {
 
     fn from_str(spec: &str) -> Result<Self, Self::Err> {
         let fail = |reason: &str| WindowSpecError { spec: spec.to_owned(), reason: reason.to_owned() };
+        if spec.trim().eq_ignore_ascii_case("auto") {
+            return Ok(Window::Running);
+        }
         let Some((start, end)) = spec.split_once(':') else {
             return Err(fail("no ':' between START and END"));
         };
@@ -89,6 +101,7 @@ impl fmt::Display for Window {
         match *self {
             Window::Samples { start, end } => write!(f, "{}:{}", side(start, ""), side(end, "")),
             Window::Seconds { start, end } => write!(f, "{}:{}", side(start, "s"), side(end, "s")),
+            Window::Running => write!(f, "auto"),
         }
     }
 }
@@ -102,6 +115,8 @@ impl Window {
         time_of_row: &dyn Fn(usize) -> f64,
     ) -> Result<Range<usize>, String> {
         match *self {
+            // The running part is found from the channels, after they are read.
+            Window::Running => Ok(0..n_rows),
             Window::Samples { start, end } => {
                 let a = start.unwrap_or(0);
                 let b = end.unwrap_or(n_rows);

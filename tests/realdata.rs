@@ -135,3 +135,35 @@ fn t07_running_windows_found_from_the_signals_agree_with_the_controller_stage() 
     }
     assert_eq!(judged, 4, "every judged log reaches stage 60");
 }
+
+/// The two-shaft turbine's project end to end: its logs as they come (repeated time stamps,
+/// sentinels, automatic windows, ramps and holds) give a report, and the residual analysis of PR
+/// says what the flow meter does (dips of 1–3 s the pressure ratio never shows) without being told.
+#[test]
+fn t07_project_runs_and_the_residuals_name_the_flow_meter_dropouts() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let data = root.join("../shared/realdata/micro_gas_turbine_twoshaft_20kW");
+    if !data.is_dir() {
+        eprintln!("SKIPPED: the T07 dataset is not at {}", data.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let project = root.join("sample_runs/t07/project.toml");
+    let o = Command::new(env!("CARGO_BIN_EXE_jetid"))
+        .args(["--batch", project.to_str().unwrap(), "--output", "PR", "--out", dir.path().to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+    let pr = &report["outputs"]["PR"];
+    assert_eq!(pr["unit"], "-", "the project gives PR's unit");
+    let residuals = pr["residuals"].as_array().unwrap();
+    let run02 = residuals.iter().find(|r| r["run"] == "T07_2023-02-10_run02").unwrap();
+    let summary = run02["summary"].as_str().unwrap();
+    assert!(summary.contains("input sensor reads dropouts"), "{summary}");
+    let notes: Vec<&str> =
+        report["diagnostics"].as_array().unwrap().iter().filter_map(|n| n.as_str()).collect();
+    assert!(notes.iter().any(|n| n.contains("running window found")), "{notes:?}");
+    assert!(pr["steady_states"].as_str().unwrap().contains("steady state"), "{pr}");
+}

@@ -10,7 +10,8 @@
 //! 4. the residual spectrum (Welch, Hann window) with its largest peak;
 //! 5. the residual against every recorded channel the model does not use, raw and smoothed, with
 //!    significance from an effective sample size that accounts for autocorrelation;
-//! 6. the worst stretches of the run, for jumping to them.
+//! 6. the worst stretches of the run, for jumping to them;
+//! 7. short dips of the input the output does not follow (a sensor's dropouts, not fuel).
 //!
 //! [`summary()`] turns the numbers into a few plain sentences.
 #![deny(clippy::indexing_slicing)]
@@ -21,6 +22,7 @@ use crate::core::numerics::noise_fit::{Distribution, Family, fit};
 use crate::core::run::{Channel, Run};
 
 mod correlation;
+mod dropouts;
 mod regimes;
 mod signal;
 mod spectrum;
@@ -31,6 +33,7 @@ pub use correlation::{
     ChannelCorrelation, ChannelScan, Correlogram, ExcludedChannel, ExclusionReason, InputCrossCorrelation,
     Z_99,
 };
+pub use dropouts::InputDropouts;
 pub use regimes::{
     Motion, NoiseBand, OperatingBand, OperatingBands, Regime, RegimeRow, RegimeTable, SampleRegimes,
     SigmaSource,
@@ -230,6 +233,10 @@ pub struct ResidualAnalysis {
     pub channels: ChannelScan,
     /// Non-overlapping windows with the largest residual RMS, worst first.
     pub worst_stretches: Vec<Stretch>,
+    /// Short dips of the input and whether the output follows them; `None` without dips the model
+    /// would answer visibly.
+    #[serde(default)]
+    pub input_dropouts: Option<InputDropouts>,
 }
 
 fn check_length(channel: &Channel, expected: usize) -> Result<(), ResidualError> {
@@ -390,6 +397,8 @@ pub fn analyse_residuals(
         checked.stretch_len,
         settings.stretch_count,
     );
+    let input_dropouts =
+        dropouts::input_dropouts(&run.input.name, &run.input.values, y, y_hat, &residual, dt_secs, sigma);
     Ok(ResidualAnalysis {
         run: run.name.clone(),
         output: output.to_owned(),
@@ -404,5 +413,6 @@ pub fn analyse_residuals(
         spectrum,
         channels,
         worst_stretches,
+        input_dropouts,
     })
 }

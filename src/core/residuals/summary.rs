@@ -193,11 +193,25 @@ fn whiteness_sentence(acf: &Correlogram) -> String {
     }
 }
 
+/// Input dips the output does not follow: the input sensor, not the engine (only when they are).
+fn dropout_sentence(d: &super::InputDropouts) -> Option<String> {
+    d.sensor_dropouts.then(|| {
+        format!(
+            "The input {} dips {} times for up to {:.1} s (by up to {:.0} % of its range) and returns, but the \
+             output does not follow (its excursion over the dips is {:.0} % of the one the model predicts): \
+             the input sensor reads dropouts the engine does not see ({:.0} % of the squared error sits \
+             there); repair or gate the input channel rather than look for missing physics.",
+            d.input, d.count, d.longest_secs, d.deepest_pct, d.output_follows_pct, d.residual_share_pct
+        )
+    })
+}
+
 /// Two to four sentences an engine engineer can act on: overall error against the noise, where the
 /// error lives by regime, then the two most telling of input timing, an unused channel, a spectral
 /// peak and whiteness.
 pub fn summary_sentences(a: &ResidualAnalysis) -> Vec<String> {
     let findings = [
+        a.input_dropouts.as_ref().and_then(dropout_sentence),
         a.input_xcorr.as_ref().and_then(input_sentence),
         channel_sentence(&a.channels),
         spectrum_sentence(&a.spectrum),

@@ -479,3 +479,46 @@ fn editing_the_proposed_clusters_keeps_the_proposals_dead_time_and_accepting_it_
     harness.run();
     assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, None);
 }
+
+/// A project's `steps_from` reaches the app: its segments are detected on that channel (as the
+/// batch does), a channel the run lacks is named in the error, and saving keeps the setting.
+#[test]
+fn the_app_finds_steps_on_the_projects_steps_from_channel_and_saves_it() {
+    use jetid::core::identification::segment::{SegmentSettings, auto_segments};
+    let dir = tempfile::tempdir().unwrap();
+    let ident = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/sr30/ident.csv");
+    let write = |name: &str, channel: &str| {
+        let path = dir.path().join(name);
+        let text = format!(
+            "ident = \"{}\"\nsteps_from = \"{channel}\"\n",
+            ident.to_str().unwrap().replace('\\', "/")
+        );
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let mut app = App::new(jetid::ui::Session::default());
+    app.apply(Command::OpenProject(write("egt.toml", "egt_c")));
+    assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
+    app.settle();
+    let run = &app.session.runs[0].run;
+    let egt = &run.channel("egt_c").unwrap().values;
+    let on_egt = auto_segments(egt, run.dt_secs, &SegmentSettings::default());
+    let on_input = auto_segments(&run.input.values, run.dt_secs, &SegmentSettings::default()).unwrap();
+    let segments = app.cache.ident.as_ref().unwrap().segments.clone();
+    match on_egt {
+        Ok(expected) => {
+            assert_eq!(segments.unwrap(), expected);
+            assert_ne!(expected, on_input, "the channel must make a difference for this test to tell");
+        }
+        Err(e) => assert!(segments.unwrap_err().contains(&e.to_string())),
+    }
+    let saved = dir.path().join("saved.toml");
+    app.apply(Command::SaveProject(saved.clone()));
+    assert_eq!(jetid::io::project::load_project(&saved).unwrap().steps_from.as_deref(), Some("egt_c"));
+
+    let mut typo = App::new(jetid::ui::Session::default());
+    typo.apply(Command::OpenProject(write("typo.toml", "egt")));
+    typo.settle();
+    let err = typo.cache.ident.as_ref().unwrap().segments.clone().unwrap_err();
+    assert!(err.contains("steps_from = \"egt\"") && err.contains("no such channel"), "{err}");
+}

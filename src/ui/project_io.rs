@@ -53,7 +53,7 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         add_effects,
         auto_effects: None,
         clusters_from: None,
-        steps_from: None,
+        steps_from: session.setup.steps_from.clone(),
         load: LoadSpec::default(),
         output,
     };
@@ -139,6 +139,7 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
         }
     }
     session.setup.segments = project.segments.values().next().cloned();
+    session.setup.steps_from = project.steps_from.clone();
     let names: BTreeSet<&String> = project.settings.keys().chain(project.clusters.keys()).collect();
     for name in names {
         session.setup.outputs.insert(

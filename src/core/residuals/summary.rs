@@ -201,7 +201,13 @@ fn dropout_sentence(d: &super::InputDropouts) -> Option<String> {
              output does not follow (its excursion over the dips is {:.0} % of the one the model predicts): \
              the input sensor reads dropouts the engine does not see ({:.0} % of the squared error sits \
              there); repair or gate the input channel rather than look for missing physics.",
-            d.input, d.count, d.longest_secs, d.deepest_pct, d.output_follows_pct, d.residual_share_pct
+            d.input,
+            d.count,
+            d.longest_secs,
+            d.deepest_pct,
+            // No "-0 %" for a share that rounds to nothing.
+            if d.output_follows_pct.abs() < 0.5 { 0.0 } else { d.output_follows_pct },
+            d.residual_share_pct
         )
     })
 }

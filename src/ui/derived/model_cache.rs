@@ -19,7 +19,7 @@ use crate::core::identification::pipeline::{
     self, LiveResult, OutputSettings, SegmentFits, fit_segments_for, live_update, live_update_proposed,
     segments_for,
 };
-use crate::core::identification::segment::{Segment, SegmentSettings};
+use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments};
 use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::{BodePoint, log_space};
 use crate::core::run::Run;
@@ -46,6 +46,7 @@ pub struct IdentCache {
     pub run_index: usize,
     pub run: Arc<Run>,
     given_segments: Option<Vec<Segment>>,
+    steps_from: Option<String>,
     /// The segments in use: the user's (checked) or the detected ones.
     pub segments: Result<Vec<Segment>, String>,
     /// One entry per output of the identification run, in its column order.
@@ -59,12 +60,17 @@ impl IdentCache {
         let (run_index, entry) = session.ident_run()?;
         let run = Arc::clone(&entry.run);
         let given = session.setup.segments.clone();
+        let steps_from = session.setup.steps_from.clone();
         let (segments, mut old_outputs) = match old {
-            Some(old) if Arc::ptr_eq(&old.run, &run) && old.given_segments == given => {
+            Some(old)
+                if Arc::ptr_eq(&old.run, &run)
+                    && old.given_segments == given
+                    && old.steps_from == steps_from =>
+            {
                 (old.segments, old.outputs)
             }
-            Some(old) => (detect_or_check(&run, given.as_deref()), old.outputs),
-            None => (detect_or_check(&run, given.as_deref()), Vec::new()),
+            Some(old) => (detect_or_check(&run, given.as_deref(), steps_from.as_deref()), old.outputs),
+            None => (detect_or_check(&run, given.as_deref(), steps_from.as_deref()), Vec::new()),
         };
         let outputs = run
             .outputs
@@ -80,7 +86,7 @@ impl IdentCache {
                 cache
             })
             .collect();
-        Some(Self { run_index, run, given_segments: given, segments, outputs })
+        Some(Self { run_index, run, given_segments: given, steps_from, segments, outputs })
     }
 
     pub fn output(&self, name: &str) -> Option<&OutputCache> {
@@ -115,8 +121,22 @@ impl IdentCache {
     }
 }
 
-fn detect_or_check(run: &Run, given: Option<&[Segment]>) -> Result<Vec<Segment>, String> {
-    segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string())
+/// The user's segments (checked), else steps detected on the input or on the `steps_from` channel.
+fn detect_or_check(
+    run: &Run,
+    given: Option<&[Segment]>,
+    steps_from: Option<&str>,
+) -> Result<Vec<Segment>, String> {
+    match (given, steps_from) {
+        (None, Some(name)) => {
+            let channel = run.channel(name).ok_or_else(|| {
+                format!("steps_from = \"{name}\": the identification run '{}' has no such channel (map it with aux={name})", run.name)
+            })?;
+            auto_segments(&channel.values, run.dt_secs, &SegmentSettings::default())
+                .map_err(|e| format!("segmentation of '{}' on {name}: {e}", run.name))
+        }
+        _ => segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string()),
+    }
 }
 
 /// A run a model is scored on.

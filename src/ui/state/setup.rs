@@ -16,6 +16,10 @@ use crate::core::identification::segment::Segment;
 pub struct ModelSetup {
     /// Segments of the identification run (sample indices); `None`: detected from the input.
     pub segments: Option<Vec<Segment>>,
+    /// Detect the steps on this channel of the identification run rather than on its input (a
+    /// project's `steps_from`: closed-loop data, or an input sensor with dropouts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps_from: Option<String>,
     /// By output column name. An output without an entry uses [`OutputSetup::for_output`].
     pub outputs: BTreeMap<String, OutputSetup>,
 }

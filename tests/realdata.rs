@@ -1,20 +1,27 @@
 //! The real-engine project (JetCat P300-PRO ECU telemetry) end to end, when the dataset is present
 //! beside the repository (`../shared/realdata/jetcat_p300pro_ecu`); skipped with a message when not.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// The shared real-data folder `name`, or `None` after saying the test is skipped (real data are
+/// never copied into the repository).
+fn dataset(name: &str) -> Option<PathBuf> {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata").join(name);
+    if data.is_dir() {
+        return Some(data);
+    }
+    eprintln!(
+        "SKIPPED: the dataset is not at {} (real data are never copied into the repository)",
+        data.display()
+    );
+    None
+}
 
 #[test]
 fn jetcat_project_identifies_and_scores_runs_a_and_f() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let data = root.join("../shared/realdata/jetcat_p300pro_ecu");
-    if !data.is_dir() {
-        eprintln!(
-            "SKIPPED: the JetCat dataset is not at {} (real data are never copied into the repository)",
-            data.display()
-        );
-        return;
-    }
+    let Some(_) = dataset("jetcat_p300pro_ecu") else { return };
     let dir = tempfile::tempdir().unwrap();
     let project = root.join("sample_runs/jetcat_p300/project.toml");
     let o = Command::new(env!("CARGO_BIN_EXE_jetid"))
@@ -49,12 +56,7 @@ fn jetcat_project_identifies_and_scores_runs_a_and_f() {
 /// column, no settings): the identification must still end with a model, not a dead end.
 #[test]
 fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let data = root.join("../shared/realdata/jetcat_p300pro_ecu");
-    if !data.is_dir() {
-        eprintln!("SKIPPED: the JetCat dataset is not at {}", data.display());
-        return;
-    }
+    let Some(data) = dataset("jetcat_p300pro_ecu") else { return };
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str| data.join(name).to_str().unwrap().replace('\\', "/");
     let project = dir.path().join("project.toml");
@@ -90,12 +92,7 @@ fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
 #[test]
 fn t07_running_windows_found_from_the_signals_agree_with_the_controller_stage() {
     use jetid::io::csv_run::{LoadOptions, load_run_with_notes};
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let data = root.join("../shared/realdata/micro_gas_turbine_twoshaft_20kW");
-    if !data.is_dir() {
-        eprintln!("SKIPPED: the T07 dataset is not at {}", data.display());
-        return;
-    }
+    let Some(data) = dataset("micro_gas_turbine_twoshaft_20kW") else { return };
     let map = ["time=time_s", "input=fuel_flow_Lpm", "output=PR", "output=N2_krpm", "output=power_kW"];
     let mut judged = 0;
     for log in
@@ -142,11 +139,7 @@ fn t07_running_windows_found_from_the_signals_agree_with_the_controller_stage() 
 #[test]
 fn t07_project_runs_and_the_residuals_name_the_flow_meter_dropouts() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let data = root.join("../shared/realdata/micro_gas_turbine_twoshaft_20kW");
-    if !data.is_dir() {
-        eprintln!("SKIPPED: the T07 dataset is not at {}", data.display());
-        return;
-    }
+    let Some(_) = dataset("micro_gas_turbine_twoshaft_20kW") else { return };
     let dir = tempfile::tempdir().unwrap();
     let project = root.join("sample_runs/t07/project.toml");
     let o = Command::new(env!("CARGO_BIN_EXE_jetid"))

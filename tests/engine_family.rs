@@ -46,8 +46,14 @@ struct Bench {
 }
 
 fn bench(engine_seed: u64, effects: &[Effect]) -> Bench {
+    bench_days(engine_seed, effects, effects)
+}
+
+/// A bench session over two test days: the identification and chirp runs on the first (with
+/// `first_day` effects), the validation run on the second (with `second_day` effects).
+fn bench_days(engine_seed: u64, first_day: &[Effect], second_day: &[Effect]) -> Bench {
     let engine = EngineFamily::small_turbojets().draw(engine_seed);
-    let run = |kind: TestKind, noise_seed: u64| {
+    let run = |kind: TestKind, noise_seed: u64, effects: &[Effect]| {
         let cfg = SimConfig::for_test(kind.name(), kind, noise_seed)
             .unwrap()
             .on_engine(&engine)
@@ -55,9 +61,9 @@ fn bench(engine_seed: u64, effects: &[Effect]) -> Bench {
         simulate(&cfg).unwrap()
     };
     Bench {
-        ident: run(TestKind::Ident, engine_seed).measured,
-        validation: run(TestKind::Validation, engine_seed + 1000),
-        chirp: run(TestKind::Chirp, engine_seed + 2000).measured,
+        ident: run(TestKind::Ident, engine_seed, first_day).measured,
+        validation: run(TestKind::Validation, engine_seed + 1000, second_day),
+        chirp: run(TestKind::Chirp, engine_seed + 2000, first_day).measured,
         engine,
     }
 }
@@ -193,8 +199,17 @@ fn found_on(
     found: impl Fn(&Bench, &DiagnosisReport) -> bool + Sync,
 ) -> (usize, String) {
     let effect: Effect = spec.parse().unwrap();
+    found_on_benches(|seed| bench(seed, std::slice::from_ref(&effect)), output, found)
+}
+
+/// [`found_on`] for benches made by `make` from an engine seed.
+fn found_on_benches(
+    make: impl Fn(u64) -> Bench + Sync,
+    output: &str,
+    found: impl Fn(&Bench, &DiagnosisReport) -> bool + Sync,
+) -> (usize, String) {
     let outcomes = parallel(&EFFECT_ENGINES, |&seed| {
-        let b = bench(seed, std::slice::from_ref(&effect));
+        let b = make(seed);
         let report = structure_first(&b, output);
         (found(&b, &report), format!("engine {seed}: {}", summary(&report)))
     });
@@ -218,6 +233,20 @@ fn assert_found_on_two(spec: &str, output: &str) {
     let (count, log) = found_on(spec, output, |_, report| first_physics_is(report, id));
     eprintln!("{spec}:\n{log}");
     assert!(count >= 2, "{spec} found on {count} of {} engines:\n{log}", EFFECT_ENGINES.len());
+}
+
+/// A fuel meter recalibrated between test days: the validation day's log reads 0.2 gal/h high (a
+/// few percent of an idle flow), the identification day's does not. Nothing else differs.
+#[test]
+fn calibration_drift_between_test_days_is_found_on_engines_of_the_family() {
+    let drift: Effect = "calibration_drift:offset_gph=0.2".parse().unwrap();
+    let (count, log) = found_on_benches(
+        |seed| bench_days(seed, &[], std::slice::from_ref(&drift)),
+        SPEED,
+        |_, report| first_physics_is(report, "calibration_drift"),
+    );
+    eprintln!("calibration_drift:\n{log}");
+    assert!(count >= 2, "calibration_drift found on {count} of {} engines:\n{log}", EFFECT_ENGINES.len());
 }
 
 #[test]

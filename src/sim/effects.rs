@@ -22,13 +22,14 @@ const fn spec(name: &'static str, default: f64, min: f64, max: f64) -> ParamSpec
 }
 
 /// The effects the simulator can switch on: METHOD.md's catalog, keyed on the model's own ids.
-pub const EFFECT_IDS: [EffectId; 6] = [
+pub const EFFECT_IDS: [EffectId; 7] = [
     EffectId::TransportDelay,
     EffectId::ThermalSoak,
     EffectId::AmbientCorrection,
     EffectId::AsymmetricDynamics,
     EffectId::SensorDynamics,
     EffectId::StaticMapOrder,
+    EffectId::CalibrationDrift,
 ];
 
 const TRANSPORT_DELAY: &[ParamSpec] = &[spec("delay_s", 0.45, 0.0, 5.0)];
@@ -48,6 +49,9 @@ const SENSOR_DYNAMICS: &[ParamSpec] = &[
     spec("lag_s", 0.3, 0.0, 2.0),
     spec("buffet_n", 1.5, 0.0, 50.0),
 ];
+/// A fuel-meter zero shift of a test day, gal/h: a few percent of an idle flow of ~2 gal/h is what
+/// a recalibration or a swapped meter gives; ±2 gal/h is the most a meter would be trusted with.
+const CALIBRATION_DRIFT: &[ParamSpec] = &[spec("offset_gph", 0.2, -2.0, 2.0)];
 const STATIC_MAP_ORDER: &[ParamSpec] =
     &[spec("bleed_rpm", 80_000.0, 50_000.0, 95_000.0), spec("gain", 2.0, 0.0, 20.0)];
 
@@ -70,6 +74,10 @@ pub enum Effect {
     /// A compressor bleed valve that opens above `bleed_rpm` (corrected) and loads the spool in
     /// proportion to `gain` times the speed above it: a kink in the static map.
     StaticMapOrder { bleed_rpm: f64, gain: f64 },
+    /// The fuel meter of this run reads `offset_gph` high: the engine burns the scheduled fuel, the
+    /// log's input column is shifted (a calibration that differs between test days; simulate the
+    /// runs of one day without it and another day's with it).
+    CalibrationDrift { offset_gph: f64 },
 }
 
 impl Effect {
@@ -82,6 +90,7 @@ impl Effect {
             Self::AsymmetricDynamics { .. } => EffectId::AsymmetricDynamics,
             Self::SensorDynamics { .. } => EffectId::SensorDynamics,
             Self::StaticMapOrder { .. } => EffectId::StaticMapOrder,
+            Self::CalibrationDrift { .. } => EffectId::CalibrationDrift,
         }
     }
 
@@ -95,9 +104,9 @@ impl Effect {
             EffectId::AsymmetricDynamics => Ok(ASYMMETRIC_DYNAMICS),
             EffectId::SensorDynamics => Ok(SENSOR_DYNAMICS),
             EffectId::StaticMapOrder => Ok(STATIC_MAP_ORDER),
-            // Not simulated: the scheduled time constant is the engine's own behaviour (always on);
-            // a calibration drift is a property of a test day, not of the engine.
-            EffectId::ScheduledTimeConstant | EffectId::CalibrationDrift => Err(unknown_effect(id.name())),
+            EffectId::CalibrationDrift => Ok(CALIBRATION_DRIFT),
+            // Not simulated: the scheduled time constant is the engine's own behaviour (always on).
+            EffectId::ScheduledTimeConstant => Err(unknown_effect(id.name())),
         }
     }
 
@@ -127,7 +136,8 @@ impl Effect {
             EffectId::SensorDynamics => {
                 Self::SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2), buffet_n: at(3) }
             }
-            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant | EffectId::CalibrationDrift => {
+            EffectId::CalibrationDrift => Self::CalibrationDrift { offset_gph: at(0) },
+            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant => {
                 Self::StaticMapOrder { bleed_rpm: at(0), gain: at(1) }
             }
         }
@@ -207,6 +217,8 @@ pub struct ActiveEffects {
     pub stand: Option<StandOverride>,
     /// `(bleed_rpm, gain)` of the bleed valve.
     pub bleed: Option<(f64, f64)>,
+    /// What the fuel meter adds to the flow it logs, gal/h.
+    pub meter_offset_gph: f64,
 }
 
 /// Linear drift of the inlet conditions through a run, and the humidity at its start.
@@ -239,6 +251,7 @@ impl ActiveEffects {
             accel_factor: 1.0,
             stand: None,
             bleed: None,
+            meter_offset_gph: 0.0,
         }
     }
 
@@ -264,6 +277,7 @@ impl ActiveEffects {
                     active.stand = Some(StandOverride { freq_hz, zeta, lag_s, buffet_n });
                 }
                 Effect::StaticMapOrder { bleed_rpm, gain } => active.bleed = Some((bleed_rpm, gain)),
+                Effect::CalibrationDrift { offset_gph } => active.meter_offset_gph = offset_gph,
             }
         }
         Ok(active)

@@ -152,7 +152,10 @@ pub fn simulate(cfg: &SimConfig) -> Result<SimOutput, SimError> {
     let engine = Engine::new(cfg.engine.clone(), effects);
     let truth = integrate(&engine, &cfg.profile, cfg.seed)?;
     let t_secs: Vec<f64> = (0..cfg.profile.n_samples).map(|k| k as f64 * DT_SECS).collect();
-    let measured = add_noise(&truth, &cfg.noise, cfg.seed);
+    let mut measured = add_noise(&truth, &cfg.noise, cfg.seed);
+    for fuel in &mut measured.fuel_gph {
+        *fuel += engine.effects.meter_offset_gph;
+    }
     Ok(SimOutput { measured: to_run(&cfg.name, &t_secs, measured), truth: to_run(&cfg.name, &t_secs, truth) })
 }
 

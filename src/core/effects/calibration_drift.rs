@@ -113,6 +113,20 @@ const DISAGREE_SE: f64 = 4.0;
 /// … and by more than this, %: smaller offsets are within what a bench's calibration holds.
 const DISAGREE_MIN_PCT: f64 = 0.5;
 
+/// Inlet temperatures further apart than this, °C, change a small turbojet's corrected speed by more
+/// than the 0.5 % a calibration is trusted to (√(T₁/T₂) − 1 ≈ 0.5 % at 288 K needs ~3 K).
+const INLET_GAP_C: f64 = 3.0;
+
+/// Mean inlet temperature of run `a` minus that of run `b`, when both record one.
+fn inlet_temperature_gap(traces: &[ResidualTrace], a: &str, b: &str) -> Option<f64> {
+    let temp = |name: &str| {
+        let t = traces.iter().find(|t| t.run == name)?;
+        let c = t.aux.iter().find(|c| c.name == super::AmbientCorrection::CHANNELS[0])?;
+        (!c.values.is_empty()).then(|| mean(&c.values))
+    };
+    Some(temp(a)? - temp(b)?)
+}
+
 /// Whether the runs' steady-state residuals disagree: the run-to-run part of the steady error.
 pub fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let runs: Vec<(&str, f64, f64)> = traces
@@ -132,9 +146,18 @@ pub fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let se = (high.2.powi(2) + low.2.powi(2)).sqrt();
     let differ = gap > DISAGREE_MIN_PCT && gap > DISAGREE_SE * se;
     let meaning = if differ {
+        let inlet = inlet_temperature_gap(traces, high.0, low.0)
+            .filter(|dt| dt.abs() > INLET_GAP_C)
+            .map(|dt| {
+                format!(
+                    "; their inlet temperatures differ by {:.1} °C, so other inlet conditions may explain it",
+                    dt.abs()
+                )
+            })
+            .unwrap_or_default();
         format!(
             "runs disagree on the steady state by {gap:.1} % ('{}' against '{}'): a calibration drift or a \
-             different engine build",
+             different engine build{inlet}",
             high.0, low.0
         )
     } else {

@@ -226,6 +226,8 @@ fn batch_errors_name_what_is_wrong() {
         .collect();
     let flat = write(dir.path(), "flat.csv", &flat);
     expect_error(&["--batch", "--ident", flat.to_str().unwrap(), "--out", out], &["no steps"]);
+    let said = stderr(&jetid(&["--batch", "--ident", flat.to_str().unwrap(), "--out", out]));
+    assert_eq!(said.matches("no steps").count(), 1, "the cause is said once: {said}");
     assert!(!Path::new(out).join("report.json").exists(), "no report may be left behind by a failed run");
 }
 
@@ -486,4 +488,85 @@ fn the_missing_physics_loop_chooses_on_validation_runs_and_scores_held_out_runs(
     // A negative number of rounds is refused by the command line.
     let bad = jetid(&["--batch", "--ident", &ident, "--auto-effects", "-1"]);
     assert!(!bad.status.success());
+}
+
+/// A model.json by hand: one first-order speed model with the pole `pole`, driven by `input`,
+/// with `effects` (a JSON list).
+fn hand_model(dir: &Path, name: &str, pole: f64, input: &str, effects: &str) -> PathBuf {
+    let text = format!(
+        r#"{{"format_version": 1, "convention": "", "dt_secs": 0.112994350282,
+            "input": {{"name": "{input}", "unit": ""}},
+            "outputs": [{{"name": "shaft_speed_rpm", "unit": "rpm",
+              "wiener": {{"linear": {{"tf": {{"num_zinv": [0.0, {gain}], "den_zinv": [1.0, {minus_pole}],
+                                             "dt_secs": 0.112994350282}}, "offset": 0.0}},
+                          "map": {{"v_center": 0.0, "v_scale": 1.0, "coeffs_scaled": [30000.0, 1.0]}}}},
+              "static_map_beta": [30000.0, 1.0], "poles": [[{pole}, 0.0]], "zeros": [], "clusters": [],
+              "effects": {effects}}}]}}"#,
+        gain = 8000.0 * (1.0 - pole),
+        minus_pole = -pole,
+    );
+    write(dir, name, &text)
+}
+
+/// predict refuses what it cannot trust, with a message about the model or the files: an unstable
+/// linear block, a model driven by another signal, an unknown effect, and an output over its input.
+#[test]
+fn predict_refuses_models_it_cannot_trust() {
+    let dir = tempfile::tempdir().unwrap();
+    let val = samples().join("validation.csv");
+    let pred = dir.path().join("p.csv");
+    let good = hand_model(dir.path(), "good.json", 0.9, "fuel_flow_gph", "[]");
+    let o = jetid(&predict_args(&good, &val, &pred, &[]));
+    assert!(o.status.success(), "the hand-made stable model predicts: {}", stderr(&o));
+
+    let unstable = hand_model(dir.path(), "unstable.json", 1.02, "fuel_flow_gph", "[]");
+    let out = dir.path().join("u.csv");
+    expect_error(
+        &predict_args(&unstable, &val, &out, &[]),
+        &["unstable.json", "shaft_speed_rpm", "1.0200", "unstable"],
+    );
+    assert!(!out.exists(), "nothing is written for a refused model");
+
+    let other_input = hand_model(dir.path(), "pump.json", 0.9, "pump_V", "[]");
+    expect_error(&predict_args(&other_input, &val, &out, &[]), &["pump_V", "fuel_flow_gph", "--map input="]);
+
+    let unknown =
+        hand_model(dir.path(), "warp.json", 0.9, "fuel_flow_gph", r#"[{"id": "warp_drive", "params": {}}]"#);
+    expect_error(
+        &predict_args(&unknown, &val, &out, &[]),
+        &["warp.json", "unknown effect 'warp_drive'", "thermal_soak"],
+    );
+    let unknown_bare =
+        hand_model(dir.path(), "warp2.json", 0.9, "fuel_flow_gph", r#"[{"id": "warp_drive"}]"#);
+    expect_error(&predict_args(&unknown_bare, &val, &out, &[]), &["unknown effect 'warp_drive'"]);
+
+    let copy = dir.path().join("run.csv");
+    std::fs::copy(&val, &copy).unwrap();
+    let before = std::fs::read(&copy).unwrap();
+    expect_error(&predict_args(&good, &copy, &copy, &[]), &["--out", "--input", "overwrite"]);
+    let relative_twin = dir.path().join(".").join("run.csv");
+    expect_error(&predict_args(&good, &copy, &relative_twin, &[]), &["overwrite"]);
+    assert_eq!(std::fs::read(&copy).unwrap(), before, "the run is untouched");
+}
+
+/// Settings for an output the run does not have would be silently ignored: an error that lists the
+/// outputs there are.
+#[test]
+fn a_project_section_for_an_unknown_output_is_an_error_naming_the_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let ident = samples().join("ident.csv");
+    let project = write(
+        dir.path(),
+        "typo.toml",
+        &format!(
+            "ident = \"{}\"\n[output.shaft_sped_rpm]\nna = 5\n",
+            ident.to_str().unwrap().replace('\\', "/")
+        ),
+    );
+    let out = dir.path().join("out");
+    expect_error(
+        &["--batch", project.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        &["[output.shaft_sped_rpm]", "shaft_speed_rpm", "thrust_n"],
+    );
+    assert!(!out.join("report.json").exists());
 }

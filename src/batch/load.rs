@@ -135,6 +135,18 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
 
 /// Outputs to model: the project's list (each must exist), else every output of the ident run.
 pub fn outputs_to_model(project: &Project, ident: &Run) -> Result<Vec<String>> {
+    let sections = project.settings.keys().chain(project.segments.keys()).chain(project.clusters.keys());
+    for name in sections {
+        if ident.output(name).is_none() {
+            let available: Vec<&str> = ident.outputs.iter().map(|c| c.name.as_str()).collect();
+            bail!(
+                "[output.{name}] in the project names no output of the identification run '{}' (outputs: {}): \
+                 its settings would be ignored",
+                ident.name,
+                available.join(", ")
+            );
+        }
+    }
     if project.outputs.is_empty() {
         return Ok(ident.outputs.iter().map(|c| c.name.clone()).collect());
     }

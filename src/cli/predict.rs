@@ -1,14 +1,14 @@
 //! `jetid predict --model MODEL.json --input RUN.csv --out PRED.csv`: simulate a saved model from a
 //! run's input alone.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 
 use crate::core::identification::initial_state::InitialState;
 use crate::core::run::{Channel, Run};
 use crate::io::csv_run::{LoadOptions, load_run, write_run};
-use crate::io::model_file::read_model;
+use crate::io::model_file::{ModelFile, read_model};
 
 #[derive(Debug, Args)]
 pub struct PredictArgs {
@@ -34,6 +34,39 @@ pub struct PredictArgs {
     pub initial_state: InitialStateArg,
 }
 
+/// Whether `a` and `b` name the same file (`b` need not exist yet).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let absolute = |p: &Path| {
+        std::fs::canonicalize(p).ok().or_else(|| {
+            let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            Some(std::fs::canonicalize(parent).ok()?.join(p.file_name()?))
+        })
+    };
+    matches!((absolute(a), absolute(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// Refuse a model whose linear block has a pole on or outside the unit circle: simulating it
+/// diverges (a model file edited by hand, or written by another tool).
+fn check_stable(model: &ModelFile, path: &Path) -> Result<()> {
+    for out in &model.outputs {
+        let poles = out.wiener.linear.tf.poles().map_err(|e| {
+            anyhow!("{}: output '{}': the linear block's poles: {e}", path.display(), out.name)
+        })?;
+        if let Some(p) = poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0) {
+            bail!(
+                "{}: output '{}' has a pole at {:.4}{:+.4}i (|z| = {:.4}), on or outside the unit circle: the model is \
+                 unstable and its simulation diverges; identify it again",
+                path.display(),
+                out.name,
+                p.re,
+                p.im,
+                p.norm()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// `--initial-state`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum InitialStateArg {
@@ -51,9 +84,26 @@ impl From<InitialStateArg> for InitialState {
 }
 
 pub fn run(args: &PredictArgs) -> Result<()> {
+    if same_file(&args.input, &args.out) {
+        bail!(
+            "--out {} is the --input file: the prediction would overwrite the run it is made from; write it elsewhere",
+            args.out.display()
+        );
+    }
     let model = read_model(&args.model)?;
+    check_stable(&model, &args.model)?;
     let opts = LoadOptions::from_cli(&args.maps, args.sample_time, None, None, false).context("--map")?;
     let run = load_run(&args.input, &opts)?;
+    if run.input.name != model.input.name {
+        bail!(
+            "{} was identified from the input '{}', but {} gives '{}' as its input: a model driven by another \
+             signal predicts nonsense (map the same signal with --map input=COLUMN)",
+            args.model.display(),
+            model.input.name,
+            args.input.display(),
+            run.input.name
+        );
+    }
     if ((run.dt_secs / model.dt_secs) - 1.0).abs() > 0.02 {
         bail!(
             "{} is sampled every {:.5} s but the model every {:.5} s; the model is discrete-time",

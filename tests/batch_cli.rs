@@ -94,6 +94,19 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
             assert_eq!(r["regimes"].as_array().unwrap().len(), 8);
         }
     }
+    // Every model that explains less than half of a run's variation is flagged, and only those.
+    for output in ["shaft_speed_rpm", "thrust_n"] {
+        let o = &report["outputs"][output];
+        let flagged = o["failing"].as_array().unwrap().len();
+        let below: usize = o["models"]
+            .as_object()
+            .unwrap()
+            .values()
+            .flat_map(|runs| runs.as_object().unwrap().values())
+            .filter(|m| m["fit_pct"].as_f64().unwrap() < 50.0)
+            .count();
+        assert_eq!(flagged, below, "{output}: {}", o["failing"]);
+    }
     assert!(report["timings_ms"]["total"].as_f64().unwrap() > 0.0);
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("Table 1") && md.contains("gray-box (Wiener)") && md.contains("paper RMSPE"));
@@ -569,4 +582,33 @@ fn a_project_section_for_an_unknown_output_is_an_error_naming_the_outputs() {
         &["[output.shaft_sped_rpm]", "shaft_speed_rpm", "thrust_n"],
     );
     assert!(!out.join("report.json").exists());
+}
+
+/// A fuel schedule is a run to predict from: no measured output is needed, and a gap in one that
+/// is there does not block a prediction started from the steady state.
+#[test]
+fn predict_runs_on_a_fuel_schedule_without_measured_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = hand_model(dir.path(), "good.json", 0.9, "fuel_flow_gph", "[]");
+    let rows = |k: usize| format!("{:.6},{}", k as f64 * 0.112994350282, if k < 100 { 4.0 } else { 5.0 });
+    let bare: String = std::iter::once("time_s,fuel_flow_gph\n".to_owned())
+        .chain((0..200).map(|k| format!("{}\n", rows(k))))
+        .collect();
+    let with_gap: String = std::iter::once("time_s,fuel_flow_gph,shaft_speed_rpm\n".to_owned())
+        .chain((0..200).map(|k| {
+            format!("{},{}\n", rows(k), if k == 50 { "nan".to_owned() } else { "60000".to_owned() })
+        }))
+        .collect();
+    for (name, text) in [("bare.csv", bare), ("gap.csv", with_gap)] {
+        let input = write(dir.path(), name, &text);
+        let out = dir.path().join(format!("pred_{name}"));
+        let o = jetid(&predict_args(&model, &input, &out, &[]));
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let predicted = load_run(&out, &LoadOptions::default()).unwrap();
+        let y = &predicted.output("shaft_speed_rpm").unwrap().values;
+        assert_eq!(y.len(), 200);
+        // Steady at 4 gal/h (v = 8000·4), then climbing towards 5 gal/h after the step.
+        assert!((y[0] - (30000.0 + 8000.0 * 4.0)).abs() < 1e-6, "{}", y[0]);
+        assert!(y[199] > y[99] + 7000.0, "{} vs {}", y[199], y[99]);
+    }
 }

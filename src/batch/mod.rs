@@ -151,6 +151,7 @@ impl Batch<'_> {
             residuals::residual_reports(self.out_dir, output, &models, &runs.scored(), sigma, notes)
         });
         out.residuals = residuals;
+        out.failing = crate::io::report::failing_models(&out);
         report.figures.extend(figs);
         let notes = &mut report.diagnostics;
         if runs.steady.is_some() && self.input_noise.is_some() {

@@ -56,6 +56,7 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
             .unwrap_or_default(),
         initial_state_meaning: models.initial_state.describe().to_owned(),
         steady_states: None,
+        failing: Vec::new(),
     }
 }
 

@@ -92,7 +92,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     }
     let model = read_model(&args.model)?;
     check_stable(&model, &args.model)?;
-    let opts = LoadOptions::from_cli(&args.maps, args.sample_time, None, None, false).context("--map")?;
+    let mut opts = LoadOptions::from_cli(&args.maps, args.sample_time, None, None, false).context("--map")?;
+    // Started from the steady state, the model needs the input alone: a fuel schedule without
+    // measured outputs, or with gaps in them, is a run to predict from.
+    opts.input_only =
+        InitialState::from(args.initial_state) == InitialState::Steady && opts.map.outputs.is_empty();
     let run = load_run(&args.input, &opts)?;
     if run.input.name != model.input.name {
         bail!(

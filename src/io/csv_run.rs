@@ -68,6 +68,9 @@ pub struct LoadOptions {
     pub invalid: std::collections::BTreeMap<String, Vec<f64>>,
     /// Per channel, its unit where the column name does not say it (`PR = "-"`, `power_kW = "kW"`).
     pub units: std::collections::BTreeMap<String, String>,
+    /// Read the time and the input only (a fuel schedule to predict from): no output is required,
+    /// and other columns are auxiliary channels, left out with the reason when they hold bad values.
+    pub input_only: bool,
 }
 
 /// A bad option string given to [`LoadOptions::from_cli`].
@@ -99,6 +102,7 @@ impl LoadOptions {
             resample,
             invalid: std::collections::BTreeMap::new(),
             units: std::collections::BTreeMap::new(),
+            input_only: false,
         })
     }
 

@@ -59,6 +59,7 @@ fn options() -> impl Strategy<Value = LoadOptions> {
             resample,
             invalid: Default::default(),
             units: Default::default(),
+            input_only: false,
         })
 }
 

@@ -17,6 +17,23 @@ pub struct Metrics {
     pub n: usize,
 }
 
+/// A model whose fit is below this, %, leaves more than half of the output's variation about its
+/// mean unexplained (‖y − ŷ‖ > ½‖y − ȳ‖): it fails on that run, whatever its RMSPE, and is flagged
+/// wherever models are compared.
+pub const MIN_FIT_PCT: f64 = 50.0;
+
+impl Metrics {
+    /// Whether the model fails on the run (see [`MIN_FIT_PCT`]).
+    pub fn fails(&self) -> bool {
+        !self.fit_pct.is_finite() || self.fit_pct < MIN_FIT_PCT
+    }
+
+    /// "fit 31.7 % (below 50 %)" when the model fails, for a flag beside its numbers.
+    pub fn failure(&self) -> Option<String> {
+        self.fails().then(|| format!("fit {:.1} % (below {MIN_FIT_PCT:.0} %)", self.fit_pct))
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MetricsError {
     #[error("measurement has {y} samples but the model gave {yhat}")]

@@ -227,7 +227,9 @@ pub(super) fn resolve_layout(
         Some(column) => mapped(Role::Input, column)?,
         None => find(INPUT_COLUMN).ok_or_else(|| missing("input", INPUT_COLUMN))?,
     };
-    let outputs = if map.outputs.is_empty() {
+    let outputs = if opts.input_only {
+        Vec::new()
+    } else if map.outputs.is_empty() {
         let found: Vec<usize> = OUTPUT_COLUMNS.iter().filter_map(|name| find(name)).collect();
         if found.is_empty() {
             return Err(RunFileError::NoOutput { file: file.to_owned(), present: present(header) });

@@ -66,6 +66,9 @@ pub struct OutputReport {
     /// words: "runs disagree on the steady state by X %: …" or "… agree …").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub steady_states: Option<String>,
+    /// Every model that fails on a run (fit below 50 %), in words.
+    #[serde(default)]
+    pub failing: Vec<String>,
 }
 
 /// The residual analysis of one output's final model on one run, as the report keeps it (the
@@ -127,17 +130,39 @@ fn metrics_table(out: &mut String, report: &OutputReport) {
         for (run, m) in runs {
             let _ = writeln!(
                 out,
-                "| {} | {run} | {:.4} | {:.4} | {:.4} | {:.2} | {:.4} | {:.4} |",
+                "| {} | {run} | {:.4} | {:.4} | {:.4} | {:.2}{} | {:.4} | {:.4} |",
                 model_title(model),
                 m.rmspe_pct,
                 m.mape_pct,
                 m.se,
                 m.fit_pct,
+                if m.fails() { " ⚠" } else { "" },
                 m.rmse,
                 m.max_abs_error
             );
         }
     }
+    let failing = failing_models(report);
+    if !failing.is_empty() {
+        let _ = writeln!(
+            out,
+            "\n⚠ Fails (explains less than half of the output's variation): {}.",
+            failing.join("; ")
+        );
+    }
+}
+
+/// "NNARX on 'validation': fit 31.7 % (below 50 %)" for every model that fails on a run.
+pub fn failing_models(report: &OutputReport) -> Vec<String> {
+    report
+        .models
+        .iter()
+        .flat_map(|(model, runs)| {
+            runs.iter().filter_map(move |(run, m)| {
+                m.failure().map(|f| format!("{} on '{run}': {f}", model_title(model)))
+            })
+        })
+        .collect()
 }
 
 /// Mean of a metric of one model over the runs of a role (validation runs, or the chirp run).

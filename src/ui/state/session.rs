@@ -105,6 +105,7 @@ impl From<&SavedLoadOptions> for LoadOptions {
             resample: saved.resample,
             invalid: saved.invalid.clone(),
             units: saved.units.clone(),
+            input_only: false,
         }
     }
 }

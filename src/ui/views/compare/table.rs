@@ -143,6 +143,25 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
                 }
             },
         );
+        let failing: Vec<String> = comparison
+            .runs
+            .iter()
+            .flat_map(|run| {
+                run.models.iter().filter_map(move |m| {
+                    let failure = m.metrics.as_ref().ok()?.failure()?;
+                    Some(format!("{} on '{}': {failure}", m.model.label(), run_title(run)))
+                })
+            })
+            .collect();
+        if !failing.is_empty() {
+            ui.label(
+                RichText::new(format!(
+                    "Fails (explains less than half of the output's variation): {}",
+                    failing.join("; ")
+                ))
+                .color(theme::WARNING),
+            );
+        }
         if PaperOutput::of(&comparison.output).is_some() {
             crate::ui::widgets::model::hint(
                 ui,

@@ -612,3 +612,37 @@ fn predict_runs_on_a_fuel_schedule_without_measured_outputs() {
         assert!(y[199] > y[99] + 7000.0, "{} vs {}", y[199], y[99]);
     }
 }
+
+/// A reused `--out` folder: what an earlier run wrote and this one did not is removed (and said),
+/// a file the user put there is left alone.
+#[test]
+fn a_reused_out_folder_keeps_no_stale_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_s = out.to_str().unwrap();
+    let ident = samples().join("ident.csv");
+    let val = samples().join("validation.csv");
+    let base =
+        ["--batch", "--ident", ident.to_str().unwrap(), "--validate", val.to_str().unwrap(), "--out", out_s];
+    let o = jetid(&base);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let thrust_figures: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("thrust_n") && n.ends_with(".png"))
+        .collect();
+    assert!(!thrust_figures.is_empty());
+    std::fs::write(out.join("my_notes.txt"), "mine").unwrap();
+
+    let mut speed_only = base.to_vec();
+    speed_only.extend(["--output", "shaft_speed_rpm"]);
+    let o = jetid(&speed_only);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(said.contains(&format!("removed {} file(s)", thrust_figures.len())), "{said}");
+    for name in &thrust_figures {
+        assert!(!out.join(name).exists(), "{name} is stale and must go");
+    }
+    assert_eq!(std::fs::read_to_string(out.join("my_notes.txt")).unwrap(), "mine");
+    assert!(out.join("shaft_speed_rpm_bode.png").is_file() && out.join("report.json").is_file());
+}

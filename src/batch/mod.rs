@@ -22,6 +22,7 @@ mod effects;
 pub mod figures;
 mod identify;
 mod load;
+mod manifest;
 mod report;
 pub mod residuals;
 

@@ -65,7 +65,20 @@ pub fn write_all(out_dir: &Path, model_file: &ModelFile, report: &Report) -> Res
     write_model(&out_dir.join("model.json"), model_file)?;
     write_report_json(&out_dir.join("report.json"), report)?;
     write_report_md(&out_dir.join("report.md"), report)?;
+    let written: Vec<String> = ["model.json", "report.json", "report.md"]
+        .into_iter()
+        .map(str::to_owned)
+        .chain(report.figures.iter().cloned())
+        .collect();
+    let removed = super::manifest::replace(out_dir, &written)?;
     print_summary(report, out_dir);
+    if !removed.is_empty() {
+        println!(
+            "removed {} file(s) an earlier run wrote there and this one did not: {}",
+            removed.len(),
+            removed.join(", ")
+        );
+    }
     Ok(())
 }
 

@@ -646,3 +646,41 @@ fn a_reused_out_folder_keeps_no_stale_results() {
     assert_eq!(std::fs::read_to_string(out.join("my_notes.txt")).unwrap(), "mine");
     assert!(out.join("shaft_speed_rpm_bode.png").is_file() && out.join("report.json").is_file());
 }
+
+/// What reading a run had to interpret reaches the report: a column left out (with why), a
+/// corrupt cell interpolated (at its row), the separator of a spreadsheet export.
+#[test]
+fn the_report_names_what_reading_the_runs_interpreted() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(samples().join("ident.csv")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    lines[0].push_str(",operator");
+    for (i, line) in lines.iter_mut().enumerate().skip(1) {
+        line.push_str(if i % 2 == 0 { ",bob" } else { ",alice" });
+    }
+    let mut cells: Vec<String> = lines[701].split(',').map(str::to_owned).collect();
+    cells[2] = "1e308".to_owned();
+    lines[701] = cells.join(",");
+    let ident = write(dir.path(), "ident.csv", &(lines.join("\n") + "\n"));
+    let validation = std::fs::read_to_string(samples().join("validation.csv")).unwrap();
+    let validation = write(dir.path(), "val.csv", &validation.replace(',', ";").replace('.', ","));
+    let out = dir.path().join("out");
+    let o = jetid(&[
+        "--batch",
+        "--ident",
+        ident.to_str().unwrap(),
+        "--validate",
+        validation.to_str().unwrap(),
+        "--output",
+        "shaft_speed_rpm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let notes = report["diagnostics"].to_string();
+    assert!(notes.contains("column 'operator' left out"), "{notes}");
+    assert!(notes.contains("data row 700: shaft_speed_rpm = 1e308"), "{notes}");
+    assert!(notes.contains("run 'val': fields separated by ';'"), "{notes}");
+}

@@ -509,3 +509,57 @@ fn inspect_with_a_bad_map_fails_with_status_1() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("speed:rpm"));
 }
+
+/// A spreadsheet's export with `;` between fields and decimal commas reads as the same run, and
+/// the notes say how it was read.
+#[test]
+fn semicolon_separated_files_with_decimal_commas_read_as_the_same_run() {
+    let text = canonical(40);
+    let european: String = text.replace(',', ";").replace('.', ",");
+    let (plain, _) = parse_run_with_notes(NAME, text.as_bytes(), &LoadOptions::default()).unwrap();
+    let (read, notes) = parse_run_with_notes(NAME, european.as_bytes(), &LoadOptions::default()).unwrap();
+    assert_eq!(read, plain);
+    assert_eq!(notes.separator, Some(';'));
+    assert!(notes.reading_notes().iter().any(|n| n.contains("';'")), "{:?}", notes.reading_notes());
+    let tabs = text.replace(',', "\t");
+    let (read, notes) = parse_run_with_notes(NAME, tabs.as_bytes(), &LoadOptions::default()).unwrap();
+    assert_eq!((read, notes.separator), (plain, Some('\t')));
+}
+
+/// A column name in Latin-1 (a Windows logger's "témp") is read as such and named in the notes,
+/// not turned into a replacement character.
+#[test]
+fn a_header_that_is_not_utf8_is_read_as_latin1_and_named() {
+    let mut bytes = b"time_s,fuel_flow_gph,shaft_speed_rpm,t\xe9mp\n".to_vec();
+    for k in 0..40 {
+        bytes.extend(
+            format!("{},{},{},{}\n", k as f64 * 0.1, 1.0 + 0.01 * k as f64, 50000 + k, 20).as_bytes(),
+        );
+    }
+    let (run, notes) = parse_run_with_notes(NAME, &bytes, &LoadOptions::default()).unwrap();
+    assert!(run.aux("témp").is_some(), "{:?}", run.aux.iter().map(|c| &c.name).collect::<Vec<_>>());
+    assert_eq!(notes.latin1_names, vec![("t\\xe9mp".to_owned(), "témp".to_owned())]);
+    assert!(notes.reading_notes().iter().any(|n| n.contains("t\\xe9mp") && n.contains("Latin-1")));
+}
+
+/// One corrupt cell (1e308) is reported at its data row and interpolated; a two-level channel's
+/// single real event (a flag dropping to 0 once) is not taken for one.
+#[test]
+fn a_corrupt_cell_is_an_outlier_at_its_row_and_a_rare_flag_is_not() {
+    let mut text = String::from("time_s,fuel_flow_gph,shaft_speed_rpm,flag\n");
+    for k in 0..60 {
+        let speed = if k == 25 { "1e308".to_owned() } else { format!("{}", 50000 + 10 * k) };
+        text.push_str(&format!(
+            "{},{},{speed},{}\n",
+            k as f64 * 0.1,
+            2.0 + 0.01 * k as f64,
+            if k == 40 { 0 } else { 1 }
+        ));
+    }
+    let (run, notes) = parse_run_with_notes(NAME, text.as_bytes(), &LoadOptions::default()).unwrap();
+    assert_eq!(notes.outliers, vec![("shaft_speed_rpm".to_owned(), 25, 1e308)]);
+    let speed = &run.output("shaft_speed_rpm").unwrap().values;
+    assert!((speed[25] - 50250.0).abs() < 1e-6, "interpolated: {}", speed[25]);
+    assert!(run.aux("flag").unwrap().values[40].abs() < 1e-12, "the flag's real event stays");
+    assert!(notes.reading_notes().iter().any(|n| n.contains("data row 25") && n.contains("shaft_speed_rpm")));
+}

@@ -67,6 +67,10 @@ fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
             run.name, run.dt_secs, read.merged_repeats
         ));
     }
+    notes.extend(read.reading_notes().into_iter().map(|n| format!("run '{}': {n}", run.name)));
+    for dropped in &read.dropped_columns {
+        notes.push(format!("run '{}': column '{}' left out: {}", run.name, dropped.name, dropped.reason));
+    }
     if let Some(window) = &read.running_window {
         notes.push(format!("run '{}': running window found: {}", run.name, window.reason));
     }

@@ -81,6 +81,9 @@ pub fn summary(run: &Run, notes: &LoadNotes) -> String {
             notes.repaired_samples, notes.trimmed_bad_start, notes.trimmed_bad_end
         );
     }
+    for note in notes.reading_notes() {
+        let _ = writeln!(out, "note      {note}");
+    }
     if let Some(window) = &notes.running_window {
         let _ = writeln!(out, "window    auto: {}", window.reason);
     }

@@ -156,6 +156,35 @@ pub struct LoadNotes {
     pub dropped_columns: Vec<DroppedColumn>,
     /// With `window = "auto"`: the running part kept, and how it was found.
     pub running_window: Option<crate::core::running_window::RunningWindow>,
+    /// The field separator when it was not a comma (`;` or a tab; decimal commas are read too).
+    pub separator: Option<char>,
+    /// Column names that were not UTF-8 and were read as Latin-1: (the bytes, the name read).
+    pub latin1_names: Vec<(String, String)>,
+    /// Samples so far from their neighbours that no engine makes them (see `repair::outliers`),
+    /// interpolated: (channel, data row of the file, value).
+    pub outliers: Vec<(String, usize, f64)>,
+}
+
+impl LoadNotes {
+    /// What reading the file had to interpret, in words: the separator, names that were not UTF-8,
+    /// outliers interpolated.
+    pub fn reading_notes(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if let Some(sep) = self.separator {
+            let name = if sep == '\t' { "tab".to_owned() } else { format!("'{sep}'") };
+            notes.push(format!("fields separated by {name} (decimal commas read as points)"));
+        }
+        for (bytes, name) in &self.latin1_names {
+            notes.push(format!("column name \"{bytes}\" is not UTF-8: read as Latin-1, \"{name}\""));
+        }
+        for (channel, row, value) in &self.outliers {
+            notes.push(format!(
+                "data row {row}: {channel} = {value:e} is an outlier (orders of magnitude off its neighbours and its \
+                 range): interpolated"
+            ));
+        }
+        notes
+    }
 }
 
 /// Read a run file. The run is named after the file stem.

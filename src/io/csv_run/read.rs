@@ -3,7 +3,9 @@ use std::ops::Range;
 use std::path::Path;
 
 use super::column_map::{Layout, TimeBase, resolve_layout};
-use super::repair::{TimeProblem, check_time, fill_gaps, median_step, merge_repeated_times, resample};
+use super::repair::{
+    TimeProblem, check_time, fill_gaps, mark_outliers, median_step, merge_repeated_times, resample,
+};
 use super::{
     DroppedColumn, LoadNotes, LoadOptions, MAX_BAD_FRACTION, MIN_SAMPLES, RunFileError, TIME_TOLERANCE,
     Window,
@@ -16,6 +18,25 @@ struct Table {
     header: Vec<String>,
     rows: Vec<csv::ByteRecord>,
     lines: Vec<u64>,
+    /// The field separator, when it is not a comma (`;` or a tab, found from the header line).
+    separator: Option<char>,
+    /// Header names that were not UTF-8, read as Latin-1: (the bytes as escapes, the name read).
+    latin1_names: Vec<(String, String)>,
+}
+
+/// The field separator of a file: `;` or a tab when the header line has one and no comma (a
+/// spreadsheet's export with decimal commas), else a comma.
+fn separator(bytes: &[u8]) -> u8 {
+    let first_line = bytes.split(|&b| b == b'\n').next().unwrap_or_default();
+    if first_line.contains(&b',') {
+        b','
+    } else if first_line.contains(&b';') {
+        b';'
+    } else if first_line.contains(&b'\t') {
+        b'\t'
+    } else {
+        b','
+    }
 }
 
 /// A cell read as a number.
@@ -33,7 +54,11 @@ fn parse_cell(bytes: &[u8]) -> Cell {
     if text.is_empty() {
         return Cell::Missing;
     }
-    match text.parse::<f64>() {
+    // A decimal comma (only possible in a file not separated by commas, or in a quoted cell).
+    let parsed = text
+        .parse::<f64>()
+        .or_else(|e| if text.contains(',') { text.replace(',', ".").parse() } else { Err(e) });
+    match parsed {
         Ok(v) if v.is_finite() => Cell::Number(v),
         Ok(_) => Cell::Missing,
         Err(_) => Cell::NotNumber,
@@ -75,8 +100,13 @@ impl LineCounter<'_> {
 }
 
 fn read_table(file: &Path, bytes: &[u8]) -> Result<Table, RunFileError> {
-    let mut reader =
-        csv::ReaderBuilder::new().has_headers(false).flexible(true).trim(csv::Trim::All).from_reader(bytes);
+    let sep = separator(bytes);
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .delimiter(sep)
+        .from_reader(bytes);
     let malformed = |err: csv::Error| RunFileError::Malformed {
         file: file.to_owned(),
         line: err.position().map_or(0, csv::Position::line),
@@ -87,11 +117,20 @@ fn read_table(file: &Path, bytes: &[u8]) -> Result<Table, RunFileError> {
         None => return Err(RunFileError::Empty { file: file.to_owned() }),
         Some(record) => record.map_err(malformed)?,
     };
+    let mut latin1_names = Vec::new();
     let header: Vec<String> = header_record
         .iter()
         .enumerate()
-        .map(|(i, name)| {
-            let name = String::from_utf8_lossy(name);
+        .map(|(i, bytes)| {
+            let name = match std::str::from_utf8(bytes) {
+                Ok(text) => text.to_owned(),
+                // Not UTF-8: a logger writing Latin-1 (Windows-1252) names; each byte is its code point.
+                Err(_) => {
+                    let read: String = bytes.iter().map(|&b| char::from(b)).collect();
+                    latin1_names.push((bytes.escape_ascii().to_string(), read.trim().to_owned()));
+                    read
+                }
+            };
             let name = if i == 0 { name.trim_start_matches('\u{feff}') } else { &name };
             name.trim().to_owned()
         })
@@ -127,7 +166,8 @@ fn read_table(file: &Path, bytes: &[u8]) -> Result<Table, RunFileError> {
         rows.push(record);
         lines.push(line);
     }
-    Ok(Table { header, rows, lines })
+    let separator = (sep != b',').then_some(char::from(sep));
+    Ok(Table { header, rows, lines, separator, latin1_names })
 }
 
 /// The table plus what is needed to name a cell in an error.
@@ -256,6 +296,12 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
     let Channels { names, mut values, dropped: dropped_columns } =
         read_channels(&ctx, &layout, kept.clone(), &good)?;
     let invalid_samples = mark_invalid(file, &names, &mut values, &opts.invalid)?;
+    let mut outliers = Vec::new();
+    for (name, column) in names.iter().zip(values.iter_mut()) {
+        for (index, value) in mark_outliers(column) {
+            outliers.push((name.clone(), kept.start + index, value));
+        }
+    }
     let mut resampled = false;
     let mut merged_repeats = 0;
     if opts.resample && matches!(layout.time, TimeBase::Column(_)) {
@@ -328,6 +374,9 @@ pub(super) fn parse(file: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<(Ru
         invalid_samples,
         dropped_columns,
         running_window,
+        separator: table.separator,
+        latin1_names: table.latin1_names.clone(),
+        outliers,
     };
     Ok((Run { name, dt_secs, t_secs, input, outputs, aux }, notes))
 }

@@ -156,6 +156,58 @@ pub(super) fn resample(t: &[f64], channels: &mut [Vec<f64>], dt_secs: f64) -> Ve
     grid
 }
 
+/// A sample further than this many times its channel's range (1st to 99th percentile) from the
+/// median of its neighbours, and this many times larger in size than the channel's typical values,
+/// cannot be a measurement: a real step moves a signal by at most its own range, while a corrupt
+/// cell (1e308, a garbled exponent) is off by orders of magnitude. The size condition keeps a rare
+/// real event of a two-level channel (a flag that drops to 0 once) from being taken for one.
+pub(super) const OUTLIER_RANGES: f64 = 100.0;
+
+/// Neighbours on each side whose median a sample is compared with.
+const OUTLIER_HALF_WINDOW: usize = 3;
+
+/// Turn every outlier of `values` (see [`OUTLIER_RANGES`]) into a gap; their indices and values.
+pub(super) fn mark_outliers(values: &mut [f64]) -> Vec<(usize, f64)> {
+    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if sorted.len() < 2 * OUTLIER_HALF_WINDOW + 1 {
+        return Vec::new();
+    }
+    sorted.sort_by(f64::total_cmp);
+    let at = |q: f64| sorted.get(((sorted.len() - 1) as f64 * q).round() as usize).copied().unwrap_or(0.0);
+    let (p1, p50, p99) = (at(0.01), at(0.5), at(0.99));
+    let range = (p99 - p1).max(1e-9 * p50.abs()).max(f64::MIN_POSITIVE);
+    let limit = OUTLIER_RANGES * range;
+    let size_limit = OUTLIER_RANGES * p1.abs().max(p99.abs()).max(f64::MIN_POSITIVE);
+    let mut found = Vec::new();
+    let mut neighbours = Vec::with_capacity(2 * OUTLIER_HALF_WINDOW);
+    for k in 0..values.len() {
+        let Some(&v) = values.get(k) else { continue };
+        if !v.is_finite() {
+            continue;
+        }
+        neighbours.clear();
+        let lo = k.saturating_sub(OUTLIER_HALF_WINDOW);
+        let hi = (k + OUTLIER_HALF_WINDOW + 1).min(values.len());
+        neighbours.extend(
+            (lo..hi).filter(|&j| j != k).filter_map(|j| values.get(j).copied()).filter(|x| x.is_finite()),
+        );
+        neighbours.sort_by(f64::total_cmp);
+        let Some(&median) = neighbours.get(neighbours.len() / 2) else { continue };
+        if (v - median).abs() > limit && v.abs() > size_limit {
+            found.push((k, v));
+        }
+    }
+    for &(k, _) in &found {
+        if let Some(v) = values.get_mut(k) {
+            *v = f64::NAN;
+        }
+    }
+    if !found.is_empty() {
+        fill_gaps(values);
+    }
+    found
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -614,7 +614,7 @@ fn predict_runs_on_a_fuel_schedule_without_measured_outputs() {
 }
 
 /// A reused `--out` folder: what an earlier run wrote and this one did not is removed (and said),
-/// a file the user put there is left alone.
+/// a file the user put there is left alone. The stage lines on stderr, and `--quiet`.
 #[test]
 fn a_reused_out_folder_keeps_no_stale_results() {
     let dir = tempfile::tempdir().unwrap();
@@ -626,6 +626,11 @@ fn a_reused_out_folder_keeps_no_stale_results() {
         ["--batch", "--ident", ident.to_str().unwrap(), "--validate", val.to_str().unwrap(), "--out", out_s];
     let o = jetid(&base);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The batch says what it is doing on stderr while it works (plain lines when not a terminal).
+    let stages = stderr(&o);
+    for stage in ["loading the runs", "identifying shaft_speed_rpm", "fitting the baselines of thrust_n"] {
+        assert!(stages.lines().any(|l| l.starts_with("jetid: [") && l.ends_with(stage)), "{stage}: {stages}");
+    }
     let thrust_figures: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -635,9 +640,10 @@ fn a_reused_out_folder_keeps_no_stale_results() {
     std::fs::write(out.join("my_notes.txt"), "mine").unwrap();
 
     let mut speed_only = base.to_vec();
-    speed_only.extend(["--output", "shaft_speed_rpm"]);
+    speed_only.extend(["--output", "shaft_speed_rpm", "--quiet"]);
     let o = jetid(&speed_only);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stderr.is_empty(), "--quiet prints no stage lines: {}", stderr(&o));
     let said = String::from_utf8_lossy(&o.stdout);
     assert!(said.contains(&format!("removed {} file(s)", thrust_figures.len())), "{said}");
     for name in &thrust_figures {

@@ -31,15 +31,75 @@ pub use load::{Runs, load_runs};
 
 /// Stopwatch that records named phases in milliseconds.
 #[derive(Default)]
-pub struct Timings(pub BTreeMap<String, f64>);
+pub struct Timings(pub BTreeMap<String, f64>, Progress);
 
 impl Timings {
     pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        self.1.stage(name);
         let start = Instant::now();
         let out = f();
         *self.0.entry(name.to_owned()).or_default() += start.elapsed().as_secs_f64() * 1e3;
         out
     }
+}
+
+/// Stage lines on stderr while the batch works: one line per stage, or one line rewritten in place
+/// on a terminal; nothing with `--quiet`.
+#[derive(Default)]
+struct Progress {
+    quiet: bool,
+    started: Option<Instant>,
+    last: String,
+}
+
+impl Progress {
+    fn new(quiet: bool) -> Self {
+        Self { quiet, started: Some(Instant::now()), last: String::new() }
+    }
+
+    fn stage(&mut self, name: &str) {
+        use std::io::{IsTerminal, Write};
+        if self.quiet || self.last == name {
+            return;
+        }
+        name.clone_into(&mut self.last);
+        let secs = self.started.get_or_insert_with(Instant::now).elapsed().as_secs_f64();
+        let what = stage_words(name);
+        let mut err = std::io::stderr();
+        let _ = if err.is_terminal() {
+            write!(err, "\r\x1b[2K[{secs:6.1} s] {what}")
+        } else {
+            writeln!(err, "jetid: [{secs:6.1} s] {what}")
+        };
+        let _ = err.flush();
+    }
+
+    fn finish(&mut self) {
+        use std::io::IsTerminal;
+        if !self.quiet && std::io::stderr().is_terminal() {
+            eprintln!();
+        }
+    }
+}
+
+/// A stage's timing key in words: "baselines_PR" → "fitting the baselines of PR".
+fn stage_words(name: &str) -> String {
+    const STAGES: [(&str, &str); 10] = [
+        ("identify_", "identifying "),
+        ("effects_", "adding the effects to "),
+        ("baselines_", "fitting the baselines of "),
+        ("diagnosis_", "diagnosing "),
+        ("load_runs", "loading the runs"),
+        ("validate", "scoring every model on the runs"),
+        ("frequency", "comparing frequency responses on the chirp run"),
+        ("monte_carlo", "the Monte Carlo study"),
+        ("residuals", "analysing the residuals"),
+        ("figures", "drawing the figures"),
+    ];
+    STAGES
+        .iter()
+        .find_map(|(key, words)| name.strip_prefix(key).map(|rest| format!("{words}{rest}")))
+        .unwrap_or_else(|| name.replace('_', " "))
 }
 
 /// What every output's stages share: the project, its runs and the steady run's input noise.
@@ -52,9 +112,9 @@ struct Batch<'a> {
 }
 
 /// Run the whole pipeline on `project` and write the results to `out_dir`.
-pub fn run(mut project: Project, out_dir: &Path) -> Result<()> {
+pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
     let total = Instant::now();
-    let mut timings = Timings::default();
+    let mut timings = Timings(BTreeMap::new(), Progress::new(quiet));
     let runs = timings.time("load_runs", || load::load_runs(&project))?;
     let outputs = load::outputs_to_model(&project, &runs.ident)?;
     let cluster_notes = load::apply_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
@@ -78,7 +138,10 @@ pub fn run(mut project: Project, out_dir: &Path) -> Result<()> {
     if !monte_carlo.is_empty() {
         report.monte_carlo = Some(serde_json::to_value(monte_carlo).context("Monte Carlo summary")?);
     }
+    timings.time("writing the results", || ());
+    timings.1.finish();
     report.timings_ms = timings.0;
+    report.timings_ms.remove("writing the results");
     report.timings_ms.insert("total".into(), total.elapsed().as_secs_f64() * 1e3);
     report::write_all(out_dir, &model_file, &report)
 }

@@ -54,6 +54,9 @@ pub struct BatchArgs {
     /// Where results go.
     #[arg(long, default_value = "jetid-out")]
     pub out: PathBuf,
+    /// Print no stage lines on stderr while the batch works.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 impl BatchArgs {

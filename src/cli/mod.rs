@@ -50,7 +50,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Predict(args)) => predict::run(&args),
         None if cli.batch => {
             let project = cli.batch_args.project()?;
-            crate::batch::run(project, &cli.batch_args.out)
+            crate::batch::run(project, &cli.batch_args.out, cli.batch_args.quiet)
         }
         #[cfg(feature = "gui")]
         None if let Some(out) = &cli.screenshot => {

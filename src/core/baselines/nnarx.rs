@@ -18,7 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::mlp::MlpShape;
-use super::nnarx_train::{TrainData, train};
+use super::nnarx_train::{TrainData, TrainOutcome, train};
 use super::{BaselineError, Scaling, check_signals, report, rms_error};
 
 /// Points of the training input range at which the fitted network's equilibria are counted.
@@ -352,6 +352,61 @@ fn several_equilibria(shape: MlpShape, w: &[f64], u_n: &[f64], opts: &NnarxOptio
 
 /// Train an NNARX model on `y` driven by `u` (see the module docs for the algorithm). `progress`
 /// receives the fraction done; returning `false` cancels.
+/// Train one network from each start, on two threads (the restarts are independent): the calling
+/// thread trains every other restart and reports progress over all of them; the helper stops when
+/// the caller cancels. Outcomes in the order of `starts`.
+fn train_restarts(
+    shape: MlpShape,
+    data: &TrainData,
+    starts: Vec<Vec<f64>>,
+    max_iterations: usize,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<Vec<TrainOutcome>, BaselineError> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let total = (starts.len() * max_iterations).max(1) as f64;
+    let iterations = AtomicUsize::new(0);
+    let cancelled = AtomicBool::new(false);
+    let (mine, helpers): (Vec<_>, Vec<_>) = starts.into_iter().enumerate().partition(|(i, _)| i % 2 == 0);
+    let (mine_out, helper_out) = std::thread::scope(|scope| {
+        let helper = scope.spawn(|| {
+            helpers
+                .into_iter()
+                .map(|(i, w0)| {
+                    let out = train(shape, data, w0, max_iterations, &mut |_| {
+                        iterations.fetch_add(1, Ordering::Relaxed);
+                        if cancelled.load(Ordering::Relaxed) { Err(BaselineError::Cancelled) } else { Ok(()) }
+                    });
+                    (i, out)
+                })
+                .collect::<Vec<_>>()
+        });
+        let mine_out: Vec<_> = mine
+            .into_iter()
+            .map(|(i, w0)| {
+                let out = train(shape, data, w0, max_iterations, &mut |_| {
+                    let done = iterations.fetch_add(1, Ordering::Relaxed) + 1;
+                    let reported = report(progress, done as f64 / total);
+                    if reported.is_err() {
+                        cancelled.store(true, Ordering::Relaxed);
+                    }
+                    reported
+                });
+                if out.is_err() {
+                    cancelled.store(true, Ordering::Relaxed);
+                }
+                (i, out)
+            })
+            .collect();
+        (mine_out, helper.join())
+    });
+    let helper_out =
+        helper_out.map_err(|_| BaselineError::Diverged { stage: "NNARX", rms_normalised: f64::NAN })?;
+    let mut all: Vec<(usize, Result<TrainOutcome, BaselineError>)> =
+        mine_out.into_iter().chain(helper_out).collect();
+    all.sort_by_key(|(i, _)| *i);
+    all.into_iter().map(|(_, out)| out).collect()
+}
+
 pub fn fit_nnarx(
     u: &[f64],
     y: &[f64],
@@ -373,16 +428,14 @@ pub fn fit_nnarx(
     }
     report(progress, 0.0)?;
 
+    // Every restart's start is drawn first, in order, so the result does not depend on how the
+    // restarts are spread over threads.
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    let per_restart = 1.0 / (opts.restarts as f64 * opts.max_iterations as f64);
+    let starts: Vec<Vec<f64>> = (0..opts.restarts).map(|_| shape.random_weights(&mut rng)).collect();
+    let trained = train_restarts(shape, &data, starts, opts.max_iterations, progress)?;
     let mut outcomes = Vec::with_capacity(opts.restarts);
     let mut summaries = Vec::with_capacity(opts.restarts);
-    for restart in 0..opts.restarts {
-        let w0 = shape.random_weights(&mut rng);
-        let done = (restart * opts.max_iterations) as f64;
-        let out = train(shape, &data, w0, opts.max_iterations, &mut |k| {
-            report(progress, (done + k as f64) * per_restart)
-        })?;
+    for out in trained {
         let one_step: Vec<f64> =
             data.x.chunks_exact(shape.n_inputs).map(|x| shape.output(&out.weights, x)).collect();
         let oe_rms = rms_error(&simulate_normalised(shape, &out.weights, &u_n, opts.nu, opts.ny), &y_n);

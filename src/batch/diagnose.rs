@@ -10,17 +10,22 @@ use crate::io::report::DiagnosisEntry;
 use super::load::Runs;
 
 /// The diagnosis of `current` (report.json `diagnosis`, best first) and, in words, the candidates
-/// not tried and the structure note.
+/// not tried and the structure note. `done` is that diagnosis when the missing-physics loop already
+/// made it (it ended on `current`): it is not computed twice.
 pub fn diagnose_output(
     project: &Project,
     runs: &Runs,
     identified: &Identified,
     current: &ExtendedModel,
     output: &str,
+    done: Option<diagnose::DiagnosisReport>,
 ) -> Result<(Vec<DiagnosisEntry>, Vec<String>)> {
     let validation = runs.validation_of(output);
     let settings = project.settings_for(output);
-    let report = diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &settings)?;
+    let report = match done {
+        Some(report) => report,
+        None => diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &settings)?,
+    };
     let skipped = report
         .skipped
         .iter()

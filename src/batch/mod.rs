@@ -166,6 +166,7 @@ impl Batch<'_> {
             effects::apply_effects(project, runs, &identified, output, notes)
         })?;
         let extended = sequence.model;
+        let final_diagnosis = sequence.final_diagnosis;
         model_file.push(&identified.model, &unit);
         if let Some(last) = model_file.outputs.last_mut() {
             // Effects are fitted together with the gain and static map they sit beside.
@@ -187,7 +188,7 @@ impl Batch<'_> {
             models.extended = Some(extended.clone());
         }
         let diagnosis = timings.time(&format!("diagnosis_{output}"), || {
-            diagnose::diagnose_output(project, runs, &identified, &extended, output)
+            diagnose::diagnose_output(project, runs, &identified, &extended, output, final_diagnosis)
         });
         match diagnosis {
             Ok((entries, skipped)) => {

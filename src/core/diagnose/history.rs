@@ -6,7 +6,7 @@ use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
-use super::{DiagnoseError, DiagnosisKind, apply, diagnose, validation_rmspe};
+use super::{DiagnoseError, DiagnosisKind, DiagnosisReport, apply, diagnose, validation_rmspe};
 
 /// The mean validation RMSPE of the model after one step ("base", "+thermal_soak", …).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -27,6 +27,9 @@ pub struct EffectSequence {
     pub history_gaps: Vec<String>,
     /// The effect that could not be added, and why; the effects after it were not tried.
     pub failed: Option<(EffectId, DiagnoseError)>,
+    /// The diagnosis of `model` on the validation runs, when the missing-physics loop ended on it
+    /// (nothing further significant): the same report a diagnosis of the final model would give.
+    pub final_diagnosis: Option<DiagnosisReport>,
 }
 
 /// Add `ids` to `base` in order, each refitted on the identification data (`ident`, `fits`), and
@@ -40,7 +43,13 @@ pub fn apply_in_order(
     validation: &[&Run],
 ) -> EffectSequence {
     let mut sequence =
-        EffectSequence { model: base.clone(), history: Vec::new(), history_gaps: Vec::new(), failed: None };
+        EffectSequence {
+            model: base.clone(),
+            history: Vec::new(),
+            history_gaps: Vec::new(),
+            failed: None,
+            final_diagnosis: None,
+        };
     sequence.record("base", validation, settings);
     for &id in ids {
         match apply(&sequence.model, id, ident, fits, settings) {
@@ -85,7 +94,10 @@ pub fn auto_effects(
     let mut taken = Vec::new();
     for _ in 0..rounds {
         let report = diagnose(&sequence.model, ident, fits, validation, settings)?;
-        let Some(top) = report.entries.iter().find(|d| d.significant) else { break };
+        let Some(top) = report.entries.iter().find(|d| d.significant) else {
+            sequence.final_diagnosis = Some(report);
+            break;
+        };
         taken.push(AutoRound {
             added: top.effect.clone(),
             kind: match top.kind {

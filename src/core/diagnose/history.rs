@@ -42,14 +42,13 @@ pub fn apply_in_order(
     settings: &OutputSettings,
     validation: &[&Run],
 ) -> EffectSequence {
-    let mut sequence =
-        EffectSequence {
-            model: base.clone(),
-            history: Vec::new(),
-            history_gaps: Vec::new(),
-            failed: None,
-            final_diagnosis: None,
-        };
+    let mut sequence = EffectSequence {
+        model: base.clone(),
+        history: Vec::new(),
+        history_gaps: Vec::new(),
+        failed: None,
+        final_diagnosis: None,
+    };
     sequence.record("base", validation, settings);
     for &id in ids {
         match apply(&sequence.model, id, ident, fits, settings) {

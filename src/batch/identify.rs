@@ -1,5 +1,5 @@
 //! Stage 2 of the batch: the gray-box model of one output.
-use crate::core::identification::pipeline::{self, Identified, PipelineError, segments_for};
+use crate::core::identification::pipeline::{self, Identified, PipelineError, segments_for, step_signal};
 use crate::core::identification::segment::{SegmentSettings, auto_segments_joined};
 use crate::io::project::Project;
 
@@ -13,11 +13,7 @@ pub fn identify(project: &Project, runs: &Runs, output: &str) -> Result<Identifi
     let segments = match project.segments.get(output) {
         Some(given) => segments_for(ident, Some(given), &SegmentSettings::default())?,
         None => {
-            let signal = project
-                .steps_from
-                .as_deref()
-                .and_then(|name| ident.channel(name))
-                .map_or(ident.input.values.as_slice(), |c| c.values.as_slice());
+            let signal = step_signal(ident, project.steps_from.as_deref())?;
             auto_segments_joined(signal, &runs.ident_junctions, ident.dt_secs, &SegmentSettings::default())
                 .map_err(|source| PipelineError::Segment { run: ident.name.clone(), source })?
         }

@@ -100,14 +100,7 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
     let parts = project.ident.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let (ident, ident_junctions) =
         crate::core::run::join_runs(&parts).context("joining the identification runs")?;
-    if let Some(name) = &project.steps_from
-        && ident.channel(name).is_none()
-    {
-        bail!(
-            "steps_from = \"{name}\": the identification run '{}' has no such channel (map it with aux={name})",
-            ident.name
-        );
-    }
+    crate::core::identification::pipeline::step_signal(&ident, project.steps_from.as_deref())?;
     let mut validate = project.validate.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let mut held_out = project.held_out.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let mut chirp = project.chirp.as_ref().map(&mut load).transpose()?;

@@ -22,6 +22,8 @@
 //!    [`SETTLE_S`]: the start is the latest such moment over the outputs.
 use serde::{Deserialize, Serialize};
 
+use crate::core::numerics::stats::quantile;
+
 /// Fuel counts as off within this share of the input's 95th percentile of zero: small engines idle
 /// on 15–30 % of their full fuel, a cut input reads zero (plus a flow meter's offset of ~1 %).
 pub const OFF_SHARE: f64 = 0.05;
@@ -65,7 +67,7 @@ pub fn running_window(u: &[f64], outputs: &[&[f64]], dt_secs: f64, t0_secs: f64)
             reason: "the run is too short to look for a start-up: kept whole".to_owned(),
         };
     }
-    let p95 = percentile(u, 0.95);
+    let p95 = quantile(u, 0.95);
     let off_level = OFF_SHARE * p95.abs();
     let on: Vec<bool> = u.iter().map(|v| v.abs() > off_level).collect();
     let fuel_on = if on.iter().all(|&b| b) {
@@ -91,7 +93,7 @@ pub fn running_window(u: &[f64], outputs: &[&[f64]], dt_secs: f64, t0_secs: f64)
     // Failing both, an output that starts a whole running spread below its lower quartile can only
     // be standing still before light-off (a flow meter may read a running flow from the first sample).
     let lit_in_log = a > 0
-        || u.get(a..end).is_some_and(|run| u[a] < RUNUP_SHARE * percentile(run, 0.5))
+        || u.get(a..end).is_some_and(|run| u[a] < RUNUP_SHARE * quantile(run, 0.5))
         || outputs.iter().any(|y| starts_below_running_range(y, a, end, 1.0));
     let start = if lit_in_log {
         outputs.iter().filter_map(|y| settled_after_runup(y, a, end, hold)).max().unwrap_or(a)
@@ -131,8 +133,8 @@ fn settled_after_runup(y: &[f64], a: usize, end: usize, hold: usize) -> Option<u
     if !starts_below_running_range(y, a, end, RUNUP_SHARE) {
         return None;
     }
-    let spread = percentile(run, 0.95) - percentile(run, 0.05);
-    let level = y[a] + RUNUP_SHARE * (percentile(run, 0.5) - y[a]);
+    let spread = quantile(run, 0.95) - quantile(run, 0.05);
+    let level = y[a] + RUNUP_SHARE * (quantile(run, 0.5) - y[a]);
     let still = SETTLE_SHARE * spread;
     (a..end - hold).find(|&s| {
         let (lo, hi) = y[s..s + hold]
@@ -147,7 +149,7 @@ fn settled_after_runup(y: &[f64], a: usize, end: usize, hold: usize) -> Option<u
 /// range higher.
 fn final_fall_start(x: &[f64], a: usize, b: usize, w: usize) -> usize {
     let Some(run) = x.get(a..b).filter(|r| !r.is_empty()) else { return b };
-    let range = percentile(run, 0.95) - percentile(run, 0.0);
+    let range = quantile(run, 0.95) - quantile(run, 0.0);
     let mut end = b;
     while end > a + w + 1 && x[end - 1 - w] - x[end - 1] > CUT_DROP_SHARE * range {
         end -= 1;
@@ -160,8 +162,8 @@ fn final_fall_start(x: &[f64], a: usize, b: usize, w: usize) -> usize {
 /// of it), so the quartile lies in the running part.
 fn starts_below_running_range(y: &[f64], a: usize, end: usize, share: f64) -> bool {
     let Some(run) = y.get(a..end).filter(|r| !r.is_empty()) else { return false };
-    let q1 = percentile(run, 0.25);
-    y[a] < q1 - share * (percentile(run, 0.95) - q1)
+    let q1 = quantile(run, 0.25);
+    y[a] < q1 - share * (quantile(run, 0.95) - q1)
 }
 
 /// The longest stretch of `on` with gaps of at most `gap` samples bridged, as `[start, end)`.
@@ -180,17 +182,6 @@ fn longest_on_stretch(on: &[bool], gap: usize) -> Option<(usize, usize)> {
         }
     }
     best
-}
-
-/// The `q`-quantile of the finite values (nearest rank); 0 when there are none.
-fn percentile(x: &[f64], q: f64) -> f64 {
-    let mut v: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let k = ((v.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
-    v[k.min(v.len() - 1)]
 }
 
 #[cfg(test)]

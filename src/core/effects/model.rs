@@ -152,7 +152,7 @@ impl ExtendedModel {
 }
 
 impl ExtendedModel {
-    /// The input offset a [`CalibrationDrift`] block gives this run (from the run's own steady
+    /// The input offset a [`CalibrationDrift`](super::CalibrationDrift) block gives this run (from the run's own steady
     /// holds of the measured output); zero without the block, the output or a usable linear block.
     pub fn calibration_offset(&self, run: &Run, u: &[f64]) -> f64 {
         let Some(EffectBlock::CalibrationDrift(block)) = self.effect(EffectId::CalibrationDrift) else {

@@ -101,6 +101,10 @@ pub enum PipelineError {
     MissingOutput { run: String, output: String, available: String },
     #[error("segmentation of '{run}': {source}")]
     Segment { run: String, source: SegmentError },
+    #[error(
+        "steps_from = \"{channel}\": the identification run '{run}' has no such channel (map it with aux={channel})"
+    )]
+    NoStepChannel { run: String, channel: String },
     #[error("only {fitted} of {segments} segment models could be fitted (need at least 2): {diagnostics}")]
     TooFewSegmentFits { fitted: usize, segments: usize, diagnostics: String },
     #[error(transparent)]
@@ -143,6 +147,18 @@ pub fn output_values<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], Pipeli
         output: output.to_owned(),
         available: run.outputs.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "),
     })
+}
+
+/// The signal steps are found on: the run's input, or the channel `steps_from` names (a set-point
+/// on closed-loop data, a command when the input sensor drops out).
+pub fn step_signal<'a>(run: &'a Run, steps_from: Option<&str>) -> Result<&'a [f64], PipelineError> {
+    match steps_from {
+        None => Ok(&run.input.values),
+        Some(name) => run
+            .channel(name)
+            .map(|c| c.values.as_slice())
+            .ok_or_else(|| PipelineError::NoStepChannel { run: run.name.clone(), channel: name.to_owned() }),
+    }
 }
 
 /// Segments of the identification run: the user's if given (checked), else detected.

@@ -161,9 +161,7 @@ fn steps_at_scale(
 }
 
 fn step_threshold(u: &[f64], w: usize, settings: &SegmentSettings) -> (f64, f64) {
-    let mut d: Vec<f64> = u.windows(2).map(|p| (p[1] - p[0]).abs()).collect();
-    d.sort_by(f64::total_cmp);
-    let sigma = d.get(d.len() / 2).copied().unwrap_or(0.0) / (0.6745 * std::f64::consts::SQRT_2);
+    let sigma = crate::core::numerics::stats::sigma_from_first_differences(u);
     let (lo, hi) = u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
     let noise_floor = 10.0 * sigma * (2.0 / w as f64).sqrt();
     // Rounding in the running means is ~ε·|u|: never count that as a step, even on a noiseless input.

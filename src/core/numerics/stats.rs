@@ -11,6 +11,22 @@ pub fn sum_of_squares(r: &[f64]) -> f64 {
     r.iter().map(|x| x * x).sum()
 }
 
+/// The `q`-quantile of the finite values of `x` (nearest rank, `q` clamped to 0..=1); 0 when there
+/// are none.
+pub fn quantile(x: &[f64], q: f64) -> f64 {
+    let mut v: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
+    v.sort_by(f64::total_cmp);
+    let k = (v.len().saturating_sub(1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
+    v.get(k).copied().unwrap_or(0.0)
+}
+
+/// Noise σ of a signal from the median absolute first difference (white noise of σ has differences
+/// of σ√2, whose median absolute value is 0.6745·σ√2); steps and dips barely move a median.
+pub fn sigma_from_first_differences(x: &[f64]) -> f64 {
+    let d: Vec<f64> = x.windows(2).filter_map(|w| Some((w.get(1)? - w.first()?).abs())).collect();
+    quantile(&d, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
+}
+
 /// Periodic Hann window of `len` samples (the form for spectral analysis).
 pub fn hann(len: usize) -> Vec<f64> {
     (0..len).map(|k| 0.5 - 0.5 * (2.0 * PI * k as f64 / len as f64).cos()).collect()
@@ -25,6 +41,8 @@ mod tests {
         assert!(mean(&[]).abs() <= f64::MIN_POSITIVE);
         assert!((mean(&[1.0, 2.0, 6.0]) - 3.0).abs() < 1e-15);
         assert!((sum_of_squares(&[3.0, -4.0]) - 25.0).abs() < 1e-12);
+        assert!((quantile(&[3.0, f64::NAN, 1.0, 2.0], 0.5) - 2.0).abs() < 1e-15);
+        assert!((quantile(&[3.0, 1.0, 2.0], 1.0) - 3.0).abs() < 1e-15 && quantile(&[], 0.5).abs() < 1e-15);
         let w = hann(4);
         assert!((w[0] - 0.0).abs() < 1e-15 && (w[2] - 1.0).abs() < 1e-15 && (w[1] - 0.5).abs() < 1e-12);
     }

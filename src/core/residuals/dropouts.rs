@@ -8,6 +8,8 @@
 //! from the same dips (least squares over the dropouts, so large dips weigh most).
 use serde::{Deserialize, Serialize};
 
+use crate::core::numerics::stats::{quantile, sigma_from_first_differences};
+
 /// A dropout lasts at most this long, s: sensor dropouts last 1–3 s; a real fuel change is held
 /// longer than a controller's hold (several seconds), so the local level follows it.
 pub const MAX_DROPOUT_S: f64 = 3.0;
@@ -63,7 +65,7 @@ pub fn input_dropouts(
     let half = (MAX_DROPOUT_S / dt_secs).ceil() as usize + 1;
     let level = running_median(u, half);
     let (lo, hi) = (quantile(u, 0.01), quantile(u, 0.99));
-    let sigma_u = noise_sigma(u);
+    let sigma_u = sigma_from_first_differences(u);
     let depth = (MIN_DEPTH_SHARE * (hi - lo)).max(MIN_DEPTH_SIGMAS * sigma_u);
     if depth <= 0.0 {
         return None;
@@ -75,17 +77,17 @@ pub fn input_dropouts(
     if dips.is_empty() {
         return None;
     }
-    let level_y = running_median(y, half);
-    let level_hat = running_median(y_hat, half);
     let (mut cross, mut predicted_sq, mut inside_sq) = (0.0, 0.0, 0.0);
     let mut covered = vec![false; n];
     for &(a, b) in &dips {
         let end = (b + watch).min(n);
-        let excursion = |x: &[f64], l: &[f64]| -> f64 {
-            let (xs, ls) = (x.get(a..end).unwrap_or_default(), l.get(a..end).unwrap_or_default());
-            xs.iter().zip(ls).map(|(v, l)| v - l).sum::<f64>() / (end - a).max(1) as f64
+        // The outputs' local levels are needed over the dips only, not along the whole run.
+        let excursion = |x: &[f64]| -> f64 {
+            let level = running_median_over(x, half, a..end);
+            let xs = x.get(a..end).unwrap_or_default();
+            xs.iter().zip(&level).map(|(v, l)| v - l).sum::<f64>() / (end - a).max(1) as f64
         };
-        let (measured, predicted) = (excursion(y, &level_y), excursion(y_hat, &level_hat));
+        let (measured, predicted) = (excursion(y), excursion(y_hat));
         cross += measured * predicted;
         predicted_sq += predicted * predicted;
         for c in covered.get_mut(a..end).into_iter().flatten() {
@@ -141,31 +143,21 @@ fn stretches(flags: &[bool]) -> Vec<(usize, usize)> {
 
 /// The median of `x` over `k − half ..= k + half` (clipped at the ends), for every `k`.
 fn running_median(x: &[f64], half: usize) -> Vec<f64> {
+    running_median_over(x, half, 0..x.len())
+}
+
+/// [`running_median`] for the samples `at` only.
+fn running_median_over(x: &[f64], half: usize, at: std::ops::Range<usize>) -> Vec<f64> {
     let mut window = Vec::with_capacity(2 * half + 1);
-    (0..x.len())
-        .map(|k| {
-            window.clear();
-            window.extend_from_slice(
-                x.get(k.saturating_sub(half)..(k + half + 1).min(x.len())).unwrap_or_default(),
-            );
-            window.sort_by(f64::total_cmp);
-            window.get(window.len() / 2).copied().unwrap_or(0.0)
-        })
-        .collect()
-}
-
-/// The `q`-quantile of `x` (nearest rank).
-fn quantile(x: &[f64], q: f64) -> f64 {
-    let mut v: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
-    v.sort_by(f64::total_cmp);
-    let k = ((v.len().saturating_sub(1)) as f64 * q).round() as usize;
-    v.get(k).copied().unwrap_or(0.0)
-}
-
-/// Noise σ from the median absolute first difference (robust to steps and dips).
-fn noise_sigma(x: &[f64]) -> f64 {
-    let d: Vec<f64> = x.windows(2).filter_map(|w| Some((w.get(1)? - w.first()?).abs())).collect();
-    quantile(&d, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
+    at.map(|k| {
+        window.clear();
+        window.extend_from_slice(
+            x.get(k.saturating_sub(half)..(k + half + 1).min(x.len())).unwrap_or_default(),
+        );
+        window.sort_by(f64::total_cmp);
+        window.get(window.len() / 2).copied().unwrap_or(0.0)
+    })
+    .collect()
 }
 
 #[cfg(test)]

@@ -43,7 +43,7 @@ impl Trace {
 
     /// `name [unit]`, or the name alone when the unit is unknown.
     pub fn axis_label(&self) -> String {
-        if self.unit.is_empty() { self.name.clone() } else { format!("{} [{}]", self.name, self.unit) }
+        format!("{}{}", self.name, crate::core::run::bracketed_unit(&self.unit))
     }
 }
 

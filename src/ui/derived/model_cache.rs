@@ -17,7 +17,7 @@ use std::sync::Arc;
 use crate::core::identification::cluster::{self, Cluster, ClusterEval};
 use crate::core::identification::pipeline::{
     self, LiveResult, OutputSettings, SegmentFits, fit_segments_for, live_update, live_update_proposed,
-    segments_for,
+    segments_for, step_signal,
 };
 use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments};
 use crate::core::identification::structure::Proposal;
@@ -129,10 +129,8 @@ fn detect_or_check(
 ) -> Result<Vec<Segment>, String> {
     match (given, steps_from) {
         (None, Some(name)) => {
-            let channel = run.channel(name).ok_or_else(|| {
-                format!("steps_from = \"{name}\": the identification run '{}' has no such channel (map it with aux={name})", run.name)
-            })?;
-            auto_segments(&channel.values, run.dt_secs, &SegmentSettings::default())
+            let signal = step_signal(run, steps_from).map_err(|e| e.to_string())?;
+            auto_segments(signal, run.dt_secs, &SegmentSettings::default())
                 .map_err(|e| format!("segmentation of '{}' on {name}: {e}", run.name))
         }
         _ => segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string()),
@@ -271,7 +269,7 @@ impl OutputCache {
 
     /// `name [unit]`.
     pub fn label(&self) -> String {
-        if self.unit.is_empty() { self.name.clone() } else { format!("{} [{}]", self.name, self.unit) }
+        format!("{}{}", self.name, crate::core::run::bracketed_unit(&self.unit))
     }
 
     fn update(

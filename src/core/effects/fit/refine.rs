@@ -1,0 +1,102 @@
+//! Levenberg–Marquardt refinement of a structure's roots and continuous effect parameters
+//! together, on the identification error (the poles parametrised so a pair may become two real
+//! poles).
+use num_complex::Complex64;
+
+use super::{Assembled, FitData, Structure, assemble};
+use crate::core::effects::EffectBlock;
+use crate::core::identification::refine::RootParams;
+use crate::core::numerics::lm::{
+    Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
+};
+
+/// Poles must stay inside this radius.
+const MAX_POLE_RADIUS: f64 = 0.999;
+
+/// The effect fits' Levenberg–Marquardt: few iterations to a loose tolerance (the screening has
+/// already chosen the start; a 10⁻⁵ relative gain is far below what the diagnosis can resolve).
+const EFFECT_FIT: LmSettings =
+    LmSettings { max_iterations: 15, cost_tol: 1e-5, damping: Damping::marquardt(10) };
+
+/// Move roots and continuous effect parameters together from `start`.
+pub(in crate::core::effects) fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
+    refine_with(start, data, &EFFECT_FIT)
+}
+
+fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Option<Assembled> {
+    let (pole_params, theta_p) = PoleParams::from_roots(&start.poles);
+    let (zero_params, theta_z) = RootParams::from_roots(&start.zeros);
+    let mut theta0: Vec<f64> = theta_p.iter().chain(&theta_z).copied().collect();
+    let lens: Vec<usize> = start.effects.iter().map(|e| e.free_params().len()).collect();
+    theta0.extend(start.effects.iter().flat_map(EffectBlock::free_params));
+    let (np, nz) = (theta_p.len(), theta_z.len());
+    let unpack = |theta: &[f64]| -> Option<Structure> {
+        let poles = pole_params.roots(theta.get(..np)?);
+        if poles.iter().any(|p| p.norm() >= MAX_POLE_RADIUS) {
+            return None;
+        }
+        let zeros = zero_params.roots(theta.get(np..np + nz)?);
+        let mut at = np + nz;
+        let mut effects = Vec::with_capacity(start.effects.len());
+        for (e, len) in start.effects.iter().zip(&lens) {
+            effects.push(e.with_free_params(theta.get(at..at + len)?, data.dt_secs)?);
+            at += len;
+        }
+        Some(Structure { poles, zeros, effects, map_order: start.map_order, delay: start.delay })
+    };
+    let residual = |theta: &[f64]| unpack(theta).and_then(|s| assemble(&s, data)).map(|a| a.residual);
+    let mut problem: LeastSquares<_, LmError> =
+        LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
+    let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;
+    assemble(&unpack(&fitted.theta)?, data)
+}
+
+/// Poles as refinement parameters: a real pole is one parameter, a complex pair the two
+/// coefficients `(s, p)` of its quadratic `z² − s·z + p`. Unlike (re, im), these let a pair become
+/// two real poles when the data want it: a damped pair found on closed-loop data (an ECU that
+/// overshoots its command at every set-point change) may be an overdamped spool once the effect
+/// that was missing is in the model.
+struct PoleParams {
+    /// For each root group: true for a quadratic (pair, or two real poles that were one).
+    quadratic: Vec<bool>,
+}
+
+impl PoleParams {
+    fn from_roots(roots: &[Complex64]) -> (Self, Vec<f64>) {
+        let mut quadratic = Vec::new();
+        let mut theta = Vec::new();
+        for r in roots {
+            if r.im.abs() <= 1e-12 {
+                quadratic.push(false);
+                theta.push(r.re);
+            } else if r.im > 0.0 {
+                quadratic.push(true);
+                theta.extend([2.0 * r.re, r.norm_sqr()]);
+            }
+        }
+        (Self { quadratic }, theta)
+    }
+
+    fn roots(&self, theta: &[f64]) -> Vec<Complex64> {
+        let mut out = Vec::new();
+        let mut values = theta.iter().copied();
+        for &quadratic in &self.quadratic {
+            let first = values.next().unwrap_or(0.0);
+            if !quadratic {
+                out.push(Complex64::new(first, 0.0));
+                continue;
+            }
+            let (half, product) = (0.5 * first, values.next().unwrap_or(0.0));
+            let disc = half * half - product;
+            if disc >= 0.0 {
+                out.extend([
+                    Complex64::new(half + disc.sqrt(), 0.0),
+                    Complex64::new(half - disc.sqrt(), 0.0),
+                ]);
+            } else {
+                out.extend([Complex64::new(half, (-disc).sqrt()), Complex64::new(half, -(-disc).sqrt())]);
+            }
+        }
+        out
+    }
+}

@@ -1,6 +1,7 @@
 //! The headless core: pure numerics. No egui, no files, no threads.
 pub mod baselines;
 pub mod compare;
+pub mod control;
 pub mod diagnose;
 pub mod effects;
 pub mod identification;

@@ -2,6 +2,7 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, median, welch_spectrum};
+use crate::core::numerics::poly::convolve;
 
 /// Load cell / stand resonance and sensor lag: the measured output is the engine's output seen
 /// through a first-order lag `lag_s` and a unit-gain second-order resonance (`freq_hz`, `zeta`),
@@ -48,31 +49,57 @@ impl SensorDynamics {
         } else {
             y.to_vec()
         };
+        let mut pos = lagged.first().copied().unwrap_or(0.0);
+        let mut vel = 0.0;
+        let mut out = Vec::with_capacity(lagged.len());
+        out.push(pos);
+        for w in lagged.windows(2) {
+            (pos, vel) = self.advance(pos, vel, w[0], w[1], dt_secs);
+            out.push(pos);
+        }
+        out
+    }
+
+    /// One sample of the resonance: position and velocity after `dt_secs`, the input going linearly
+    /// from `w0` to `w1`.
+    fn advance(&self, mut pos: f64, mut vel: f64, w0: f64, w1: f64, dt_secs: f64) -> (f64, f64) {
         let omega = 2.0 * std::f64::consts::PI * self.freq_hz;
         let steps = ((omega * dt_secs / 0.25).ceil() as usize).max(4);
         let h = dt_secs / steps as f64;
         let deriv = |pos: f64, vel: f64, input: f64| {
             (vel, omega * omega * (input - pos) - 2.0 * self.zeta * omega * vel)
         };
-        let mut pos = lagged.first().copied().unwrap_or(0.0);
-        let mut vel = 0.0;
-        let mut out = Vec::with_capacity(lagged.len());
-        out.push(pos);
-        for w in lagged.windows(2) {
-            let input_at = |s: f64| w[0] + (w[1] - w[0]) * s / dt_secs;
-            for step in 0..steps {
-                let t = step as f64 * h;
-                let (u0, u1, u2) = (input_at(t), input_at(t + 0.5 * h), input_at(t + h));
-                let k1 = deriv(pos, vel, u0);
-                let k2 = deriv(pos + 0.5 * h * k1.0, vel + 0.5 * h * k1.1, u1);
-                let k3 = deriv(pos + 0.5 * h * k2.0, vel + 0.5 * h * k2.1, u1);
-                let k4 = deriv(pos + h * k3.0, vel + h * k3.1, u2);
-                pos += h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
-                vel += h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
-            }
-            out.push(pos);
+        let input_at = |s: f64| w0 + (w1 - w0) * s / dt_secs;
+        for step in 0..steps {
+            let t = step as f64 * h;
+            let (u0, u1, u2) = (input_at(t), input_at(t + 0.5 * h), input_at(t + h));
+            let k1 = deriv(pos, vel, u0);
+            let k2 = deriv(pos + 0.5 * h * k1.0, vel + 0.5 * h * k1.1, u1);
+            let k3 = deriv(pos + 0.5 * h * k2.0, vel + 0.5 * h * k2.1, u1);
+            let k4 = deriv(pos + h * k3.0, vel + h * k3.1, u2);
+            pos += h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
+            vel += h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
         }
-        out
+        (pos, vel)
+    }
+
+    /// The sensor as a discrete transfer function in z⁻¹ (numerator, denominator): exactly what
+    /// [`SensorDynamics::apply`] does to small deviations, lag and resonance in series. The
+    /// resonance's one-sample map `x⁺ = M·x + n₀·w[k] + n₁·w[k+1]` is read off [`Self::advance`] on
+    /// unit states and inputs (it is linear), and `pos = e₁ᵀ(zI − M)⁻¹(n₀ + z·n₁)·w`.
+    pub fn discrete_tf(&self, dt_secs: f64) -> (Vec<f64>, Vec<f64>) {
+        let col = |pos, vel, w0, w1| self.advance(pos, vel, w0, w1, dt_secs);
+        let (m1, m2, n0, n1) = (col(1.0, 0.0, 0.0, 0.0), col(0.0, 1.0, 0.0, 0.0), col(0.0, 0.0, 1.0, 0.0), col(0.0, 0.0, 0.0, 1.0));
+        // M = [[m1.0, m2.0], [m1.1, m2.1]].
+        let (m11, m12, m21, m22) = (m1.0, m2.0, m1.1, m2.1);
+        let num = vec![n1.0, n0.0 - m22 * n1.0 + m12 * n1.1, -m22 * n0.0 + m12 * n0.1];
+        let den = vec![1.0, -(m11 + m22), m11 * m22 - m12 * m21];
+        if self.lag_s <= MIN_LAG_S {
+            return (num, den);
+        }
+        let a = (-dt_secs / self.lag_s).exp();
+        let ramp = 1.0 - self.lag_s * (1.0 - a) / dt_secs;
+        (convolve(&num, &[ramp, 1.0 - a - ramp]), convolve(&den, &[1.0, -a]))
     }
 
     pub(super) fn free_params(&self) -> Vec<f64> {

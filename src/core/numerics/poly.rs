@@ -80,6 +80,20 @@ pub fn poly_from_roots(roots: &[Complex64]) -> Vec<f64> {
     coeffs.into_iter().map(|c| c.re).collect()
 }
 
+/// Product of two polynomials (the coefficient order is kept: descending powers, or powers of z⁻¹).
+pub fn convolve(a: &[f64], b: &[f64]) -> Vec<f64> {
+    if a.is_empty() || b.is_empty() {
+        return Vec::new();
+    }
+    let mut out = vec![0.0; a.len() + b.len() - 1];
+    for (i, x) in a.iter().enumerate() {
+        for (j, y) in b.iter().enumerate() {
+            out[i + j] += x * y;
+        }
+    }
+    out
+}
+
 /// Evaluate a real polynomial (descending powers) at a complex point, by Horner's rule.
 pub fn polyval_complex(coeffs: &[f64], z: Complex64) -> Complex64 {
     coeffs.iter().fold(Complex64::new(0.0, 0.0), |acc, c| acc * z + c)

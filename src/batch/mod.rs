@@ -17,6 +17,7 @@ use crate::io::project::Project;
 use crate::io::report::Report;
 
 mod compare;
+mod control;
 mod diagnose;
 mod effects;
 pub mod figures;
@@ -217,6 +218,7 @@ impl Batch<'_> {
         });
         out.residuals = residuals;
         out.failing = crate::io::report::failing_models(&out);
+        (out.operating_points, out.continuous) = control::control_report(&extended, runs, notes);
         report.figures.extend(figs);
         let notes = &mut report.diagnostics;
         if runs.steady.is_some() && self.input_noise.is_some() {

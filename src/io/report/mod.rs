@@ -69,6 +69,13 @@ pub struct OutputReport {
     /// Every model that fails on a run (fit below 50 %), in words.
     #[serde(default)]
     pub failing: Vec<String>,
+    /// Operating points across the identified range and at the steady run's plateau, each with
+    /// its local linear model.
+    #[serde(default)]
+    pub operating_points: Vec<crate::core::control::OperatingPoint>,
+    /// Zero-order-hold continuous equivalent of the final model's linear block (input to v).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub continuous: Option<crate::core::control::ContinuousTf>,
 }
 
 /// The residual analysis of one output's final model on one run, as the report keeps it (the
@@ -343,6 +350,80 @@ fn residuals_section(out: &mut String, residuals: &[ResidualReport], unit: &str)
     }
 }
 
+/// Operating points and the continuous-time equivalent, for a controller designer.
+fn control_section(out: &mut String, o: &OutputReport) {
+    if o.operating_points.is_empty() && o.continuous.is_none() {
+        return;
+    }
+    let _ = writeln!(out, "\n### Operating points (local linear models for control design)\n");
+    if let Some(c) = &o.continuous {
+        let _ = writeln!(
+            out,
+            "Linear block as a continuous-time system (zero-order-hold equivalent, s in rad/s): {}.\n",
+            continuous_text(c)
+        );
+    }
+    if o.operating_points.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "Local model at each point: K·G(z)/G(1), K the local gain dy/du, with the effects linearised there. \
+         Poles as τ (real) or ωn, ζ (pairs), from their zero-order-hold equivalents.\n\n\
+         | point | u* | y*{unit} | dy/du | poles | −3 dB bandwidth (rad/s) | rise 10–90 % (s) | settling 2 % (s) | overshoot % |\n\
+         |---|---|---|---|---|---|---|---|---|",
+        unit = crate::core::run::bracketed_unit(&o.unit)
+    );
+    let opt = |x: Option<f64>, digits: usize| x.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
+    for p in &o.operating_points {
+        let source = match &p.source {
+            crate::core::control::PointSource::Grid => "grid".to_owned(),
+            crate::core::control::PointSource::SteadyRun(run) => format!("steady run `{run}`"),
+        };
+        let poles: Vec<String> = p
+            .poles
+            .iter()
+            .map(|r| match (r.tau_s, r.wn_rad_s, r.zeta) {
+                (Some(tau), _, _) => format!("τ {tau:.3} s"),
+                (None, Some(wn), Some(zeta)) => format!("ωn {wn:.3}, ζ {zeta:.3}"),
+                _ => format!("z {:.4}{:+.4}i", r.z.re, r.z.im),
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "| {source} | {:.4} | {:.4} | {:.5} | {} | {} | {} | {} | {:.1} |",
+            p.u,
+            p.y,
+            p.gain,
+            poles.join("; "),
+            opt(p.bandwidth_rad_s, 3),
+            opt(p.step.rise_s, 3),
+            opt(p.step.settling_s, 3),
+            p.step.overshoot_pct
+        );
+    }
+}
+
+/// `e^(−0.2 s)·(b0 s + b1)/(s² + a1 s + a2)` with six significant digits.
+pub fn continuous_text(c: &crate::core::control::ContinuousTf) -> String {
+    let poly = |coeffs: &[f64]| {
+        let n = coeffs.len().saturating_sub(1);
+        let terms: Vec<String> = coeffs
+            .iter()
+            .enumerate()
+            .filter(|(_, x)| **x != 0.0)
+            .map(|(i, x)| match n - i {
+                0 => format!("{x:.6e}"),
+                1 => format!("{x:.6e}·s"),
+                p => format!("{x:.6e}·s^{p}"),
+            })
+            .collect();
+        if terms.is_empty() { "0".to_owned() } else { terms.join(" + ") }
+    };
+    let delay = if c.delay_secs > 0.0 { format!("e^(−{:.4}·s)·", c.delay_secs) } else { String::new() };
+    format!("{delay}({}) / ({})", poly(&c.num_s), poly(&c.den_s))
+}
+
 /// The Markdown report: the same numbers as report.json, as tables a person reads.
 pub fn render_markdown(report: &Report) -> String {
     let mut out = String::new();
@@ -389,6 +470,7 @@ pub fn render_markdown(report: &Report) -> String {
                 );
             }
         }
+        control_section(&mut out, o);
         residuals_section(&mut out, &o.residuals, &o.unit);
     }
     table1_section(&mut out, report);

@@ -101,3 +101,11 @@ pub const EMPIRICAL: Color32 = Color32::from_rgb(240, 180, 60);
 
 /// The gray-box model without its effects, drawn beside the model with them.
 pub const WITHOUT_EFFECTS: Color32 = Color32::from_rgb(200, 150, 230);
+
+/// A colour along a blue (0) to red (1) ramp: operating points from the bottom to the top of the
+/// range.
+pub fn ramp(t: f32) -> Color32 {
+    let t = t.clamp(0.0, 1.0);
+    let mix = |a: u8, b: u8| (a as f32 + (b as f32 - a as f32) * t).round() as u8;
+    Color32::from_rgb(mix(70, 240), mix(150, 90), mix(230, 80))
+}

@@ -34,7 +34,9 @@ pub struct ContinuousTf {
 /// Why a discrete block has no zero-order-hold continuous equivalent.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum D2cError {
-    #[error("the pole {re:.6}{im:+.6}i lies on the negative real axis: it alternates sign every sample, which no continuous system behind a zero-order hold does")]
+    #[error(
+        "the pole {re:.6}{im:+.6}i lies on the negative real axis: it alternates sign every sample, which no continuous system behind a zero-order hold does"
+    )]
     NegativeRealPole { re: f64, im: f64 },
     #[error("the pole {re:.6}{im:+.6}i is repeated: the modal continuous equivalent needs distinct poles")]
     RepeatedPole { re: f64, im: f64 },
@@ -72,7 +74,8 @@ pub fn d2c_zoh(tf: &DiscreteTf) -> Result<ContinuousTf, D2cError> {
     }
     // Direct feedthrough D, and the strictly proper remainder N(z) − D·A(z).
     let n = den_z.len() - 1;
-    let padded: Vec<f64> = std::iter::repeat_n(0.0, n + 1 - num_z.len()).chain(num_z.iter().copied()).collect();
+    let padded: Vec<f64> =
+        std::iter::repeat_n(0.0, n + 1 - num_z.len()).chain(num_z.iter().copied()).collect();
     let feedthrough = padded[0] / den_z[0];
     let remainder: Vec<f64> = padded.iter().zip(&den_z).map(|(b, a)| b - feedthrough * a).collect();
     let den_deriv: Vec<f64> = den_z[..n].iter().enumerate().map(|(i, a)| a * (n - i) as f64).collect();
@@ -99,7 +102,11 @@ pub fn d2c_zoh(tf: &DiscreteTf) -> Result<ContinuousTf, D2cError> {
             num[shift + k] += c * t;
         }
     }
-    Ok(ContinuousTf { num_s: trim_leading(num.iter().map(|c| c.re).collect()), den_s, delay_secs: delay as f64 * dt })
+    Ok(ContinuousTf {
+        num_s: trim_leading(num.iter().map(|c| c.re).collect()),
+        den_s,
+        delay_secs: delay as f64 * dt,
+    })
 }
 
 /// `tf` in positive powers of z without its pure delay: `z^(−delay)·N(z)/A(z)`, with deg N ≤ deg A
@@ -153,13 +160,12 @@ pub fn c2d_zoh(gc: &ContinuousTf, dt_secs: f64) -> Result<DiscreteTf, D2cError> 
     let den = &gc.den_s;
     let n = den.len().saturating_sub(1);
     let bad = D2cError::BadSampling { dt_secs };
-    if n == 0 || den[0] == 0.0 || gc.num_s.len() > den.len() || !(dt_secs > 0.0) {
+    if n == 0 || den[0] == 0.0 || gc.num_s.len() > den.len() || dt_secs.is_nan() || dt_secs <= 0.0 {
         return Err(bad);
     }
     let a: Vec<f64> = den.iter().map(|x| x / den[0]).collect();
-    let b: Vec<f64> = std::iter::repeat_n(0.0, n + 1 - gc.num_s.len())
-        .chain(gc.num_s.iter().map(|x| x / den[0]))
-        .collect();
+    let b: Vec<f64> =
+        std::iter::repeat_n(0.0, n + 1 - gc.num_s.len()).chain(gc.num_s.iter().map(|x| x / den[0])).collect();
     let d = b[0];
     // Controllable canonical form: x' = A x + B u, y = C x + D u.
     let mut aug = DMatrix::<f64>::zeros(n + 1, n + 1);
@@ -203,10 +209,10 @@ pub fn c2d_zoh(gc: &ContinuousTf, dt_secs: f64) -> Result<DiscreteTf, D2cError> 
 pub fn step_response(gc: &ContinuousTf, t: &[f64]) -> Result<Vec<f64>, D2cError> {
     let lambdas = poly::roots(&gc.den_s)?;
     let n = lambdas.len();
-    let den_deriv: Vec<f64> =
-        gc.den_s[..n].iter().enumerate().map(|(i, a)| a * (n - i) as f64).collect();
-    let padded: Vec<f64> =
-        std::iter::repeat_n(0.0, (n + 1).saturating_sub(gc.num_s.len())).chain(gc.num_s.iter().copied()).collect();
+    let den_deriv: Vec<f64> = gc.den_s[..n].iter().enumerate().map(|(i, a)| a * (n - i) as f64).collect();
+    let padded: Vec<f64> = std::iter::repeat_n(0.0, (n + 1).saturating_sub(gc.num_s.len()))
+        .chain(gc.num_s.iter().copied())
+        .collect();
     let d = padded[0] / gc.den_s[0];
     let rem: Vec<f64> = padded.iter().zip(&gc.den_s).map(|(b, a)| b - d * a).collect();
     let modes: Vec<(Complex64, Complex64)> =
@@ -258,7 +264,9 @@ mod tests {
     #[test]
     fn a_damped_pair_with_a_zero_and_dead_time_survives_the_round_trip() {
         let poles = [Complex64::new(0.85, 0.14), Complex64::new(0.85, -0.14), Complex64::new(0.6, 0.0)];
-        let tf = DiscreteTf::from_zpk(&[Complex64::new(0.3, 0.0)], &poles, 0.02, 0.05).unwrap().with_input_delay(3);
+        let tf = DiscreteTf::from_zpk(&[Complex64::new(0.3, 0.0)], &poles, 0.02, 0.05)
+            .unwrap()
+            .with_input_delay(3);
         let back = roundtrip(&tf);
         assert_same_response(&tf, &back);
         let gc = d2c_zoh(&tf).unwrap();
@@ -279,7 +287,9 @@ mod tests {
     #[test]
     fn blocks_without_an_equivalent_are_refused_with_the_pole() {
         let alternating = DiscreteTf::new(vec![0.0, 1.5], vec![1.0, 0.5], 0.1).unwrap();
-        assert!(matches!(d2c_zoh(&alternating), Err(D2cError::NegativeRealPole { re, .. }) if (re + 0.5).abs() < 1e-12));
+        assert!(
+            matches!(d2c_zoh(&alternating), Err(D2cError::NegativeRealPole { re, .. }) if (re + 0.5).abs() < 1e-12)
+        );
         let repeated = DiscreteTf::new(vec![0.0, 0.0, 0.01], vec![1.0, -1.8, 0.81], 0.1).unwrap();
         assert!(matches!(d2c_zoh(&repeated), Err(D2cError::RepeatedPole { .. })));
     }

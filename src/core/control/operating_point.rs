@@ -114,12 +114,17 @@ pub fn operating_points(
     if !(lo.is_finite() && hi.is_finite() && hi > lo) {
         return Err(OperatingPointError::BadRange { output: model.output.clone(), lo, hi });
     }
-    let grid = (0..GRID_POINTS).map(|i| (PointSource::Grid, lo + (hi - lo) * i as f64 / (GRID_POINTS - 1) as f64));
+    let grid =
+        (0..GRID_POINTS).map(|i| (PointSource::Grid, lo + (hi - lo) * i as f64 / (GRID_POINTS - 1) as f64));
     let steady = plateaus.iter().map(|(run, u)| (PointSource::SteadyRun(run.clone()), *u));
     grid.chain(steady).map(|(source, u)| operating_point(model, source, u)).collect()
 }
 
-fn operating_point(model: &ExtendedModel, source: PointSource, u: f64) -> Result<OperatingPoint, OperatingPointError> {
+fn operating_point(
+    model: &ExtendedModel,
+    source: PointSource,
+    u: f64,
+) -> Result<OperatingPoint, OperatingPointError> {
     let output = model.output.clone();
     let linear = &model.wiener.linear;
     let g1 = linear
@@ -132,14 +137,25 @@ fn operating_point(model: &ExtendedModel, source: PointSource, u: f64) -> Result
     });
     let v = g1 * u + linear.offset;
     let y = model.wiener.map.eval(v) + kink.map_or(0.0, |k| k.eval(v));
-    let slope = model.wiener.map.slope(v) + kink.map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 });
+    let slope =
+        model.wiener.map.slope(v) + kink.map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 });
     let gain = slope * g1;
-    let unit = local_dynamics(model, u)
-        .map_err(|reason| OperatingPointError::LocalModel { output: output.clone(), u, reason })?;
-    let local = DiscreteTf::new(unit.num_zinv.iter().map(|b| b * gain).collect(), unit.den_zinv.clone(), unit.dt_secs)
-        .map_err(|e| OperatingPointError::LocalModel { output: output.clone(), u, reason: e.to_string() })?;
-    let poles = local_poles(&unit)
-        .map_err(|e| OperatingPointError::LocalModel { output: output.clone(), u, reason: e.to_string() })?;
+    let unit = local_dynamics(model, u).map_err(|reason| OperatingPointError::LocalModel {
+        output: output.clone(),
+        u,
+        reason,
+    })?;
+    let local = DiscreteTf::new(
+        unit.num_zinv.iter().map(|b| b * gain).collect(),
+        unit.den_zinv.clone(),
+        unit.dt_secs,
+    )
+    .map_err(|e| OperatingPointError::LocalModel { output: output.clone(), u, reason: e.to_string() })?;
+    let poles = local_poles(&unit).map_err(|e| OperatingPointError::LocalModel {
+        output: output.clone(),
+        u,
+        reason: e.to_string(),
+    })?;
     let (continuous, continuous_note) = match d2c_zoh(&local) {
         Ok(c) => (Some(c), None),
         Err(e) => (None, Some(e.to_string())),
@@ -218,17 +234,20 @@ pub fn local_dynamics(model: &ExtendedModel, u: f64) -> Result<DiscreteTf, Strin
     let local = DiscreteTf::new(num, den, dt).map_err(|e| e.to_string())?;
     // Unit steady gain by construction; dividing by the computed gain removes rounding.
     let gain = local.dc_gain().map_err(|e| e.to_string())?;
-    DiscreteTf::new(local.num_zinv.iter().map(|b| b / gain).collect(), local.den_zinv.clone(), dt).map_err(|e| e.to_string())
+    DiscreteTf::new(local.num_zinv.iter().map(|b| b / gain).collect(), local.den_zinv.clone(), dt)
+        .map_err(|e| e.to_string())
 }
 
 fn local_poles(tf: &DiscreteTf) -> Result<Vec<LocalPole>, poly::PolyError> {
     let dt = tf.dt_secs;
-    let mut roots: Vec<Complex64> = tf.poles()?.into_iter().filter(|p| p.im >= -1e-12 && p.norm() > 1e-12).collect();
+    let mut roots: Vec<Complex64> =
+        tf.poles()?.into_iter().filter(|p| p.im >= -1e-12 && p.norm() > 1e-12).collect();
     roots.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
     Ok(roots
         .into_iter()
         .map(|z| {
-            let s = (!(z.im.abs() <= 1e-12 && z.re < 0.0)).then(|| Complex64::new(z.norm().ln(), z.arg()) / dt);
+            let s =
+                (!(z.im.abs() <= 1e-12 && z.re < 0.0)).then(|| Complex64::new(z.norm().ln(), z.arg()) / dt);
             let wn = s.map(|s| s.norm());
             LocalPole {
                 z,
@@ -252,7 +271,8 @@ fn bandwidth(unit: &DiscreteTf) -> Option<f64> {
     let slowest = local_poles(unit).ok()?.iter().filter_map(|p| p.wn_rad_s).fold(f64::INFINITY, f64::min);
     let lo = (slowest.min(nyquist) * 1e-4).max(nyquist * 1e-9);
     let decades = (nyquist / lo).log10();
-    let omegas = log_space(lo, nyquist * 0.999, (decades * BODE_POINTS_PER_DECADE as f64).ceil() as usize + 2);
+    let omegas =
+        log_space(lo, nyquist * 0.999, (decades * BODE_POINTS_PER_DECADE as f64).ceil() as usize + 2);
     let mag_db: Vec<f64> = omegas.iter().map(|w| 20.0 * unit.freq_response(*w).norm().log10()).collect();
     cutoff_rad_s(&omegas, &mag_db, LowFrequencyLevel::Db(0.0)).ok().flatten()
 }
@@ -314,7 +334,9 @@ mod tests {
         let unit = crate::core::identification::wiener::unit_gain_tf(&[p, p.conj()], &[], dt).unwrap();
         let poles = local_poles(&unit).unwrap();
         assert_eq!(poles.len(), 1);
-        assert!((poles[0].wn_rad_s.unwrap() - wn).abs() < 1e-9 && (poles[0].zeta.unwrap() - zeta).abs() < 1e-9);
+        assert!(
+            (poles[0].wn_rad_s.unwrap() - wn).abs() < 1e-9 && (poles[0].zeta.unwrap() - zeta).abs() < 1e-9
+        );
         let step = step_figures(&unit, &poles);
         let expected = 100.0 * (-std::f64::consts::PI * zeta / (1.0 - zeta * zeta).sqrt()).exp();
         assert!((step.overshoot_pct - expected).abs() < 0.3, "{} vs {expected}", step.overshoot_pct);

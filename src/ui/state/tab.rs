@@ -11,12 +11,21 @@ pub enum Tab {
     Traces,
     Compare,
     Diagnosis,
+    Control,
 }
 
 impl Tab {
     /// In the order of the tab bar.
-    pub const ALL: [Self; 7] =
-        [Self::Data, Self::ZPlane, Self::Bode, Self::StaticMap, Self::Traces, Self::Compare, Self::Diagnosis];
+    pub const ALL: [Self; 8] = [
+        Self::Data,
+        Self::ZPlane,
+        Self::Bode,
+        Self::StaticMap,
+        Self::Traces,
+        Self::Compare,
+        Self::Diagnosis,
+        Self::Control,
+    ];
 
     pub fn label(self) -> &'static str {
         match self {
@@ -27,6 +36,7 @@ impl Tab {
             Self::Traces => "Traces",
             Self::Compare => "Compare",
             Self::Diagnosis => "Diagnosis",
+            Self::Control => "Control",
         }
     }
 
@@ -40,6 +50,7 @@ impl Tab {
             Self::Traces => "traces",
             Self::Compare => "compare",
             Self::Diagnosis => "diagnosis",
+            Self::Control => "control",
         }
     }
 

@@ -51,4 +51,5 @@ pub struct ViewStates {
     pub traces: TracesViewState,
     pub compare: CompareViewState,
     pub diagnosis: DiagnosisViewState,
+    pub control: crate::ui::views::control::ControlViewState,
 }

@@ -6,6 +6,7 @@
 //! of [`ViewStates`] holding its state, and `impl View` for that state below.
 pub mod bode;
 pub mod compare;
+pub mod control;
 pub mod data;
 pub mod diagnosis;
 pub mod static_map;
@@ -81,6 +82,13 @@ impl View for compare::CompareViewState {
     }
 }
 
+impl View for control::ControlViewState {
+    fn ui(&mut self, ui: &mut egui::Ui, output: &str, ctx: &ViewContext<'_>) -> Vec<Command> {
+        control::control_ui(ui, output, self, ctx.session, ctx.cache);
+        Vec::new()
+    }
+}
+
 impl View for diagnosis::DiagnosisViewState {
     fn ui(&mut self, ui: &mut egui::Ui, output: &str, ctx: &ViewContext<'_>) -> Vec<Command> {
         diagnosis::diagnosis_ui(ui, output, self, ctx.session, ctx.cache)
@@ -128,5 +136,6 @@ pub fn tab_ui(ui: &mut egui::Ui, session: &Session, view: &mut ViewState, cache:
         Tab::Traces => draw(ui, &mut states.traces, output, &ctx),
         Tab::Compare => draw(ui, &mut states.compare, output, &ctx),
         Tab::Diagnosis => draw(ui, &mut states.diagnosis, output, &ctx),
+        Tab::Control => draw(ui, &mut states.control, output, &ctx),
     }
 }

@@ -1,0 +1,49 @@
+//! The Control view on the bundled sample project: the operating points of the model shown, a row
+//! click choosing the point whose Bode is drawn, and the points following a change of the model.
+#![cfg(feature = "gui")]
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+
+use common::app::harness;
+use common::sample;
+use egui_kittest::kittest::Queryable;
+use jetid::core::control::PointSource;
+use jetid::ui::{App, Command, Session, Tab};
+
+#[test]
+fn the_control_view_schedules_the_model_and_follows_it() {
+    let mut app = App::new(Session::default());
+    app.apply(Command::OpenProject(sample("sr30/project.toml")));
+    assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
+    app.apply(Command::SelectOutput("thrust_n".into()));
+    app.apply(Command::ShowTab(Tab::Control));
+    app.settle();
+    let mut harness = harness(app);
+    harness.run();
+    let points = harness.state().view.views.control.points().expect("operating points").to_vec();
+    assert_eq!(points.iter().filter(|p| p.source == PointSource::Grid).count(), 9);
+    assert!(
+        points.iter().any(|p| matches!(&p.source, PointSource::SteadyRun(_))),
+        "the sample's steady run gives a plateau point"
+    );
+    // Thrust grows faster than linearly with fuel flow: the local gain rises along the range.
+    assert!(points[8].gain > points[0].gain, "{} vs {}", points[8].gain, points[0].gain);
+    harness.get_by_label("grid 5").click();
+    harness.run();
+    assert_eq!(harness.state().view.views.control.selected, 4);
+    // A linear static map makes the gain the same everywhere: the view follows the model.
+    let settings =
+        harness.state().cache.output("thrust_n").expect("thrust is identified").setup.settings.clone();
+    let linear = jetid::core::identification::pipeline::OutputSettings { static_order: Some(1), ..settings };
+    harness.state_mut().apply(Command::SetOutputSettings { output: "thrust_n".into(), settings: linear });
+    harness.state_mut().settle();
+    harness.run();
+    let after = harness.state().view.views.control.points().expect("operating points").to_vec();
+    assert!(
+        (after[0].gain - after[8].gain).abs() <= 1e-9 * after[0].gain.abs(),
+        "{} vs {}",
+        after[0].gain,
+        after[8].gain
+    );
+}

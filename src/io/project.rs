@@ -282,18 +282,17 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
             clusters.insert(name.clone(), c.clone());
         }
     }
-    let opt = |e: &Option<RunEntry>| e.as_ref().map(|e| source(e, base, defaults)).transpose();
+    let source = |e: &RunEntry| source(e, base, defaults).with_context(|| format!("project file {origin}"));
+    let opt = |e: &Option<RunEntry>| e.as_ref().map(source).transpose();
     Ok(Project {
         name: file.name.clone().unwrap_or_else(|| origin.to_owned()),
         ident: match &file.ident {
             None => Vec::new(),
-            Some(IdentEntry::One(e)) => vec![source(e, base, defaults)?],
-            Some(IdentEntry::Many(list)) => {
-                list.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?
-            }
+            Some(IdentEntry::One(e)) => vec![source(e)?],
+            Some(IdentEntry::Many(list)) => list.iter().map(source).collect::<Result<_>>()?,
         },
-        validate: file.validate.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?,
-        held_out: file.held_out.iter().map(|e| source(e, base, defaults)).collect::<Result<_>>()?,
+        validate: file.validate.iter().map(source).collect::<Result<_>>()?,
+        held_out: file.held_out.iter().map(source).collect::<Result<_>>()?,
         chirp: opt(&file.chirp)?,
         steady: opt(&file.steady)?,
         outputs: file.outputs.clone(),
@@ -302,7 +301,12 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
         settings,
         segments,
         clusters,
-        clusters_from: file.clusters_from.as_deref().map(|raw| resolve_path(raw, base)).transpose()?,
+        clusters_from: file
+            .clusters_from
+            .as_deref()
+            .map(|raw| resolve_path(raw, base))
+            .transpose()
+            .with_context(|| format!("project file {origin}"))?,
         steps_from: file.steps_from.clone(),
     })
 }

@@ -30,13 +30,16 @@ pub mod residuals;
 pub use identify::identify;
 pub use load::{Runs, load_runs};
 
-/// Stopwatch that records named phases in milliseconds.
+/// Stopwatch that records named phases in milliseconds; the progress lines are shared by the
+/// outputs' threads.
 #[derive(Default)]
-pub struct Timings(pub BTreeMap<String, f64>, Progress);
+pub struct Timings(pub BTreeMap<String, f64>, std::sync::Arc<std::sync::Mutex<Progress>>);
 
 impl Timings {
     pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
-        self.1.stage(name);
+        if let Ok(mut progress) = self.1.lock() {
+            progress.stage(name);
+        }
         let start = Instant::now();
         let out = f();
         *self.0.entry(name.to_owned()).or_default() += start.elapsed().as_secs_f64() * 1e3;
@@ -103,6 +106,14 @@ fn stage_words(name: &str) -> String {
         .unwrap_or_else(|| name.replace('_', " "))
 }
 
+/// One output's share of the results, filled on its own thread.
+struct OutputPart {
+    model_file: ModelFile,
+    report: Report,
+    monte_carlo: BTreeMap<String, BTreeMap<String, crate::core::compare::MonteCarloSummary>>,
+    timings: Timings,
+}
+
 /// What every output's stages share: the project, its runs and the steady run's input noise.
 struct Batch<'a> {
     project: &'a Project,
@@ -115,7 +126,8 @@ struct Batch<'a> {
 /// Run the whole pipeline on `project` and write the results to `out_dir`.
 pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
     let total = Instant::now();
-    let mut timings = Timings(BTreeMap::new(), Progress::new(quiet));
+    let progress = std::sync::Arc::new(std::sync::Mutex::new(Progress::new(quiet)));
+    let mut timings = Timings(BTreeMap::new(), progress.clone());
     let runs = timings.time("load_runs", || load::load_runs(&project))?;
     let outputs = load::outputs_to_model(&project, &runs.ident)?;
     let cluster_notes = load::apply_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
@@ -132,15 +144,58 @@ pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
         .and_then(|r| r.best().map(|f| f.distribution));
     let batch = Batch { project: &project, runs: &runs, out_dir, input_noise };
     let mut monte_carlo = BTreeMap::new();
-    for output in &outputs {
-        batch.model_output(output, &mut model_file, &mut report, &mut monte_carlo, &mut timings)?;
+    // The outputs are independent: each runs on its own thread into its own part of the results,
+    // merged in output order (so the files are the same as one output after another).
+    let parts: Vec<Result<OutputPart>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = outputs
+            .iter()
+            .map(|output| {
+                let (batch, progress) = (&batch, progress.clone());
+                let mut part = OutputPart {
+                    model_file: report::new_model_file(batch.runs),
+                    report: Report { diagnostics: Vec::new(), ..report.clone() },
+                    monte_carlo: BTreeMap::new(),
+                    timings: Timings(BTreeMap::new(), progress),
+                };
+                scope.spawn(move || {
+                    batch
+                        .model_output(
+                            output,
+                            &mut part.model_file,
+                            &mut part.report,
+                            &mut part.monte_carlo,
+                            &mut part.timings,
+                        )
+                        .map(|()| part)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| Err(anyhow::anyhow!("an output's thread stopped unexpectedly")))
+            })
+            .collect()
+    });
+    for part in parts {
+        let part = part?;
+        model_file.outputs.extend(part.model_file.outputs);
+        report.outputs.extend(part.report.outputs);
+        report.figures.extend(part.report.figures);
+        report.diagnostics.extend(part.report.diagnostics);
+        monte_carlo.extend(part.monte_carlo);
+        for (stage, ms) in part.timings.0 {
+            *timings.0.entry(stage).or_default() += ms;
+        }
     }
     report.noise_fit = noise.map(serde_json::to_value).transpose().context("noise fit")?;
     if !monte_carlo.is_empty() {
         report.monte_carlo = Some(serde_json::to_value(monte_carlo).context("Monte Carlo summary")?);
     }
     timings.time("writing the results", || ());
-    timings.1.finish();
+    if let Ok(mut progress) = timings.1.lock() {
+        progress.finish();
+    }
     report.timings_ms = timings.0;
     report.timings_ms.remove("writing the results");
     report.timings_ms.insert("total".into(), total.elapsed().as_secs_f64() * 1e3);

@@ -109,5 +109,5 @@ pub(super) fn apparent_nk(data: &IdentData, assembled: &Assembled) -> usize {
         })
         .collect();
     let max = ((MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).clamp(1, 50);
-    arx::estimate_dead_time(&deviations, data.settings.orders.na, max, data.fits.dt_secs).map_or(1, |d| d.nk)
+    arx::estimate_dead_time(&deviations, data.settings.orders.na, max).map_or(1, |d| d.nk)
 }

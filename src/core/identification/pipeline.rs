@@ -263,7 +263,7 @@ pub fn fit_segments_for(
         })
         .collect();
     let max_nk = ((MAX_DEAD_TIME_SECS / run.dt_secs).round() as usize).clamp(1, 50);
-    let dead_time = arx::estimate_dead_time(&deviations, settings.orders.na, max_nk, run.dt_secs);
+    let dead_time = arx::estimate_dead_time(&deviations, settings.orders.na, max_nk);
     let nk = dead_time.as_ref().map_or(settings.orders.nk, |d| d.nk);
     let mut fits = fit_segments(run, output, segments, ArxOrders { nk, ..settings.orders })?;
     fits.dead_time = dead_time;

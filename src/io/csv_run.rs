@@ -194,8 +194,9 @@ pub fn load_run(path: &Path, opts: &LoadOptions) -> Result<Run, RunFileError> {
 
 /// Read a run file and report what was repaired, trimmed or left out.
 pub fn load_run_with_notes(path: &Path, opts: &LoadOptions) -> Result<(Run, LoadNotes), RunFileError> {
-    let bytes = std::fs::read(path).map_err(|io| RunFileError::Unreadable { file: path.to_owned(), io })?;
-    read::parse(path, &bytes, opts)
+    // Streamed: a long log is parsed cell by cell into numbers, never held as text.
+    std::fs::metadata(path).map_err(|io| RunFileError::Unreadable { file: path.to_owned(), io })?;
+    read::parse(path, read::Source::File(path), opts)
 }
 
 /// Read a run from CSV bytes in memory; `name` stands for the file in errors and names the run
@@ -210,7 +211,7 @@ pub fn parse_run_with_notes(
     bytes: &[u8],
     opts: &LoadOptions,
 ) -> Result<(Run, LoadNotes), RunFileError> {
-    read::parse(Path::new(name), bytes, opts)
+    read::parse(Path::new(name), read::Source::Bytes(bytes), opts)
 }
 
 /// Write a run file atomically (temporary file in the same directory, then rename); a missing

@@ -1,4 +1,5 @@
-//! The command line of CONTRACT.md: `jetid`, `jetid --batch`, `jetid predict`, `jetid simulate`.
+//! The command line of CONTRACT.md: `jetid`, `jetid --batch`, `jetid predict`, `jetid simulate`,
+//! `jetid export`.
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -7,6 +8,7 @@ use clap::{Parser, Subcommand};
 pub use batch_args::BatchArgs;
 
 pub mod batch_args;
+pub mod export;
 pub mod inspect;
 pub mod predict;
 pub mod simulate;
@@ -40,6 +42,8 @@ pub enum Command {
     Predict(predict::PredictArgs),
     /// Load a run file and print what jetid reads from it (channels, sample time, ranges).
     Inspect(inspect::InspectArgs),
+    /// Write a saved model as a Python, C99 or MATLAB program that reproduces `jetid predict`.
+    Export(export::ExportArgs),
 }
 
 /// Dispatch a parsed command line.
@@ -48,6 +52,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Simulate(args)) => simulate::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Predict(args)) => predict::run(&args),
+        Some(Command::Export(args)) => export::run(&args),
         None if cli.batch => {
             let project = cli.batch_args.project()?;
             crate::batch::run(project, &cli.batch_args.out, cli.batch_args.quiet)

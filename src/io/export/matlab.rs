@@ -1,0 +1,461 @@
+//! The MATLAB/Octave rendering of a [`Plan`]: one function file whose first argument picks what it
+//! does (simulate, the `tf` objects, the local linear model, CSV to CSV), the model's numbers as a
+//! struct, and a runtime of the same recursions as `core::effects`, stage by stage over the run.
+use super::ExportError;
+use super::plan::{Filter, InputStep, Linear, OutputPlan, OutputStep, Plan};
+use super::{header, list, num};
+
+/// Longest MATLAB identifier (`namelengthmax`).
+const MAX_NAME_LEN: usize = 63;
+
+pub(super) fn render(plan: &Plan, name: &str) -> Result<String, ExportError> {
+    let valid = name.len() <= MAX_NAME_LEN
+        && name.starts_with(|c: char| c.is_ascii_alphabetic())
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if !valid {
+        return Err(ExportError::BadMatlabName { name: name.to_owned() });
+    }
+    let mut text = format!("function varargout = {name}(command, varargin)\n");
+    for line in header(plan, "MATLAB") {
+        text.push_str(&format!("% {line}\n"));
+    }
+    text.push_str(&USAGE.replace("NAME", name));
+    text.push_str(DISPATCH);
+    text.push_str(&format!(
+        "\nfunction m = model_data()\n% The numbers of every step of each output's signal path.\nm.dt = {};\nm.input = '{}';\nm.outputs = {{}};\n",
+        num(plan.dt_secs),
+        plan.input
+    ));
+    for out in &plan.outputs {
+        text.push_str(&output(out));
+    }
+    text.push_str("end\n");
+    text.push_str(RUNTIME);
+    Ok(text)
+}
+
+fn row(xs: &[f64]) -> String {
+    list(xs, "[", "]")
+}
+
+fn filter(prefix: &str, f: &Filter) -> String {
+    format!(
+        "{prefix}.num = {};\n{prefix}.den = {};\n{prefix}.steady_gain = {};\n",
+        row(&f.num_zinv),
+        row(&f.den_zinv),
+        num(f.steady_gain)
+    )
+}
+
+fn output(o: &OutputPlan) -> String {
+    let mut t = format!(
+        "% Output '{}' [{}].\no = struct();\no.name = '{}';\no.ident = '{}';\n",
+        o.name, o.unit, o.name, o.ident
+    );
+    t.push_str(&filter("o.tf", &o.tf));
+    let (n, d) = o.tf.positive_powers();
+    t.push_str(&format!("o.tf_num_z = {};\no.tf_den_z = {};\n", row(&n), row(&d)));
+    t.push_str(&format!(
+        "o.offset = {};\no.v_center = {};\no.v_scale = {};\no.coeffs = {};\n",
+        num(o.offset),
+        num(o.map.v_center),
+        num(o.map.v_scale),
+        row(&o.map.coeffs_scaled)
+    ));
+    t.push_str(&match &o.kink {
+        Some(k) => format!("o.kink = [{}, {}];\n", num(k.knot_v), num(k.slope_change)),
+        None => "o.kink = [];\n".to_owned(),
+    });
+    t.push_str(&match &o.calibration {
+        Some(c) => format!("o.calibration = [{}, {}];\n", num(c.hold_s), num(c.dc_gain)),
+        None => "o.calibration = [];\n".to_owned(),
+    });
+    let steps: Vec<String> = o
+        .input_steps
+        .iter()
+        .map(|s| match s {
+            InputStep::Delay(d) => {
+                format!("struct('kind', 'delay', 'whole', {}, 'frac', {})", d.whole, num(d.frac))
+            }
+            InputStep::AmbientInput => "struct('kind', 'ambient')".to_owned(),
+        })
+        .collect();
+    t.push_str(&format!("o.input_steps = {{{}}};\n", steps.join(", ")));
+    match &o.linear {
+        Linear::Direct(_) => t.push_str("o.split = [];\n"),
+        Linear::Split(s) => {
+            t.push_str(&format!(
+                "sp = struct();\nsp.dead_time = {};\nsp.ln_root = [{}, {}];\nsp.pair = {};\nsp.gain = {};\nsp.decel = {};\n",
+                s.dead_time,
+                num(s.ln_root.0),
+                num(s.ln_root.1),
+                if s.pair { "true" } else { "false" },
+                num(s.gain),
+                num(s.decel)
+            ));
+            match &s.rest {
+                Some(rest) => t.push_str(&filter("rest", rest)),
+                None => t.push_str("rest = [];\n"),
+            }
+            t.push_str("sp.rest = rest;\n");
+            t.push_str(&match &s.schedule {
+                Some(sc) => format!(
+                    "sp.schedule = [{}, {}, {}, {}];\n",
+                    num(sc.log_ratio),
+                    num(sc.state_log_ratio),
+                    num(sc.ref_input),
+                    num(sc.input_span)
+                ),
+                None => "sp.schedule = [];\n".to_owned(),
+            });
+            t.push_str("o.split = sp;\n");
+        }
+    }
+    t.push_str(&match &o.soak {
+        Some(s) => format!("o.soak = [{}, {}];\n", num(s.gain), num(s.tau_s)),
+        None => "o.soak = [];\n".to_owned(),
+    });
+    let steps: Vec<String> = o
+        .output_steps
+        .iter()
+        .map(|s| match s {
+            OutputStep::AmbientOutput { theta_exp, delta_exp } => format!(
+                "struct('kind', 'ambient', 'theta_exp', {}, 'delta_exp', {})",
+                num(*theta_exp),
+                num(*delta_exp)
+            ),
+            OutputStep::Sensor(s) => format!(
+                "struct('kind', 'sensor', 'freq_hz', {}, 'zeta', {}, 'lag_s', {})",
+                num(s.freq_hz),
+                num(s.zeta),
+                num(s.lag_s)
+            ),
+        })
+        .collect();
+    t.push_str(&format!("o.output_steps = {{{}}};\nm.outputs{{end + 1}} = o;\n", steps.join(", ")));
+    t
+}
+
+const USAGE: &str = r"%
+% NAME('simulate', u, aux, measured, dt) -> struct with one field per output: the outputs simulated
+%   from the input vector u. aux: struct with fields ambient_temp_c and ambient_pressure_kpa (for
+%   outputs corrected for inlet conditions), or []; measured: struct of measured outputs (fields as in the result), used only
+%   by calibration_drift's per-run offset, or []; dt: the run's sample time (default: the model's).
+% NAME('tf') -> struct with one tf object G(z) per output (tf(num, den, Ts)).
+% NAME('operating_point', output, u_star) -> the local linear model K G(z)/G(1), K = f'(v*) G(1).
+% NAME('csv', 'IN.csv', 'OUT.csv' [, 'calibrate']) -> what `jetid predict` writes for IN.csv.
+% tf objects need the Control System Toolbox (Octave: pkg load control); the simulation does not.
+";
+
+const DISPATCH: &str = r"m = model_data();
+switch command
+    case 'simulate'
+        varargout{1} = simulate_all(m, varargin{:});
+    case 'tf'
+        g = struct();
+        for i = 1:numel(m.outputs)
+            o = m.outputs{i};
+            g.(o.ident) = tf(o.tf_num_z, o.tf_den_z, m.dt);
+        end
+        varargout{1} = g;
+    case 'operating_point'
+        o = find_output(m, varargin{1});
+        g1 = o.tf.steady_gain;
+        v_star = g1 * varargin{2} + o.offset;
+        k = static_map_slope(o, v_star) * g1;
+        varargout{1} = tf(o.tf_num_z, o.tf_den_z, m.dt) * (k / g1);
+    case 'csv'
+        run_csv(m, varargin{:});
+    otherwise
+        error('jetid:command', 'unknown command ''%s'' (simulate, tf, operating_point, csv)', command);
+end
+end
+";
+
+const RUNTIME: &str = r"
+function o = find_output(m, name)
+for i = 1:numel(m.outputs)
+    if strcmp(m.outputs{i}.name, name) || strcmp(m.outputs{i}.ident, name)
+        o = m.outputs{i};
+        return;
+    end
+end
+error('jetid:output', 'the model has no output ''%s''', name);
+end
+
+function out = simulate_all(m, u, aux, measured, dt)
+if nargin < 3, aux = []; end
+if nargin < 4, measured = []; end
+if nargin < 5 || isempty(dt), dt = m.dt; end
+u = u(:)';
+out = struct();
+for i = 1:numel(m.outputs)
+    o = m.outputs{i};
+    [us, theta, delta] = input_stage(o, u, aux);
+    offset = 0;
+    if ~isempty(o.calibration) && isstruct(measured) && isfield(measured, o.ident)
+        offset = calibration_offset(o, us, measured.(o.ident)(:)', dt);
+    end
+    v = linear_stage(o, us + offset, dt);
+    out.(o.ident) = output_stage(o, v, theta, delta, dt);
+end
+end
+
+function [u, theta, delta] = input_stage(o, u, aux)
+theta = [];
+delta = [];
+for i = 1:numel(o.input_steps)
+    s = o.input_steps{i};
+    if strcmp(s.kind, 'delay')
+        u = delay(u, s.whole, s.frac);
+    else
+        t = aux.ambient_temp_c(:)';
+        p = aux.ambient_pressure_kpa(:)';
+        if any(~isfinite(t) | t <= -273.15) || any(~isfinite(p) | p <= 0)
+            error('jetid:ambient', 'unphysical inlet conditions');
+        end
+        theta = (t + 273.15) / 288.15;
+        delta = p / 101.325;
+        u = u ./ (delta .* sqrt(theta));
+    end
+end
+end
+
+function y = delay(u, whole, frac)
+% u(k - whole - frac), linearly interpolated; samples before the start equal the first.
+n = numel(u);
+y = zeros(1, n);
+for k = 1:n
+    j = k - whole;
+    a = u(max(j, 1));
+    b = u(max(j - 1, 1));
+    y(k) = (1 - frac) * a + frac * b;
+end
+end
+
+function y = filter_from_steady(f, u)
+% G(z) in z^-1 from the steady state of u(1): past inputs u(1), past outputs steady_gain * u(1).
+n = numel(u);
+y = zeros(1, n);
+u0 = u(1);
+y0 = f.steady_gain * u0;
+for k = 1:n
+    acc = 0;
+    for j = 1:numel(f.num)
+        if k - j + 1 >= 1, x = u(k - j + 1); else, x = u0; end
+        acc = acc + f.num(j) * x;
+    end
+    for j = 2:numel(f.den)
+        if k - j + 1 >= 1, x = y(k - j + 1); else, x = y0; end
+        acc = acc - f.den(j) * x;
+    end
+    y(k) = acc;
+end
+end
+
+function v = linear_stage(o, u, dt)
+if isempty(o.split)
+    v = filter_from_steady(o.tf, u);
+else
+    v = o.split.gain * spool(o.split, delay(u, o.split.dead_time, 0));
+end
+if ~isempty(o.soak)
+    a = exp(-dt / max(o.soak(2), realmin));
+    s = v(1);
+    for k = 1:numel(v)
+        s = a * s + (1 - a) * v(k);
+        v(k) = v(k) + o.soak(1) * (s - v(k));
+    end
+end
+v = v + o.offset;
+end
+
+function out = spool(sp, u)
+% The spool root's time constant scaled by the operating point it is heading for (schedule) and
+% while falling (decel); the rest of the block ahead of it.
+if isempty(sp.rest), r = u; else, r = filter_from_steady(sp.rest, u); end
+x = r(1); x_old = x; prev = x; prev_old = x;
+out = zeros(1, numel(r));
+for k = 1:numel(r)
+    factor = 1;
+    if ~isempty(sp.schedule)
+        c = sp.schedule;
+        factor = exp(-(c(1) * (prev - c(3)) + c(2) * (x - c(3))) / c(4));
+    end
+    if prev < x, factor = factor * sp.decel; end
+    f = max(factor, realmin);
+    mag = exp(sp.ln_root(1) / f);
+    re = mag * cos(sp.ln_root(2) / f);
+    im = mag * sin(sp.ln_root(2) / f);
+    if sp.pair
+        a1 = 2 * re;
+        a2 = re * re + im * im;
+        nxt = a1 * x - a2 * x_old + (1 - a1 + a2) * prev_old;
+    else
+        nxt = re * x + (1 - re) * prev;
+    end
+    x_old = x; x = nxt;
+    prev_old = prev; prev = r(k);
+    out(k) = x;
+end
+end
+
+function y = static_map(o, v)
+x = (v - o.v_center) / o.v_scale;
+y = zeros(size(v));
+for i = numel(o.coeffs):-1:1
+    y = y .* x + o.coeffs(i);
+end
+if ~isempty(o.kink)
+    y = y + o.kink(2) * max(v - o.kink(1), 0);
+end
+end
+
+function d = static_map_slope(o, v)
+x = (v - o.v_center) / o.v_scale;
+d = 0;
+for i = numel(o.coeffs):-1:2
+    d = d * x + (i - 1) * o.coeffs(i);
+end
+d = d / o.v_scale;
+if ~isempty(o.kink) && v > o.kink(1)
+    d = d + o.kink(2);
+end
+end
+
+function y = output_stage(o, v, theta, delta, dt)
+y = static_map(o, v);
+for i = 1:numel(o.output_steps)
+    s = o.output_steps{i};
+    if strcmp(s.kind, 'ambient')
+        y = y .* (theta .^ s.theta_exp .* delta .^ s.delta_exp);
+    else
+        y = sensor(s, y, dt);
+    end
+end
+end
+
+function out = sensor(s, y, dt)
+% Sensor lag (exact for an input linear between samples), then the resonance by RK4.
+n = numel(y);
+lagged = y;
+if s.lag_s > 1e-3
+    a = exp(-dt / s.lag_s);
+    ramp = 1 - s.lag_s * (1 - a) / dt;
+    x = y(1);
+    for k = 2:n
+        x = a * x + (1 - a) * y(k - 1) + (y(k) - y(k - 1)) * ramp;
+        lagged(k) = x;
+    end
+end
+w = 2 * pi * s.freq_hz;
+steps = max(ceil(w * dt / 0.25), 4);
+h = dt / steps;
+deriv = @(pos, vel, u) [vel, w * w * (u - pos) - 2 * s.zeta * w * vel];
+pos = lagged(1);
+vel = 0;
+out = zeros(1, n);
+out(1) = pos;
+for k = 2:n
+    w0 = lagged(k - 1);
+    w1 = lagged(k);
+    for st = 0:steps - 1
+        t = st * h;
+        u0 = w0 + (w1 - w0) * t / dt;
+        u1 = w0 + (w1 - w0) * (t + 0.5 * h) / dt;
+        u2 = w0 + (w1 - w0) * (t + h) / dt;
+        k1 = deriv(pos, vel, u0);
+        k2 = deriv(pos + 0.5 * h * k1(1), vel + 0.5 * h * k1(2), u1);
+        k3 = deriv(pos + 0.5 * h * k2(1), vel + 0.5 * h * k2(2), u1);
+        k4 = deriv(pos + h * k3(1), vel + h * k3(2), u2);
+        pos = pos + h / 6 * (k1(1) + 2 * k2(1) + 2 * k3(1) + k4(1));
+        vel = vel + h / 6 * (k1(2) + 2 * k2(2) + 2 * k3(2) + k4(2));
+    end
+    out(k) = pos;
+end
+end
+
+function offset = calibration_offset(o, u, y, dt)
+% calibration_drift: the input offset that puts the steady states on the run's own holds of the
+% measured output (last half of every stretch holding within 1 % of its range for hold_s).
+hold_s = o.calibration(1);
+dc = o.calibration(2);
+steady = @(x) static_map(o, dc * x + o.offset);
+tol = 0.01 * max(max(y) - min(y), realmin);
+need = ceil(hold_s / dt);
+tail = max(floor(0.5 * hold_s / dt + 0.5), 2);
+hu = [];
+hy = [];
+start = 1;
+n = numel(y);
+for k = 2:n + 1
+    if k == n + 1 || abs(y(k) - y(start)) > tol
+        if k - start >= max(need, tail)
+            hu(end + 1) = sum(u(k - tail:k - 1)) / tail; %#ok<AGROW>
+            hy(end + 1) = sum(y(k - tail:k - 1)) / tail; %#ok<AGROW>
+        end
+        start = k;
+    end
+end
+span = max(max(u) - min(u), realmin);
+offset = 0;
+if isempty(hu) || ~isfinite(span), return; end
+cost = @(b) sum((hy - steady(hu + b)) .^ 2);
+h = 1e-4 * span;
+for it = 1:30
+    r = hy - steady(hu + offset);
+    j = (steady(hu + offset + h) - steady(hu + offset - h)) / (2 * h);
+    jtj = sum(j .* j);
+    jtr = sum(j .* r);
+    if jtj <= realmin, break; end
+    step = min(max(jtr / jtj, -0.1 * span), 0.1 * span);
+    while abs(step) > 1e-12 * span && cost(offset + step) > cost(offset)
+        step = step * 0.5;
+    end
+    offset = offset + step;
+    if abs(step) <= 1e-9 * span, break; end
+end
+if ~(isfinite(offset) && abs(offset) <= 0.5 * span), offset = 0; end
+end
+
+function run_csv(m, in_file, out_file, calibrate)
+if nargin < 4, calibrate = ''; end
+fid = fopen(in_file, 'r');
+if fid < 0, error('jetid:csv', 'cannot read %s', in_file); end
+names = strtrim(strsplit(fgetl(fid), ','));
+fclose(fid);
+data = dlmread(in_file, ',', 1, 0);
+col = @(name) data(:, find(strcmp(names, name), 1))';
+t = col('time_s');
+u = col(m.input);
+steps = sort(diff(t));
+mid = floor(numel(steps) / 2);
+if mod(numel(steps), 2) == 0, dt = 0.5 * (steps(mid) + steps(mid + 1)); else, dt = steps(mid + 1); end
+dt = str2double(sprintf('%.11e', dt));
+if abs(dt / m.dt - 1) > 0.02
+    error('jetid:dt', '%s is sampled every %g s but the model every %g s', in_file, dt, m.dt);
+end
+aux = struct();
+if any(strcmp(names, 'ambient_temp_c')) && any(strcmp(names, 'ambient_pressure_kpa'))
+    aux.ambient_temp_c = col('ambient_temp_c');
+    aux.ambient_pressure_kpa = col('ambient_pressure_kpa');
+end
+measured = struct();
+if strcmp(calibrate, 'calibrate')
+    for i = 1:numel(m.outputs)
+        if any(strcmp(names, m.outputs{i}.name)), measured.(m.outputs{i}.ident) = col(m.outputs{i}.name); end
+    end
+end
+y = simulate_all(m, u, aux, measured, dt);
+fid = fopen(out_file, 'w');
+header = ['time_s,', m.input];
+table = [t; u];
+for i = 1:numel(m.outputs)
+    header = [header, ',', m.outputs{i}.name]; %#ok<AGROW>
+    table = [table; y.(m.outputs{i}.ident)]; %#ok<AGROW>
+end
+fprintf(fid, '%s\n', header);
+fprintf(fid, [repmat('%.17g,', 1, size(table, 1) - 1), '%.17g\n'], table);
+fclose(fid);
+end
+";

@@ -1,0 +1,333 @@
+//! The numeric plan of an export: per output, the steps of `ExtendedModel::simulate` in signal-path
+//! order with every number they need. Each language renders this plan; whatever needs roots or a
+//! transfer-function split is worked out here, so the generated programs only run recursions.
+use num_complex::Complex64;
+
+use super::ExportError;
+use crate::core::effects::{
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, ExtendedModel, ScheduledTimeConstant, SensorDynamics,
+    StaticMapOrder, ThermalSoak,
+};
+use crate::core::identification::static_map::StaticMap;
+use crate::core::numerics::tf::DiscreteTf;
+use crate::io::model_file::{ModelFile, OutputModel};
+
+/// A discrete transfer function in z⁻¹, with the gain its simulation starts from: past inputs equal
+/// the first input, past outputs `steady_gain` times it (`DiscreteTf::simulate_from_steady`; zero
+/// without a steady state).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Filter {
+    pub num_zinv: Vec<f64>,
+    pub den_zinv: Vec<f64>,
+    pub steady_gain: f64,
+}
+
+impl Filter {
+    fn of(tf: &DiscreteTf) -> Self {
+        Self {
+            num_zinv: tf.num_zinv.clone(),
+            den_zinv: tf.den_zinv.clone(),
+            steady_gain: tf.dc_gain().unwrap_or(0.0),
+        }
+    }
+
+    /// The same transfer function in positive powers of z (numerator and denominator of equal
+    /// length), as `control.TransferFunction` and MATLAB's `tf` read them.
+    pub fn positive_powers(&self) -> (Vec<f64>, Vec<f64>) {
+        let len = self.num_zinv.len().max(self.den_zinv.len());
+        let pad = |c: &[f64]| {
+            let mut out = c.to_vec();
+            out.resize(len, 0.0);
+            out
+        };
+        (pad(&self.num_zinv), pad(&self.den_zinv))
+    }
+}
+
+/// A fractional delay `u(k − d)`, linearly interpolated, the samples before the start equal to the
+/// first (`TransportDelay::delay`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Delay {
+    pub whole: usize,
+    pub frac: f64,
+}
+
+impl Delay {
+    /// How many past samples the delay line holds (the current one included).
+    pub fn line_len(&self) -> usize {
+        self.whole + 2
+    }
+}
+
+/// One step of the input stage, in signal-path order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum InputStep {
+    /// Fuel-line dead time.
+    Delay(Delay),
+    /// Corrected fuel flow `u/(δ√θ)` from the run's inlet channels.
+    AmbientInput,
+}
+
+/// One step after the static map, in signal-path order.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OutputStep {
+    /// The physical output from the corrected one: `· θ^a δ^b`.
+    AmbientOutput { theta_exp: f64, delta_exp: f64 },
+    /// Sensor lag and resonance (`SensorDynamics::apply`).
+    Sensor(SensorDynamics),
+}
+
+/// The per-run input offset of `calibration_drift`, found from the run's own steady holds of the
+/// measured output (`CalibrationDrift::run_offset`); it needs the whole run before the first step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Calibration {
+    pub hold_s: f64,
+    /// G(1) of the linear block: the steady state is `f(G(1)·u + offset)`.
+    pub dc_gain: f64,
+}
+
+/// The linear block with its spool root split off, for asymmetric or scheduled dynamics
+/// (`scheduled_time_constant::respond`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spool {
+    /// Input dead time of the linear block, samples (`DiscreteTf::input_delay`).
+    pub dead_time: usize,
+    /// The unit-gain remainder, when the spool is not the only root.
+    pub rest: Option<Filter>,
+    /// ln of the spool root, as a complex number (re, im).
+    pub ln_root: (f64, f64),
+    /// Whether the spool is a complex pair.
+    pub pair: bool,
+    /// G(1) of the linear block, applied after the unit-gain split response.
+    pub gain: f64,
+    /// Falling over rising time constant (1 without asymmetric dynamics).
+    pub decel: f64,
+    /// The time-constant schedule, when applied.
+    pub schedule: Option<ScheduledTimeConstant>,
+}
+
+/// How `v` is made from the (corrected, delayed, calibrated) input.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Linear {
+    /// The linear block simulated from the steady state of the first input.
+    Direct(Filter),
+    /// The split block of asymmetric or scheduled dynamics.
+    Split(Spool),
+}
+
+/// Everything needed to simulate one output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputPlan {
+    /// The output's name (a column of the run file).
+    pub name: String,
+    /// The name as an identifier of the generated languages.
+    pub ident: String,
+    pub unit: String,
+    /// The linear block G(z) as identified (for the transfer-function objects and the local model).
+    pub tf: Filter,
+    /// Added to the linear block's output.
+    pub offset: f64,
+    pub map: StaticMap,
+    pub kink: Option<StaticMapOrder>,
+    pub calibration: Option<Calibration>,
+    pub input_steps: Vec<InputStep>,
+    pub linear: Linear,
+    pub soak: Option<ThermalSoak>,
+    pub output_steps: Vec<OutputStep>,
+    /// Names of the applied effects, in signal-path order (for the generated file's header).
+    pub effects: Vec<&'static str>,
+}
+
+impl OutputPlan {
+    /// Whether the output reads the run's inlet channels.
+    pub fn needs_ambient(&self) -> bool {
+        self.input_steps.contains(&InputStep::AmbientInput)
+    }
+}
+
+/// The whole model, ready to render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// The model file it was made from, for the generated file's header.
+    pub source: String,
+    pub dt_secs: f64,
+    /// The input column.
+    pub input: String,
+    pub outputs: Vec<OutputPlan>,
+}
+
+impl Plan {
+    /// The plan of a model file; errors name the output and what cannot be exported.
+    pub fn new(model: &ModelFile, source: &str) -> Result<Self, ExportError> {
+        check_name("input", &model.input.name)?;
+        if model.outputs.is_empty() {
+            return Err(ExportError::NoOutputs);
+        }
+        let mut outputs: Vec<OutputPlan> = Vec::with_capacity(model.outputs.len());
+        for out in &model.outputs {
+            let plan = output_plan(out)?;
+            if let Some(other) = outputs.iter().find(|o| o.ident == plan.ident) {
+                return Err(ExportError::NameClash {
+                    first: other.name.clone(),
+                    second: plan.name.clone(),
+                    ident: plan.ident.clone(),
+                });
+            }
+            outputs.push(plan);
+        }
+        Ok(Self {
+            source: source.to_owned(),
+            dt_secs: model.dt_secs,
+            input: model.input.name.clone(),
+            outputs,
+        })
+    }
+
+    /// Whether any output reads the run's inlet channels.
+    pub fn needs_ambient(&self) -> bool {
+        self.outputs.iter().any(OutputPlan::needs_ambient)
+    }
+
+    /// Longest delay line any output needs (at least that of a zero delay, which the runtime can
+    /// always reach).
+    pub fn max_delay_line(&self) -> usize {
+        self.outputs
+            .iter()
+            .flat_map(|o| {
+                let input = o.input_steps.iter().filter_map(|s| match s {
+                    InputStep::Delay(d) => Some(d.line_len()),
+                    InputStep::AmbientInput => None,
+                });
+                let dead = match &o.linear {
+                    Linear::Split(s) => Some(Delay { whole: s.dead_time, frac: 0.0 }.line_len()),
+                    Linear::Direct(_) => None,
+                };
+                input.chain(dead)
+            })
+            .fold(Delay { whole: 0, frac: 0.0 }.line_len(), usize::max)
+    }
+
+    /// Longest numerator or denominator of any filter.
+    pub fn max_filter_len(&self) -> usize {
+        self.outputs
+            .iter()
+            .flat_map(|o| {
+                let rest = match &o.linear {
+                    Linear::Split(s) => s.rest.as_ref(),
+                    Linear::Direct(_) => None,
+                };
+                [Some(&o.tf), rest].into_iter().flatten()
+            })
+            .map(|f| f.num_zinv.len().max(f.den_zinv.len()))
+            .max()
+            .unwrap_or(1)
+    }
+}
+
+/// Names become string literals and CSV header cells in every language: they must not need
+/// quoting there.
+fn check_name(what: &'static str, name: &str) -> Result<(), ExportError> {
+    let bad = name.chars().find(|c| c.is_control() || matches!(c, '"' | '\'' | '\\' | ',' | '%'));
+    match (name.trim().is_empty() || name.trim() != name, bad) {
+        (false, None) => Ok(()),
+        (_, bad) => Err(ExportError::UnsupportedName {
+            what,
+            name: name.to_owned(),
+            reason: match bad {
+                Some(c) => {
+                    format!("it holds the character {c:?}, which the generated CSV reader cannot read")
+                }
+                None => "it is empty or starts or ends with white space".to_owned(),
+            },
+        }),
+    }
+}
+
+/// An identifier for the generated languages: letters, digits and `_`, not starting with a digit.
+fn identifier(name: &str) -> String {
+    let mut ident: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    if !ident.starts_with(|c: char| c.is_ascii_alphabetic()) {
+        ident.insert_str(0, "y_");
+    }
+    ident
+}
+
+fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
+    check_name("output", &out.name)?;
+    let err = |source| ExportError::Effect { output: out.name.clone(), source };
+    let model = ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects).map_err(err)?;
+    let tf = &model.wiener.linear.tf;
+    let bad_linear = |reason: String| ExportError::BadLinearBlock { output: out.name.clone(), reason };
+    let (poles, zeros) = model.roots().map_err(|e| bad_linear(e.to_string()))?;
+    if let Some(p) = poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0) {
+        return Err(bad_linear(format!(
+            "a pole at {:.4}{:+.4}i (|z| = {:.4}) is on or outside the unit circle: the model is unstable and \
+             `jetid predict` refuses it too",
+            p.re,
+            p.im,
+            p.norm()
+        )));
+    }
+    let mut plan = OutputPlan {
+        name: out.name.clone(),
+        ident: identifier(&out.name),
+        unit: out.unit.clone(),
+        tf: Filter::of(tf),
+        offset: model.wiener.linear.offset,
+        map: model.wiener.map.clone(),
+        kink: None,
+        calibration: None,
+        input_steps: Vec::new(),
+        linear: Linear::Direct(Filter::of(tf)),
+        soak: None,
+        output_steps: Vec::new(),
+        effects: model.effects.iter().map(|e| e.id().name()).collect(),
+    };
+    let (mut decel, mut schedule, mut split) = (None, None, false);
+    for effect in &model.effects {
+        match effect {
+            EffectBlock::CalibrationDrift(c) => {
+                plan.calibration = tf.dc_gain().ok().map(|dc_gain| Calibration { hold_s: c.hold_s, dc_gain });
+            }
+            EffectBlock::TransportDelay(d) => {
+                let whole = d.delay_samples.floor();
+                plan.input_steps
+                    .push(InputStep::Delay(Delay { whole: whole as usize, frac: d.delay_samples - whole }));
+            }
+            EffectBlock::ThermalSoak(s) => plan.soak = Some(s.clone()),
+            EffectBlock::AmbientCorrection(AmbientCorrection { output_theta_exp, output_delta_exp }) => {
+                plan.input_steps.push(InputStep::AmbientInput);
+                plan.output_steps.push(OutputStep::AmbientOutput {
+                    theta_exp: *output_theta_exp,
+                    delta_exp: *output_delta_exp,
+                });
+            }
+            EffectBlock::AsymmetricDynamics(a) => {
+                decel = Some(a.decel_factor);
+                split = true;
+            }
+            EffectBlock::ScheduledTimeConstant(s) => {
+                schedule = Some(s.clone());
+                split = true;
+            }
+            EffectBlock::SensorDynamics(s) => plan.output_steps.push(OutputStep::Sensor(s.clone())),
+            EffectBlock::StaticMapOrder(k) => plan.kink = Some(k.clone()),
+        }
+    }
+    if split {
+        let shape = AsymmetricDynamics::split(&poles, &zeros, tf.dt_secs).map_err(err)?;
+        let gain = tf.dc_gain().map_err(|e| bad_linear(e.to_string()))?;
+        let ln_root: Complex64 =
+            Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
+        plan.linear = Linear::Split(Spool {
+            dead_time: tf.input_delay(),
+            rest: shape.rest.as_ref().map(Filter::of),
+            ln_root: (ln_root.re, ln_root.im),
+            pair: shape.is_pair(),
+            gain,
+            decel: decel.unwrap_or(1.0),
+            schedule,
+        });
+    }
+    Ok(plan)
+}

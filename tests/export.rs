@@ -1,0 +1,440 @@
+//! `jetid export` end to end: the Python and C programs it writes reproduce `jetid predict` on a run
+//! the model was not fitted on, for the plain model and for a model with each effect; the MATLAB
+//! file holds the model's transfer functions; and the errors a user can cause.
+//!
+//! The programs are run with the real `python3` (numpy and python-control) and `cc`. Without them
+//! the comparisons are skipped with a message, unless `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), where a
+//! missing tool fails the test.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use jetid::io::model_file::read_model;
+
+fn jetid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().expect("jetid runs")
+}
+
+fn ok(o: &Output, what: &str) -> String {
+    assert!(
+        o.status.success(),
+        "{what} failed: {}\n{}",
+        String::from_utf8_lossy(&o.stderr),
+        String::from_utf8_lossy(&o.stdout)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+/// Whether `tool` can be used; when it cannot, says so and, with `JETID_REQUIRE_EXPORT_TOOLS=1`,
+/// fails.
+fn have(tool: &str, probe: &mut Command) -> bool {
+    let found = probe.output().is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            std::env::var("JETID_REQUIRE_EXPORT_TOOLS").as_deref() != Ok("1"),
+            "{tool} is needed to test the exports (JETID_REQUIRE_EXPORT_TOOLS=1)"
+        );
+        eprintln!("SKIPPED: {tool} is not available, so the exported program is not run");
+    }
+    found
+}
+
+fn have_python() -> bool {
+    have(
+        "python3 with numpy and python-control",
+        Command::new("python3").args(["-c", "import numpy, control"]),
+    )
+}
+
+fn have_cc() -> bool {
+    have("a C compiler (cc)", Command::new("cc").arg("--version"))
+}
+
+/// A run file's header and columns.
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(|h| h.trim().to_owned()).collect();
+    let mut columns = vec![Vec::new(); header.len()];
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        for (column, cell) in columns.iter_mut().zip(line.split(',')) {
+            column.push(
+                cell.trim().parse::<f64>().unwrap_or_else(|e| panic!("{}: {cell}: {e}", path.display())),
+            );
+        }
+    }
+    (header, columns)
+}
+
+/// Largest relative difference of `actual` from `expected`, after checking that both have the same
+/// columns and samples and that every sample agrees to 1e-6 relative (1e-9 absolute floor).
+fn agree(expected: &Path, actual: &Path) -> f64 {
+    let (h_e, c_e) = read_csv(expected);
+    let (h_a, c_a) = read_csv(actual);
+    assert_eq!(h_e, h_a, "columns of {} and {}", expected.display(), actual.display());
+    let mut worst = 0.0f64;
+    for ((name, e), a) in h_e.iter().zip(&c_e).zip(&c_a) {
+        assert_eq!(e.len(), a.len(), "{name}: samples");
+        assert!(e.len() > 100, "{name}: a run of {} samples", e.len());
+        for (k, (x, y)) in e.iter().zip(a).enumerate() {
+            let diff = (x - y).abs();
+            assert!(
+                diff <= 1e-6 * x.abs() + 1e-9,
+                "{}: {name}[{k}] = {y}, jetid predict says {x}",
+                actual.display()
+            );
+            worst = worst.max(diff / x.abs().max(1e-300));
+        }
+    }
+    worst
+}
+
+/// The effects the simulator can switch on (scheduled_time_constant is how every turbojet behaves,
+/// so the simulator always has it).
+const SIMULATED: [&str; 7] = [
+    "transport_delay",
+    "thermal_soak",
+    "ambient_correction",
+    "asymmetric_dynamics",
+    "sensor_dynamics",
+    "static_map_order",
+    "calibration_drift",
+];
+
+/// A model fitted on a simulated identification run (with `effect` in the engine when the
+/// simulator has it, and added to the model), and a run of another seed it was not fitted on.
+fn fit(dir: &Path, effect: Option<&str>, output: Option<&str>) -> (PathBuf, PathBuf) {
+    let sim_effect: Vec<&str> =
+        effect.filter(|e| SIMULATED.contains(e)).map(|e| vec!["--effect", e]).unwrap_or_default();
+    let simulate = |test: &str, seed: &str, out: &Path| {
+        let mut args = vec!["simulate", "--test", test, "--seed", seed, "--out", s(out)];
+        args.extend(&sim_effect);
+        ok(&jetid(&args), "jetid simulate");
+    };
+    let (ident, val, other) = (dir.join("ident.csv"), dir.join("val.csv"), dir.join("other.csv"));
+    simulate("ident", "3", &ident);
+    simulate("validation", "4", &val);
+    simulate("validation", "11", &other);
+    let fitted = dir.join("fit");
+    let mut args =
+        vec!["--batch", "--ident", s(&ident), "--validate", s(&val), "--out", s(&fitted), "--quiet"];
+    args.extend(output.map(|o| ["--output", o]).iter().flatten());
+    args.extend(effect.map(|e| ["--add-effect", e]).iter().flatten());
+    ok(&jetid(&args), "jetid --batch");
+    let model = fitted.join("model.json");
+    for out in &read_model(&model).unwrap().outputs {
+        let applied: Vec<&str> = out.effects.iter().map(|e| e.id.name()).collect();
+        assert_eq!(applied, effect.into_iter().collect::<Vec<_>>(), "{}: {}", model.display(), out.name);
+    }
+    (model, other)
+}
+
+/// Export `model` to Python and C, run both on `run` (with `extra` arguments) and compare with
+/// `jetid predict` (with `predict_extra`). Returns the largest relative differences (Python, C),
+/// `None` for a tool that is missing.
+fn reproduce(
+    dir: &Path,
+    model: &Path,
+    run: &Path,
+    extra: &[&str],
+    predict_extra: &[&str],
+) -> (Option<f64>, Option<f64>) {
+    let tag = model.parent().and_then(Path::file_name).map(|n| n.to_string_lossy().into_owned()).unwrap();
+    let expected = dir.join(format!("{tag}_predict.csv"));
+    let mut args = vec!["predict", "--model", s(model), "--input", s(run), "--out", s(&expected)];
+    args.extend_from_slice(predict_extra);
+    ok(&jetid(&args), "jetid predict");
+
+    let python = have_python().then(|| {
+        let program = dir.join(format!("{tag}_model.py"));
+        ok(
+            &jetid(&["export", "--model", s(model), "--format", "python", "--out", s(&program)]),
+            "export python",
+        );
+        let out = dir.join(format!("{tag}_python.csv"));
+        let o = Command::new("python3").arg(&program).arg(run).arg(&out).args(extra).output().unwrap();
+        ok(&o, "the exported Python program");
+        agree(&expected, &out)
+    });
+    let c = have_cc().then(|| {
+        let source = dir.join(format!("{tag}_model.c"));
+        ok(&jetid(&["export", "--model", s(model), "--format", "c", "--out", s(&source)]), "export c");
+        let binary = dir.join(format!("{tag}_model"));
+        let strict = ["-O2", "-std=c99", "-Wall", "-Werror"];
+        let o =
+            Command::new("cc").args(strict).arg(&source).arg("-o").arg(&binary).arg("-lm").output().unwrap();
+        ok(&o, "cc on the exported C program");
+        let o = Command::new("cc")
+            .args(strict)
+            .args(["-DJETID_NO_MAIN", "-c"])
+            .arg(&source)
+            .arg("-o")
+            .arg(dir.join(format!("{tag}_model.o")))
+            .output()
+            .unwrap();
+        ok(&o, "cc -DJETID_NO_MAIN on the exported C program");
+        let out = dir.join(format!("{tag}_c.csv"));
+        ok(&Command::new(&binary).arg(run).arg(&out).args(extra).output().unwrap(), "the exported C program");
+        agree(&expected, &out)
+    });
+    eprintln!(
+        "{}: largest relative difference from jetid predict: Python {python:?}, C {c:?}",
+        model.display()
+    );
+    (python, c)
+}
+
+fn exports_reproduce_predict(effect: Option<&str>, output: Option<&str>) {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, run) = fit(dir.path(), effect, output);
+    reproduce(dir.path(), &model, &run, &[], &[]);
+}
+
+#[test]
+fn plain_model_with_two_outputs() {
+    exports_reproduce_predict(None, None);
+}
+
+#[test]
+fn thermal_soak() {
+    exports_reproduce_predict(Some("thermal_soak"), Some("shaft_speed_rpm"));
+}
+
+#[test]
+fn ambient_correction() {
+    exports_reproduce_predict(Some("ambient_correction"), Some("thrust_n"));
+}
+
+#[test]
+fn asymmetric_dynamics() {
+    exports_reproduce_predict(Some("asymmetric_dynamics"), Some("shaft_speed_rpm"));
+}
+
+#[test]
+fn scheduled_time_constant() {
+    exports_reproduce_predict(Some("scheduled_time_constant"), Some("shaft_speed_rpm"));
+}
+
+#[test]
+fn sensor_dynamics() {
+    exports_reproduce_predict(Some("sensor_dynamics"), Some("thrust_n"));
+}
+
+#[test]
+fn static_map_order_and_the_local_linear_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, run) = fit(dir.path(), Some("static_map_order"), Some("shaft_speed_rpm"));
+    reproduce(dir.path(), &model, &run, &[], &[]);
+    if !have_python() {
+        return;
+    }
+    // operating_point(output, u*) is K·G(z)/G(1), K = f'(v*)·G(1) with the kink's slope above its knot.
+    let read = read_model(&model).unwrap();
+    let out = &read.outputs[0];
+    let knot = out.effects[0].params["knot_v"];
+    let slope_change = out.effects[0].params["slope_change"];
+    let g1 = out.wiener.linear.tf.dc_gain().unwrap();
+    let offset = out.wiener.linear.offset;
+    let program = dir.path().join("jetid_model.py");
+    ok(
+        &jetid(&["export", "--model", s(&model), "--format", "python", "--out", s(&program)]),
+        "export python",
+    );
+    for v_star in [knot - 1000.0, knot + 1000.0] {
+        let u_star = (v_star - offset) / g1;
+        let expected = (out.wiener.map.slope(v_star) + if v_star > knot { slope_change } else { 0.0 }) * g1;
+        let script = format!(
+            "import sys; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
+             g = m.operating_point({name:?}, {u_star:?})\n\
+             print(repr(float(g.dcgain())), repr(float(abs(g.poles() - m.TF[{name:?}].poles()).max())))",
+            dir = s(dir.path()),
+            name = out.name,
+        );
+        let printed = ok(&Command::new("python3").args(["-c", &script]).output().unwrap(), "operating_point");
+        let numbers: Vec<f64> = printed.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        assert!(
+            (numbers[0] - expected).abs() <= 1e-9 * expected.abs(),
+            "K at v* = {v_star}: {} vs {expected}",
+            numbers[0]
+        );
+        assert!(numbers[1] < 1e-12, "the local model has G's poles: {printed}");
+    }
+}
+
+#[test]
+fn transport_delay_fitted_and_several_samples_long() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, run) = fit(dir.path(), Some("transport_delay"), Some("thrust_n"));
+    reproduce(dir.path(), &model, &run, &[], &[]);
+    // The fitted delay can be a fraction of a sample; a delay three samples longer runs the delay line.
+    let mut longer = read_model(&model).unwrap();
+    let delay = longer.outputs[0].effects[0].params.get_mut("delay_samples").unwrap();
+    *delay += 3.0;
+    let longer_dir = dir.path().join("longer");
+    std::fs::create_dir_all(&longer_dir).unwrap();
+    let longer_model = longer_dir.join("model.json");
+    jetid::io::model_file::write_model(&longer_model, &longer).unwrap();
+    reproduce(dir.path(), &longer_model, &run, &[], &[]);
+}
+
+#[test]
+fn calibration_drift_from_the_runs_own_holds() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, run) = fit(dir.path(), Some("calibration_drift"), Some("thrust_n"));
+    reproduce(dir.path(), &model, &run, &[], &[]);
+    // A run logged with another calibration, noiseless so that its holds are found: with the
+    // measured output read (`--calibrate`, `--map output=thrust_n`) the offset moves the prediction.
+    let (noisy, truth) = (dir.path().join("drifted.csv"), dir.path().join("drifted_truth.csv"));
+    ok(
+        &jetid(&[
+            "simulate",
+            "--test",
+            "ident",
+            "--seed",
+            "9",
+            "--effect",
+            "calibration_drift:offset_gph=0.5",
+            "--out",
+            s(&noisy),
+            "--truth-out",
+            s(&truth),
+        ]),
+        "jetid simulate",
+    );
+    let (py, c) = reproduce(dir.path(), &model, &truth, &["--calibrate"], &["--map", "output=thrust_n"]);
+    let calibrated = dir.path().join("fit_predict.csv");
+    let plain = dir.path().join("uncalibrated.csv");
+    ok(&jetid(&["predict", "--model", s(&model), "--input", s(&truth), "--out", s(&plain)]), "jetid predict");
+    let (_, a) = read_csv(&calibrated);
+    let (_, b) = read_csv(&plain);
+    let moved = a[2].iter().zip(&b[2]).map(|(x, y)| (x - y).abs() / x.abs()).fold(0.0, f64::max);
+    assert!(moved > 1e-3, "the calibration offset must change the prediction ({moved})");
+    assert!(py.is_none_or(|e| e <= 1e-6) && c.is_none_or(|e| e <= 1e-6));
+}
+
+#[test]
+fn matlab_file_holds_the_transfer_functions_and_a_simulation() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, _) = fit(dir.path(), Some("thermal_soak"), None);
+    let file = dir.path().join("engine_model.m");
+    ok(&jetid(&["export", "--model", s(&model), "--format", "matlab", "--out", s(&file)]), "export matlab");
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.starts_with("function varargout = engine_model(command, varargin)"), "{}", &text[..80]);
+    assert!(text.contains("tf(o.tf_num_z, o.tf_den_z, m.dt)"));
+    assert!(text.contains("function out = simulate_all(m, u, aux, measured, dt)"));
+    let read = read_model(&model).unwrap();
+    let row = |xs: &[f64]| xs.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+    assert!(text.contains(&format!("m.dt = {:?};", read.dt_secs)));
+    for out in &read.outputs {
+        let tf = &out.wiener.linear.tf;
+        let at = text.find(&format!("o.name = '{}';", out.name)).unwrap_or_else(|| panic!("{}", out.name));
+        let section = &text[at..];
+        assert!(section.contains(&format!("o.tf.num = [{}];", row(&tf.num_zinv))), "{}", out.name);
+        assert!(section.contains(&format!("o.tf.den = [{}];", row(&tf.den_zinv))), "{}", out.name);
+        assert!(section.contains(&format!("o.coeffs = [{}];", row(&out.wiener.map.coeffs_scaled))));
+        let soak = &out.effects[0].params;
+        assert!(
+            section.contains(&format!("o.soak = [{:?}, {:?}];", soak["gain"], soak["tau_s"])),
+            "{}",
+            out.name
+        );
+    }
+    if Command::new("octave").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        let run = dir.path().join("other.csv");
+        let out = dir.path().join("octave.csv");
+        let expected = dir.path().join("predict.csv");
+        ok(&jetid(&["predict", "--model", s(&model), "--input", s(&run), "--out", s(&expected)]), "predict");
+        let call = format!("engine_model('csv', '{}', '{}')", s(&run), s(&out));
+        ok(
+            &Command::new("octave")
+                .current_dir(dir.path())
+                .args(["--quiet", "--eval", &call])
+                .output()
+                .unwrap(),
+            "octave",
+        );
+        agree(&expected, &out);
+    } else {
+        eprintln!("SKIPPED: octave is not installed, so the MATLAB file is checked as text only");
+    }
+}
+
+/// `jetid` fails with status 1, no panic, and a message holding every `needle`.
+fn fails_with(args: &[&str], needles: &[&str]) {
+    let o = jetid(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for needle in needles {
+        assert!(err.contains(needle), "{args:?}: '{needle}' not in: {err}");
+    }
+}
+
+#[test]
+fn errors_name_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, _) = fit(dir.path(), None, Some("thrust_n"));
+    let out = dir.path().join("m.py");
+    fails_with(
+        &["export", "--model", s(&dir.path().join("missing.json")), "--format", "python", "--out", s(&out)],
+        &["missing.json"],
+    );
+    fails_with(
+        &["export", "--model", s(&model), "--format", "fortran", "--out", s(&out)],
+        &["fortran", "python", "matlab"],
+    );
+    // An --out inside a regular file.
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, "x").unwrap();
+    fails_with(
+        &["export", "--model", s(&model), "--format", "c", "--out", s(&blocker.join("sub/m.c"))],
+        &["cannot create folder", "file"],
+    );
+    assert!(!blocker.join("sub").exists());
+    fails_with(
+        &["export", "--model", s(&model), "--format", "matlab", "--out", s(&dir.path().join("2nd-model.m"))],
+        &["2nd-model", "MATLAB identifier"],
+    );
+
+    // What the generated code cannot represent: a name that cannot be a CSV header cell, an
+    // unstable linear block, an effect the linear block has no spool for.
+    let edited = |name: &str, edit: &dyn Fn(&mut jetid::io::model_file::ModelFile)| {
+        let mut m = read_model(&model).unwrap();
+        edit(&mut m);
+        let path = dir.path().join(name);
+        jetid::io::model_file::write_model(&path, &m).unwrap();
+        path
+    };
+    let quoted = edited("quoted.json", &|m| m.outputs[0].name = "thrust, \"net\"".into());
+    fails_with(
+        &["export", "--model", s(&quoted), "--format", "python", "--out", s(&out)],
+        &["thrust, \\\"net\\\"", "cannot be exported"],
+    );
+    let unstable = edited("unstable.json", &|m| {
+        let tf = &mut m.outputs[0].wiener.linear.tf;
+        tf.den_zinv = vec![1.0, -1.5];
+        tf.num_zinv = vec![0.0, 1.0];
+    });
+    fails_with(
+        &["export", "--model", s(&unstable), "--format", "c", "--out", s(&out)],
+        &["thrust_n", "unstable"],
+    );
+    let no_spool = edited("no_spool.json", &|m| {
+        let tf = &mut m.outputs[0].wiener.linear.tf;
+        tf.den_zinv = vec![1.0, 0.5];
+        tf.num_zinv = vec![0.0, 1.5];
+        m.outputs[0].effects.push(jetid::io::model_file::EffectRecord {
+            id: "asymmetric_dynamics".parse().unwrap(),
+            params: [("decel_factor".to_owned(), 2.0)].into_iter().collect(),
+        });
+    });
+    fails_with(
+        &["export", "--model", s(&no_spool), "--format", "python", "--out", s(&out)],
+        &["thrust_n", "asymmetric_dynamics", "real pole"],
+    );
+    assert!(!out.exists(), "nothing is written on an error");
+}

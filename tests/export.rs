@@ -438,3 +438,49 @@ fn errors_name_what_is_wrong() {
     );
     assert!(!out.exists(), "nothing is written on an error");
 }
+
+/// The exported `operating_point` is the local model of the report's operating points (the same
+/// frequency response at every point), for a scheduled spool and for sensor dynamics.
+#[test]
+fn the_python_operating_points_are_the_reports() {
+    if !have_python() {
+        return;
+    }
+    for effect in ["scheduled_time_constant", "sensor_dynamics"] {
+        let dir = tempfile::tempdir().unwrap();
+        let (model, _) = fit(dir.path(), Some(effect), Some("shaft_speed_rpm"));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit/report.json")).unwrap())
+                .unwrap();
+        let points = report["outputs"]["shaft_speed_rpm"]["operating_points"].as_array().unwrap().clone();
+        assert!(points.len() >= 9, "{effect}: {} points", points.len());
+        let program = dir.path().join("jetid_model.py");
+        ok(
+            &jetid(&["export", "--model", s(&model), "--format", "python", "--out", s(&program)]),
+            "export python",
+        );
+        let omegas = [0.05, 0.5, 2.0, 8.0];
+        for p in [&points[0], &points[4], &points[8]] {
+            let u = p["u"].as_f64().unwrap();
+            let local: jetid::core::numerics::tf::DiscreteTf =
+                serde_json::from_value(p["local"].clone()).unwrap();
+            let script = format!(
+                "import sys, numpy as np; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
+                 g = m.operating_point('shaft_speed_rpm', {u:?})\n\
+                 for w in {omegas:?}:\n    r = g(np.exp(1j * w * m.DT))\n    print(repr(float(r.real)), repr(float(r.imag)))",
+                dir = s(dir.path()),
+            );
+            let printed =
+                ok(&Command::new("python3").args(["-c", &script]).output().unwrap(), "operating_point");
+            for (line, w) in printed.lines().zip(omegas) {
+                let parts: Vec<f64> = line.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                let expected = local.freq_response(w);
+                let got = num_complex::Complex64::new(parts[0], parts[1]);
+                assert!(
+                    (got - expected).norm() <= 1e-9 * expected.norm().max(1e-300),
+                    "{effect}, u* = {u}, ω = {w}: {got} vs {expected}"
+                );
+            }
+        }
+    }
+}

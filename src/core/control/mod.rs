@@ -5,6 +5,6 @@ pub mod operating_point;
 
 pub use d2c::{ContinuousTf, D2cError, c2d_zoh, d2c_zoh};
 pub use operating_point::{
-    LocalPole, OperatingPoint, OperatingPointError, PointSource, StepFigures, local_dynamics,
-    operating_points,
+    LocalPole, OperatingPoint, OperatingPointError, PointSource, StepFigures, effect_dynamics,
+    local_dynamics, operating_points,
 };

@@ -189,7 +189,7 @@ pub fn local_dynamics(model: &ExtendedModel, u: f64) -> Result<DiscreteTf, Strin
         .effects
         .iter()
         .any(|e| matches!(e, EffectBlock::ScheduledTimeConstant(_) | EffectBlock::AsymmetricDynamics(_)));
-    let (mut num, mut den) = if split_needed {
+    let (num, den) = if split_needed {
         let (poles, zeros) = model.roots().map_err(|e| e.to_string())?;
         let split = AsymmetricDynamics::split(&poles, &zeros, dt).map_err(|e| e.to_string())?;
         let factor = scheduled.map_or(1.0, |s| s.factor(u, u)).max(f64::MIN_POSITIVE);
@@ -212,6 +212,21 @@ pub fn local_dynamics(model: &ExtendedModel, u: f64) -> Result<DiscreteTf, Strin
     } else {
         (tf.num_zinv.iter().map(|b| b / g1).collect(), tf.den_zinv.clone())
     };
+    let (fixed_num, fixed_den) = effect_dynamics(model);
+    let (num, den) = (convolve(&num, &fixed_num), convolve(&den, &fixed_den));
+    let local = DiscreteTf::new(num, den, dt).map_err(|e| e.to_string())?;
+    // Unit steady gain by construction; dividing by the computed gain removes rounding.
+    let gain = local.dc_gain().map_err(|e| e.to_string())?;
+    DiscreteTf::new(local.num_zinv.iter().map(|b| b / gain).collect(), local.den_zinv.clone(), dt)
+        .map_err(|e| e.to_string())
+}
+
+/// The part of every local model that does not depend on the operating point, in z⁻¹ (numerator,
+/// denominator; unit steady gain): the effects' linear dynamics — a dead time's interpolating FIR,
+/// the soak branch, the sensor's lag and resonance — in series.
+pub fn effect_dynamics(model: &ExtendedModel) -> (Vec<f64>, Vec<f64>) {
+    let dt = model.wiener.linear.tf.dt_secs;
+    let (mut num, mut den) = (vec![1.0], vec![1.0]);
     for effect in &model.effects {
         let (n, d) = match effect {
             EffectBlock::TransportDelay(delay) => {
@@ -231,11 +246,7 @@ pub fn local_dynamics(model: &ExtendedModel, u: f64) -> Result<DiscreteTf, Strin
         num = convolve(&num, &n);
         den = convolve(&den, &d);
     }
-    let local = DiscreteTf::new(num, den, dt).map_err(|e| e.to_string())?;
-    // Unit steady gain by construction; dividing by the computed gain removes rounding.
-    let gain = local.dc_gain().map_err(|e| e.to_string())?;
-    DiscreteTf::new(local.num_zinv.iter().map(|b| b / gain).collect(), local.den_zinv.clone(), dt)
-        .map_err(|e| e.to_string())
+    (num, den)
 }
 
 fn local_poles(tf: &DiscreteTf) -> Result<Vec<LocalPole>, poly::PolyError> {

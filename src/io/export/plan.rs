@@ -134,6 +134,9 @@ pub struct OutputPlan {
     pub linear: Linear,
     pub soak: Option<ThermalSoak>,
     pub output_steps: Vec<OutputStep>,
+    /// The effects' linear dynamics every local model shares (dead time, soak, sensor; unit steady
+    /// gain), as `core::control::effect_dynamics` builds them.
+    pub effect_dynamics: Filter,
     /// Names of the applied effects, in signal-path order (for the generated file's header).
     pub effects: Vec<&'static str>,
 }
@@ -281,6 +284,10 @@ fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
         linear: Linear::Direct(Filter::of(tf)),
         soak: None,
         output_steps: Vec::new(),
+        effect_dynamics: {
+            let (num_zinv, den_zinv) = crate::core::control::effect_dynamics(&model);
+            Filter { num_zinv, den_zinv, steady_gain: 1.0 }
+        },
         effects: model.effects.iter().map(|e| e.id().name()).collect(),
     };
     let (mut decel, mut schedule, mut split) = (None, None, false);

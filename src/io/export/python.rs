@@ -107,6 +107,7 @@ fn output(o: &OutputPlan) -> String {
         ("split", option(split)),
         ("soak", option(o.soak.as_ref().map(|s| format!("({}, {})", num(s.gain), num(s.tau_s))))),
         ("output_steps", format!("[{}]", output_steps.join(", "))),
+        ("effect_dynamics", filter(&o.effect_dynamics)),
     ];
     let body: Vec<String> = fields.iter().map(|(k, v)| format!("\n        {k:?}: {v}")).collect();
     format!("{{{},\n    }}", body.join(","))
@@ -445,15 +446,53 @@ def simulate(u, aux=None, measured=None, dt=DT):
     return out
 
 
+def _tf_zinv(num, den):
+    """A control.TransferFunction from coefficients in z^-1 (padded to equal length)."""
+    n = max(len(num), len(den))
+    return control.TransferFunction(list(num) + [0.0] * (n - len(num)), list(den) + [0.0] * (n - len(den)), DT)
+
+
+def local_dynamics(output, u_star):
+    """The unit-steady-gain local dynamics at the steady input u_star, in z^-1 (num, den), as jetid's
+    operating points build them: the linear block (its spool at the time constant of u_star when
+    scheduled; the rising one when asymmetric), then the effects' dead time, soak and sensor."""
+    p = OUTPUTS[output]
+    s = p["split"]
+    if s is None:
+        g1 = p["tf"]["steady_gain"]
+        num, den = np.array(p["tf"]["num"]) / g1, np.array(p["tf"]["den"])
+    else:
+        factor = 1.0
+        if s["schedule"] is not None:
+            log_ratio, state_log_ratio, ref, span = s["schedule"]
+            factor = math.exp(-(log_ratio + state_log_ratio) * (u_star - ref) / span)
+        f = max(factor, _MIN_POSITIVE)
+        mag = math.exp(s["ln_root"][0] / f)
+        re, im = mag * math.cos(s["ln_root"][1] / f), mag * math.sin(s["ln_root"][1] / f)
+        if s["pair"]:
+            a1, a2 = 2.0 * re, re * re + im * im
+            spool_num, spool_den = [0.0, 0.0, 1.0 - a1 + a2], [1.0, -a1, a2]
+        else:
+            spool_num, spool_den = [0.0, 1.0 - re], [1.0, -re]
+        num, den = np.convolve([0.0] * s["dead_time"] + [1.0], spool_num), np.array(spool_den)
+        if s["rest"] is not None:
+            num, den = np.convolve(num, s["rest"]["num"]), np.convolve(den, s["rest"]["den"])
+    fixed = p["effect_dynamics"]
+    num, den = np.convolve(num, fixed["num"]), np.convolve(den, fixed["den"])
+    return num / (np.sum(num) / np.sum(den)), den
+
+
 def operating_point(output, u_star):
     """The local linear model at the steady state of input u_star (on a standard day, without
-    calibration offset): K G(z)/G(1), with K = f'(v*) G(1) the local gain and v* = G(1) u_star +
-    offset the linear block's steady output. Delay, soak and sensor dynamics are not included."""
+    calibration offset), as a control.TransferFunction: K G(z)/G(1) with K = f'(v*) G(1) the local
+    gain, v* = G(1) u_star + offset the linear block's steady output, and the effects linearised
+    where they act (see local_dynamics)."""
     p = OUTPUTS[output]
     g1 = p["tf"]["steady_gain"]
     v_star = g1 * u_star + p["offset"]
     k = static_map_slope(output, v_star) * g1
-    return TF[output] * (k / g1)
+    num, den = local_dynamics(output, u_star)
+    return _tf_zinv(k * num, den)
 
 
 def _median_step(t):

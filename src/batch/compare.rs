@@ -3,18 +3,25 @@
 use std::collections::BTreeMap;
 
 use crate::core::compare::{
-    FrequencyComparison, MonteCarloSummary, OutputModels, error_boxes, frequency_comparison, monte_carlo_all,
+    FrequencyComparison, MonteCarloSummary, OutputModels, error_boxes, failure_reasons, frequency_comparison,
+    monte_carlo_all,
 };
 use crate::core::identification::pipeline;
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::core::numerics::noise_fit::Distribution;
+use crate::core::numerics::stats::quantile;
 use crate::core::run::Run;
 use crate::io::report::OutputReport;
 
 use super::Timings;
 use super::load::Runs;
 
-/// Every model simulated on every scored run that records `output`, into `report.models`.
+/// Share of the identification input left out at each end of the identified range (a dropout or
+/// spike must not stretch it), as for the operating points.
+const RANGE_TAIL: f64 = 0.01;
+
+/// Every model simulated on every scored run that records `output`, into `report.models`; why a
+/// failing one fails, into `report.failure_reasons`.
 pub fn score_output(
     models: &OutputModels,
     runs: &Runs,
@@ -22,6 +29,8 @@ pub fn score_output(
     report: &mut OutputReport,
     notes: &mut Vec<String>,
 ) {
+    let u = &runs.ident.input.values;
+    let ident_input = (quantile(u, RANGE_TAIL), quantile(u, 1.0 - RANGE_TAIL));
     for run in runs.scored() {
         if run.output(output).is_none() {
             notes.push(format!("run '{}' has no '{output}' column; not scored for it", run.name));
@@ -30,6 +39,16 @@ pub fn score_output(
         for (kind, y_hat) in models.simulate_run(run) {
             match pipeline::score(run, output, y_hat) {
                 Ok(p) => {
+                    if p.metrics.fails()
+                        && let Some(y) = run.output(output)
+                    {
+                        let why = failure_reasons(&y.values, &p.y_hat, &run.input.values, ident_input);
+                        report
+                            .failure_reasons
+                            .entry(kind.report_name().to_owned())
+                            .or_default()
+                            .insert(run.name.clone(), why.join("; "));
+                    }
                     report
                         .models
                         .entry(kind.report_name().to_owned())

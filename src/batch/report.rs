@@ -57,6 +57,7 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
         initial_state_meaning: models.initial_state.describe().to_owned(),
         steady_states: None,
         failing: Vec::new(),
+        failure_reasons: BTreeMap::new(),
         operating_points: Vec::new(),
         continuous: None,
     }

@@ -14,10 +14,12 @@ use crate::core::numerics::metrics::{Metrics, metrics};
 use crate::core::numerics::noise_fit::{Distribution, NoiseFitReport};
 use crate::core::run::Run;
 
+mod failure;
 mod model_kind;
 mod models;
 mod studies;
 
+pub use failure::failure_reasons;
 pub use model_kind::{ModelKind, PaperOutput, PaperRow};
 pub use models::{Cancelled, OutputModels, fit_baselines, fit_baselines_with_progress, scaled};
 pub use studies::{

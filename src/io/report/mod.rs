@@ -66,9 +66,12 @@ pub struct OutputReport {
     /// words: "runs disagree on the steady state by X %: …" or "… agree …").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub steady_states: Option<String>,
-    /// Every model that fails on a run (fit below 50 %), in words.
+    /// Every model that fails on a run (fit below 50 %), in words, with why.
     #[serde(default)]
     pub failing: Vec<String>,
+    /// model → run → why it fails there (only failing models).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub failure_reasons: BTreeMap<String, BTreeMap<String, String>>,
     /// Operating points across the identified range and at the steady run's plateau, each with
     /// its local linear model.
     #[serde(default)]
@@ -166,7 +169,11 @@ pub fn failing_models(report: &OutputReport) -> Vec<String> {
         .iter()
         .flat_map(|(model, runs)| {
             runs.iter().filter_map(move |(run, m)| {
-                m.failure().map(|f| format!("{} on '{run}': {f}", model_title(model)))
+                let why = report.failure_reasons.get(model).and_then(|r| r.get(run));
+                m.failure().map(|f| match why {
+                    Some(why) => format!("{} on '{run}': {f}: {why}", model_title(model)),
+                    None => format!("{} on '{run}': {f}", model_title(model)),
+                })
             })
         })
         .collect()

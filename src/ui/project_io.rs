@@ -46,7 +46,12 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         name: project_path.file_stem().map(|s| s.to_string_lossy().into_owned()),
         ident: ident.map(IdentEntry::One),
         validate,
-        held_out: Vec::new(),
+        held_out: session
+            .runs
+            .iter()
+            .filter(|r| r.role == Role::HeldOut)
+            .map(|r| run_entry(r, base))
+            .collect(),
         chirp,
         steady,
         outputs,
@@ -128,8 +133,8 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
         .ident
         .iter()
         .map(|s| (s, Role::Identification))
-        // The app has no held-out role yet: held-out runs are shown (and scored) as validation runs.
-        .chain(project.validate.iter().chain(&project.held_out).map(|s| (s, Role::Validation)))
+        .chain(project.validate.iter().map(|s| (s, Role::Validation)))
+        .chain(project.held_out.iter().map(|s| (s, Role::HeldOut)))
         .chain(project.chirp.iter().map(|s| (s, Role::Chirp)))
         .chain(project.steady.iter().map(|s| (s, Role::Steady)));
     for (source, role) in sources {

@@ -145,18 +145,30 @@ struct ScoredSource {
     run: Arc<Run>,
 }
 
-/// Validation runs, then chirp runs, that have the output and the identification run's sampling.
+/// Validation runs, held-out runs, then chirp runs, that have the output and the identification
+/// run's sampling. A run resampled from an irregular log onto its own median step (the load
+/// option "resample") is put on the identification run's grid, as the batch does.
 fn scored_runs(session: &Session, ident: &Run, output: &str, notes: &mut Vec<String>) -> Vec<ScoredSource> {
     notes.clear();
     let mut scored = Vec::new();
-    for role in [Role::Validation, Role::Chirp] {
+    for role in [Role::Validation, Role::HeldOut, Role::Chirp] {
         for (index, entry) in session.runs.iter().enumerate().filter(|(_, r)| r.role == role) {
             let name = entry.display_name();
+            let off_grid = (entry.run.dt_secs / ident.dt_secs - 1.0).abs() > DT_TOLERANCE;
             if entry.run.output(output).is_none() {
                 notes.push(format!("{} run {name} has no {output} column; not scored", role.label()));
-            } else if (entry.run.dt_secs / ident.dt_secs - 1.0).abs() > DT_TOLERANCE {
+            } else if off_grid && entry.options.resample {
                 notes.push(format!(
-                    "{} run {name} is sampled every {:.4} s, the identification run every {:.4} s; not scored",
+                    "{} run {name}: resampled again from {:.5} s onto the identification run's {:.5} s grid",
+                    role.label(),
+                    entry.run.dt_secs,
+                    ident.dt_secs
+                ));
+                scored.push(ScoredSource { index, role, run: Arc::new(entry.run.resampled(ident.dt_secs)) });
+            } else if off_grid {
+                notes.push(format!(
+                    "{} run {name} is sampled every {:.4} s, the identification run every {:.4} s; not scored \
+                     (the load option \"resample\" puts it on the identification run's grid)",
                     role.label(),
                     entry.run.dt_secs,
                     ident.dt_secs

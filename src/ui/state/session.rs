@@ -18,17 +18,22 @@ use crate::ui::state::setup::ModelSetup;
 pub enum Role {
     Identification,
     Validation,
+    /// Scored beside the validation runs, never used to choose anything (the diagnosis, the
+    /// effects and the live error read only validation runs).
+    HeldOut,
     Chirp,
     Steady,
 }
 
 impl Role {
-    pub const ALL: [Self; 4] = [Self::Identification, Self::Validation, Self::Chirp, Self::Steady];
+    pub const ALL: [Self; 5] =
+        [Self::Identification, Self::Validation, Self::HeldOut, Self::Chirp, Self::Steady];
 
     pub fn label(self) -> &'static str {
         match self {
             Self::Identification => "identification",
             Self::Validation => "validation",
+            Self::HeldOut => "held out",
             Self::Chirp => "chirp",
             Self::Steady => "steady",
         }
@@ -41,6 +46,8 @@ impl Role {
             Self::Chirp
         } else if stem.contains("steady") {
             Self::Steady
+        } else if stem.contains("held") {
+            Self::HeldOut
         } else if stem.contains("valid") {
             Self::Validation
         } else if stem.contains("ident") || !session.runs.iter().any(|r| r.role == Self::Identification) {

@@ -115,7 +115,7 @@ pub fn line_key_ui(ui: &mut egui::Ui, colour: egui::Color32, width: f32, dashed:
     );
     let size = egui::vec2(STRETCH + GAP + galley.size().x, galley.size().y);
     let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
-    response.widget_info(|| egui::WidgetInfo::labeled(egui::WidgetType::Label, true, name));
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, name));
     let y = rect.center().y;
     let points = [egui::pos2(rect.left(), y), egui::pos2(rect.left() + STRETCH, y)];
     let stroke = egui::Stroke::new(width, colour);

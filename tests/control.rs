@@ -4,7 +4,8 @@
 #![allow(clippy::unwrap_used)]
 use jetid::core::control::{PointSource, operating_points};
 use jetid::core::effects::{
-    EffectBlock, ExtendedModel, ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
+    EffectBlock, ExtendedModel, ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak,
+    TransportDelay,
 };
 use jetid::core::identification::static_map::StaticMap;
 use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
@@ -74,7 +75,12 @@ fn local_gains_are_the_slope_of_the_simulated_steady_states() {
         for p in &points {
             let h = 1e-3;
             let fd = (settled(&m, p.u + h) - settled(&m, p.u - h)) / (2.0 * h);
-            assert!((p.gain - fd).abs() <= 1e-5 * fd.abs().max(1.0), "{label}, u = {}: gain {} vs {fd}", p.u, p.gain);
+            assert!(
+                (p.gain - fd).abs() <= 1e-5 * fd.abs().max(1.0),
+                "{label}, u = {}: gain {} vs {fd}",
+                p.u,
+                p.gain
+            );
             assert!((p.y - settled(&m, p.u)).abs() <= 1e-8 * p.y.abs(), "{label}, u = {}: y* {}", p.u, p.y);
         }
         // The concave map and the kink make the gain fall along the range.

@@ -89,7 +89,12 @@ impl SensorDynamics {
     /// unit states and inputs (it is linear), and `pos = e₁ᵀ(zI − M)⁻¹(n₀ + z·n₁)·w`.
     pub fn discrete_tf(&self, dt_secs: f64) -> (Vec<f64>, Vec<f64>) {
         let col = |pos, vel, w0, w1| self.advance(pos, vel, w0, w1, dt_secs);
-        let (m1, m2, n0, n1) = (col(1.0, 0.0, 0.0, 0.0), col(0.0, 1.0, 0.0, 0.0), col(0.0, 0.0, 1.0, 0.0), col(0.0, 0.0, 0.0, 1.0));
+        let (m1, m2, n0, n1) = (
+            col(1.0, 0.0, 0.0, 0.0),
+            col(0.0, 1.0, 0.0, 0.0),
+            col(0.0, 0.0, 1.0, 0.0),
+            col(0.0, 0.0, 0.0, 1.0),
+        );
         // M = [[m1.0, m2.0], [m1.1, m2.1]].
         let (m11, m12, m21, m22) = (m1.0, m2.0, m1.1, m2.1);
         let num = vec![n1.0, n0.0 - m22 * n1.0 + m12 * n1.1, -m22 * n0.0 + m12 * n0.1];

@@ -255,3 +255,103 @@ fn screenshots_are_written_as_png() {
     let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(leftovers.len(), 1, "no temporary file left: {leftovers:?}");
 }
+
+/// The app on one good run in `dir`, with no native file dialog (as on a bare X server).
+fn app_without_native_dialogs(dir: &Path) -> Harness<'static, App> {
+    let good = write_good_run(dir, "good.csv");
+    let mut app = App::new(session_with(&[(&good, Role::Identification)]));
+    app.view.native_dialogs = false;
+    let mut harness = harness(app);
+    harness.run();
+    harness
+}
+
+#[test]
+fn without_a_native_dialog_save_project_asks_for_the_path_in_the_app() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut harness = app_without_native_dialogs(dir.path());
+
+    harness.get_by_label("File").click();
+    harness.run();
+    harness.get_by_label("Save project…").click();
+    harness.run();
+
+    // The window is prefilled with a project file beside the run.
+    harness.get_by_label("Save project");
+    let expected = dir.path().join("project.toml");
+    let field = harness.get_by_role_and_label(A11yRole::TextInput, "Path");
+    assert_eq!(field.value().as_deref(), Some(expected.display().to_string().as_str()));
+
+    harness.get_by_label("OK").click();
+    harness.run();
+    let text = std::fs::read_to_string(&expected).expect("OK writes the project");
+    assert!(text.contains("good.csv"), "{text}");
+    assert!(harness.state().view.path_prompt.is_none(), "the window closes once written");
+    assert!(harness.query_by_label("Save project").is_none());
+    let status = harness.state().view.status.clone().unwrap_or_default();
+    assert!(status.starts_with("Saved the project as"), "{status}");
+}
+
+#[test]
+fn a_path_that_cannot_be_written_keeps_the_window_open_with_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut harness = app_without_native_dialogs(dir.path());
+
+    harness.state_mut().apply(Command::ChooseFile(jetid::ui::state::command::FileAction::ExportModel));
+    harness.run();
+    harness.get_by_label("Export model");
+    // A folder under a file cannot be created.
+    let blocked = dir.path().join("good.csv").join("model.json");
+    harness.state_mut().view.path_prompt.as_mut().expect("the path window is open").text =
+        blocked.display().to_string();
+    harness.get_by_label("OK").click();
+    harness.run();
+
+    let prompt = harness.state().view.path_prompt.as_ref().expect("the window stays open");
+    let error = prompt.error.clone().expect("the failure is shown");
+    assert!(error.contains("exporting the model to"), "{error}");
+    assert!(harness.query_by_label_contains("exporting the model to").is_some(), "the error is on screen");
+    assert!(!blocked.exists());
+
+    harness.get_by_label("Cancel").click();
+    harness.run();
+    assert!(harness.state().view.path_prompt.is_none());
+    assert!(harness.query_by_label("Export model").is_none());
+}
+
+#[test]
+fn a_restored_session_says_so_and_can_start_fresh() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = write_good_run(dir.path(), "a.csv");
+    let saved = App::new(session_with(&[(&a, Role::Identification)])).saved_session();
+
+    let mut harness = harness(App::startup(Some(&saved)));
+    harness.run();
+    harness.get_by_label("Restored the last session (1 run) —");
+    harness.get_by_label("Start fresh").click();
+    harness.run();
+
+    // The first start's session: the bundled sample runs.
+    let fresh = App::startup(None);
+    let paths = |app: &App| app.session.runs.iter().map(|r| r.path.clone()).collect::<Vec<_>>();
+    assert_eq!(paths(harness.state()), paths(&fresh));
+    assert!(!paths(harness.state()).contains(&a));
+    assert!(harness.query_by_label_contains("Restored the last session").is_none(), "the notice goes");
+    assert_eq!(harness.state().saved_session(), fresh.saved_session(), "the fresh session is saved on close");
+}
+
+#[test]
+fn a_first_start_has_no_restore_notice_and_keep_hides_it() {
+    let mut harness = harness(App::startup(None));
+    harness.run();
+    assert!(harness.query_by_label_contains("Restored the last session").is_none());
+
+    let saved = harness.state().saved_session();
+    let mut harness = self::harness(App::startup(Some(&saved)));
+    harness.run();
+    harness.get_by_label("Restored the last session (4 runs) —");
+    harness.get_by_label("Keep").click();
+    harness.run();
+    assert!(harness.query_by_label_contains("Restored the last session").is_none());
+    assert_eq!(harness.state().session.runs.len(), 4, "Keep keeps the session");
+}

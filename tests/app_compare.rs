@@ -101,6 +101,13 @@ fn showing_compare_starts_a_job_with_progress_and_fills_table_1() {
         assert!(harness.query_all_by_label(reference).count() >= 1, "{reference}");
     }
     assert!(harness.query_all_by_label("1.3429").count() >= 1);
+    // The notes under the table wrap at its width, so the summary beside it stays in the window
+    // and the plots follow below.
+    let width = harness.ctx.content_rect().width();
+    let summary = harness.get_by_label_contains("cut-off on");
+    assert!(summary.rect().max.x <= width, "the summary ends at {} of {width} px", summary.rect().max.x);
+    harness.get_by_label("Traces on run:");
+    harness.get_by_label_contains("Monte Carlo error propagation");
 }
 
 #[test]

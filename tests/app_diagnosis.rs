@@ -102,16 +102,22 @@ fn hot_day_ambient_correction_is_found_applied_and_removed() {
     assert!(effects_in_setup(harness.state()).is_empty());
     let removed = live_rmspe(harness.state());
     assert!((removed - before).abs() < 1e-9 * before, "{before} vs {removed}");
+    // Back at the diagnosed model, the diagnosis is current again.
+    assert!(harness.query_by_label("Re-run diagnosis").is_none());
 
     // Undo brings the effect back, undo again is the state before it was applied.
     harness.state_mut().apply(Command::Undo);
     harness.run();
     assert_eq!(effects_in_setup(harness.state()), vec!["ambient_correction".to_owned()]);
     assert!((live_rmspe(harness.state()) - after).abs() < 1e-9 * after);
+    harness.get_by_label("Re-run diagnosis");
     harness.state_mut().apply(Command::Undo);
     harness.run();
     assert!(effects_in_setup(harness.state()).is_empty());
     assert!((live_rmspe(harness.state()) - before).abs() < 1e-9 * before);
+    assert!(harness.query_by_label("Re-run diagnosis").is_none(), "no stale banner after the Undo");
+    assert!(harness.query_by_label_contains("the ranking below is stale").is_none());
+    harness.get_by_label("Run again");
 }
 
 #[test]
@@ -206,6 +212,11 @@ fn soak_speed_ranks_thermal_soak_first_and_a_screenshot_app_can_apply_it() {
         jetid::ui::screenshot::screenshot_app(Some(&sample("soak/project.toml")), &[EffectId::ThermalSoak])
             .unwrap();
     assert_eq!(effects_in_setup(&app), vec!["thermal_soak".to_owned()]);
+    // The status bar names every output the effect went to, not only the last one.
+    assert_eq!(
+        app.view.status.as_deref(),
+        Some("Effect thermal_soak applied to shaft_speed_rpm and thrust_n")
+    );
     let after = live_rmspe(&app);
     assert!(after < before, "{before} -> {after}");
     // An unknown id never reaches the app: the command line refuses it (see batch_cli).

@@ -522,3 +522,29 @@ fn the_app_finds_steps_on_the_projects_steps_from_channel_and_saves_it() {
     let err = typo.cache.ident.as_ref().unwrap().segments.clone().unwrap_err();
     assert!(err.contains("steps_from = \"egt\"") && err.contains("no such channel"), "{err}");
 }
+
+#[test]
+fn an_invalid_clusters_status_fits_the_window_and_the_pointer_readout_is_under_the_plot() {
+    let mut harness = sample_harness(Tab::ZPlane);
+    let mut clusters = clusters_of(harness.state(), SPEED);
+    // A cluster where no segment has a root: valid for no segment.
+    clusters.push(Cluster::new(RootKind::Pole, Complex64::new(0.5, 0.5), 0.01));
+    harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: Some(clusters) });
+    harness.state_mut().settle();
+    harness.run();
+
+    let status = harness.get_by_label("too few");
+    let width = harness.ctx.content_rect().width();
+    assert!(status.rect().max.x <= width, "the status ends at {} of {width} px", status.rect().max.x);
+
+    let t = transform(&harness);
+    let plot = *t.frame();
+    harness.hover_at(plot.center());
+    harness.run();
+    let readout = harness.get_by_label_contains("pointer: z = ");
+    assert!(
+        readout.rect().min.y >= plot.max.y,
+        "the readout {:?} is below the plot {plot:?}",
+        readout.rect()
+    );
+}

@@ -101,7 +101,7 @@ pub fn output_figures(
                 &run.t_secs,
                 &y.values,
                 &traces,
-                output,
+                &figures::with_unit(output, &y.unit),
             ),
         );
     }

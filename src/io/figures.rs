@@ -238,6 +238,12 @@ pub(crate) fn tick_label(v: f64) -> String {
     if s == "-0" { "0".to_owned() } else { s.to_owned() }
 }
 
+/// An axis label with its unit as the figures write it, "thrust_n (N)" like "time (s)"; the name
+/// alone when the unit is unknown.
+pub fn with_unit(name: &str, unit: &str) -> String {
+    if unit.is_empty() { name.to_owned() } else { format!("{name} ({unit})") }
+}
+
 /// `v` with `digits` significant digits, for numbers quoted in legends.
 pub(crate) fn sig(v: f64, digits: usize) -> String {
     let a = v.abs();

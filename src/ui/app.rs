@@ -6,10 +6,11 @@ use crate::core::effects::EffectId;
 
 use crate::ui::derived::Derived;
 use crate::ui::derived::model_cache::IdentCache;
-use crate::ui::file_dialog::{PendingPick, PickPoll, PickPurpose};
+use crate::ui::file_dialog::{self, PendingPick, PickPoll, PickPurpose};
 use crate::ui::mapping_ui::{self, MappingDialog, MappingTarget};
 use crate::ui::panels_ui;
-use crate::ui::state::command::Command;
+use crate::ui::path_prompt::{self, PathPrompt};
+use crate::ui::state::command::{Command, FileAction};
 use crate::ui::state::session::{LoadFailure, Role, SavedSession, Session, SessionRun, file_label};
 use crate::ui::state::{Tab, ViewState};
 use crate::ui::views;
@@ -23,7 +24,12 @@ pub struct App {
 impl App {
     pub fn new(session: Session) -> Self {
         let selected_run = if session.runs.is_empty() { None } else { Some(0) };
-        Self { session, view: ViewState { selected_run, ..ViewState::default() }, cache: Derived::default() }
+        let view = ViewState {
+            selected_run,
+            native_dialogs: file_dialog::native_dialog_available(),
+            ..ViewState::default()
+        };
+        Self { session, view, cache: Derived::default() }
     }
 
     /// The app on a restored session, with the runs that failed to load shown as errors.
@@ -43,7 +49,11 @@ impl App {
         if let Some(saved) = saved.filter(|s| !s.runs.is_empty()) {
             let (session, restore_failures) = Session::restore(saved);
             if !session.runs.is_empty() {
-                return Self::with_failures(session, restore_failures);
+                let mut app = Self::with_failures(session, restore_failures);
+                // Say so: a user who expects the sample runs, or an empty app, should not have to
+                // guess where these runs came from.
+                app.view.restored_runs = Some(app.session.runs.len());
+                return app;
             }
             failures = restore_failures;
         }
@@ -129,12 +139,18 @@ impl App {
             Command::RemoveEffect { output, effect } => self.remove_effect(&output, &effect),
             Command::Undo => self.undo(),
             Command::Redo => self.redo(),
-            Command::ExportModel(path) => self.export_model(&path),
-            Command::ImportModel(path) => self.import_model(&path),
-            Command::SaveProject(path) => self.save_project(&path),
-            Command::OpenProject(path) => self.open_project(&path),
+            Command::StartFresh => self.start_fresh(),
+            Command::ExportModel(path) => self.file_action_shown(FileAction::ExportModel, &path),
+            Command::ImportModel(path) => self.file_action_shown(FileAction::ImportModel, &path),
+            Command::SaveProject(path) => self.file_action_shown(FileAction::SaveProject, &path),
+            Command::OpenProject(path) => self.file_action_shown(FileAction::OpenProject, &path),
             Command::OpenRunDialog => self.view.dialog_requested = Some(PickPurpose::Runs),
             Command::ChooseFile(action) => self.view.dialog_requested = Some(PickPurpose::File(action)),
+            Command::SubmitPath => self.submit_path(),
+            Command::ClosePathPrompt => {
+                self.view.path_prompt = None;
+                self.view.status = None;
+            }
             Command::DismissError(index) => {
                 if index < self.view.errors.len() {
                     self.view.errors.remove(index);
@@ -169,6 +185,7 @@ impl App {
                 }
             }
             Command::DismissAllFailures => self.view.failures.clear(),
+            Command::DismissRestoreNotice => self.view.restored_runs = None,
             Command::SelectRun(index) => {
                 if index < self.session.runs.len() {
                     self.view.selected_run = Some(index);
@@ -181,6 +198,22 @@ impl App {
             }
             Command::Quit => self.view.quit_requested = true,
         }
+    }
+
+    /// Replace the session by the one of a first start (what is saved on close from then on). The
+    /// tab and the way files are chosen stay.
+    fn start_fresh(&mut self) {
+        let mut fresh = Self::startup(None);
+        fresh.session.revision = self.session.revision + 1;
+        fresh.view.tab = self.view.tab;
+        fresh.view.native_dialogs = self.view.native_dialogs;
+        let what = if fresh.session.runs.is_empty() {
+            "an empty session".to_owned()
+        } else {
+            format!("the bundled sample runs ({})", fresh.session.runs.len())
+        };
+        fresh.view.status = Some(format!("Started fresh on {what}"));
+        *self = fresh;
     }
 
     /// Add a catalog effect to an output's setup (undoable); an unknown id is an error shown.
@@ -287,6 +320,11 @@ impl App {
         egui::Panel::top("menu_bar").show(ui, |ui| {
             commands.extend(panels_ui::menu_bar_ui(ui, &self.view.history));
         });
+        if let Some(runs) = self.view.restored_runs {
+            egui::Panel::top("restore_notice").show(ui, |ui| {
+                commands.extend(panels_ui::restore_notice_ui(ui, runs));
+            });
+        }
         egui::Panel::bottom("status_bar").show(ui, |ui| panels_ui::status_bar_ui(ui, &self.view));
         egui::Panel::left("runs_panel").resizable(true).default_size(250.0).min_size(180.0).show(ui, |ui| {
             commands.extend(panels_ui::runs_panel_ui(ui, &self.session, self.view.selected_run))
@@ -299,6 +337,9 @@ impl App {
         }
         if let Some(dialog) = &mut self.view.mapping {
             commands.extend(mapping_ui::mapping_ui(&ctx, dialog));
+        }
+        if let Some(prompt) = &mut self.view.path_prompt {
+            commands.extend(path_prompt::path_prompt_ui(&ctx, prompt));
         }
         if !self.view.errors.is_empty() {
             commands.extend(panels_ui::errors_ui(&ctx, &self.view.errors));
@@ -317,6 +358,8 @@ impl App {
         }
         if let Some(purpose) = self.view.dialog_requested.take() {
             self.open_picker(&ctx, purpose);
+            // Draw the path field (or the "Choosing a file…" status) now, not at the next input.
+            ctx.request_repaint();
         }
         if self.view.quit_requested {
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
@@ -368,15 +411,59 @@ impl App {
         views::selected_output(&self.view, &self.cache)
     }
 
-    fn open_picker(&mut self, ctx: &egui::Context, purpose: PickPurpose) {
-        if self.view.picker.is_some() {
-            return;
+    /// A file action whose failure goes to the error window.
+    fn file_action_shown(&mut self, action: FileAction, path: &std::path::Path) {
+        if let Err(err) = self.file_action(action, path) {
+            self.push_error(&err);
         }
-        let start_dir = self
-            .view
+    }
+
+    /// Use the in-app path field's path. A model or project file that fails keeps the field open
+    /// with the error; a run file that fails goes to the load-failure window like any other.
+    fn submit_path(&mut self) {
+        let Some(mut prompt) = self.view.path_prompt.take() else { return };
+        let path = prompt.path();
+        match prompt.purpose {
+            PickPurpose::Runs => {
+                let role = Role::guess_from_path(&path, &self.session);
+                self.apply(Command::load(path, role));
+            }
+            PickPurpose::File(action) => {
+                if let Err(err) = self.file_action(action, &path) {
+                    self.view.status = Some(format!("{} failed", prompt.title()));
+                    prompt.error = Some(format!("{err:#}"));
+                    self.view.path_prompt = Some(prompt);
+                }
+            }
+        }
+    }
+
+    /// The folder a file dialog starts in: the selected run's.
+    fn start_dir(&self) -> Option<std::path::PathBuf> {
+        self.view
             .selected_run
             .and_then(|i| self.session.runs.get(i))
-            .and_then(|r| r.path.parent().map(ToOwned::to_owned));
+            .and_then(|r| r.path.parent().map(ToOwned::to_owned))
+    }
+
+    /// The in-app path field for `purpose`, starting in the selected run's folder (else the
+    /// working folder).
+    fn open_path_prompt(&mut self, purpose: PickPurpose, note: Option<String>) {
+        let dir = self.start_dir().or_else(|| std::env::current_dir().ok()).unwrap_or_default();
+        let mut prompt = PathPrompt::new(purpose, &dir);
+        prompt.note = note;
+        self.view.status = Some(format!("{}: type the path", prompt.title()));
+        self.view.path_prompt = Some(prompt);
+    }
+
+    fn open_picker(&mut self, ctx: &egui::Context, purpose: PickPurpose) {
+        if self.view.picker.is_some() || self.view.path_prompt.is_some() {
+            return;
+        }
+        if !self.view.native_dialogs {
+            return self.open_path_prompt(purpose, None);
+        }
+        let start_dir = self.start_dir();
         let ctx = ctx.clone();
         let repaint = move || ctx.request_repaint();
         self.view.picker = Some(match purpose {
@@ -389,7 +476,17 @@ impl App {
     fn poll_picker(&mut self) {
         let Some(picker) = &self.view.picker else { return };
         let purpose = picker.purpose;
-        let PickPoll::Done(paths) = picker.poll() else { return };
+        let paths = match picker.poll() {
+            PickPoll::Waiting => return,
+            PickPoll::Done(paths) => paths,
+            PickPoll::NoDialog => {
+                // No dialog came up; ask here from now on.
+                self.view.picker = None;
+                self.view.native_dialogs = false;
+                let note = "The system's file dialog could not be opened.".to_owned();
+                return self.open_path_prompt(purpose, Some(note));
+            }
+        };
         self.view.picker = None;
         self.view.status = None;
         for path in paths {

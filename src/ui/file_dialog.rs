@@ -1,13 +1,18 @@
 //! The native file dialogs (open runs, import/export a model, open/save a project), run off the UI
 //! thread so the app keeps repainting while one is open. The result comes back through a channel
 //! that the app polls each frame.
+//!
+//! Where no native dialog can appear (on Linux: no XDG desktop portal and no `zenity`, as on a bare
+//! X server), rfd answers at once as if the user had cancelled. The app then asks for the path
+//! in a window of its own ([`crate::ui::path_prompt`]) rather than doing nothing.
 use std::future::Future;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::pin::pin;
 use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::task::{Context, Poll, Wake, Waker};
 use std::thread::{self, Thread};
+use std::time::{Duration, Instant};
 
 use crate::ui::state::command::FileAction;
 
@@ -21,7 +26,8 @@ pub enum PickPurpose {
 /// A file dialog in progress.
 pub struct PendingPick {
     pub purpose: PickPurpose,
-    rx: Receiver<Vec<PathBuf>>,
+    /// The chosen files and how long the dialog took to answer.
+    rx: Receiver<(Vec<PathBuf>, Duration)>,
 }
 
 /// What polling a pending dialog gave.
@@ -30,6 +36,34 @@ pub enum PickPoll {
     Waiting,
     /// Closed: the chosen files (empty when cancelled).
     Done(Vec<PathBuf>),
+    /// Came back empty sooner than anyone can cancel a dialog: no dialog was shown.
+    NoDialog,
+}
+
+/// A dialog that comes back empty within this time was never on screen: a person needs longer to
+/// see a dialog and cancel it, while rfd answers in a few milliseconds when it has no dialog to
+/// show.
+const NO_DIALOG_WITHIN: Duration = Duration::from_millis(300);
+
+/// Whether a native file dialog can appear. On Linux and the BSDs rfd asks the XDG desktop portal
+/// over the D-Bus session bus and falls back to `zenity`: with neither a session bus nor `zenity`
+/// it can show nothing. Elsewhere the system always has a dialog.
+pub fn native_dialog_available() -> bool {
+    if !cfg!(all(unix, not(target_os = "macos"), not(target_os = "android"))) {
+        return true;
+    }
+    session_bus_present() || on_path("zenity")
+}
+
+fn session_bus_present() -> bool {
+    let set = std::env::var_os("DBUS_SESSION_BUS_ADDRESS").is_some_and(|v| !v.is_empty());
+    let socket = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|dir| Path::new(&dir).join("bus").exists());
+    set || socket
+}
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
 }
 
 impl PendingPick {
@@ -91,9 +125,11 @@ impl PendingPick {
         future: impl Future<Output = Vec<PathBuf>> + Send + 'static,
     ) -> Self {
         let (tx, rx) = mpsc::channel();
+        let opened = Instant::now();
         thread::spawn(move || {
+            let paths = block_on(future);
             // The receiver is gone only if the app closed; nothing to do then.
-            let _ = tx.send(block_on(future));
+            let _ = tx.send((paths, opened.elapsed()));
             repaint();
         });
         Self { purpose, rx }
@@ -101,7 +137,8 @@ impl PendingPick {
 
     pub fn poll(&self) -> PickPoll {
         match self.rx.try_recv() {
-            Ok(paths) => PickPoll::Done(paths),
+            Ok((paths, took)) if paths.is_empty() && took < NO_DIALOG_WITHIN => PickPoll::NoDialog,
+            Ok((paths, _)) => PickPoll::Done(paths),
             Err(TryRecvError::Empty) => PickPoll::Waiting,
             Err(TryRecvError::Disconnected) => PickPoll::Done(Vec::new()),
         }

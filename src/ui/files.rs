@@ -1,14 +1,16 @@
-//! Model and project files: export and import model.json, save and open a project. Every failure
-//! is shown in the error window and leaves the session as it was.
+//! Model and project files: export and import model.json, save and open a project. Each returns
+//! its failure (the session is left as it was) for the caller to show: the error window, or the
+//! in-app path field that asked for the file.
 use std::path::Path;
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow, bail};
 
 use crate::io::atomic::write_atomic;
 use crate::io::model_file::{ModelFile, SignalInfo, read_model, write_model};
 use crate::io::project::load_project;
 use crate::ui::app::App;
 use crate::ui::project_io;
+use crate::ui::state::command::FileAction;
 use crate::ui::state::session::file_label;
 
 /// A model file's sample time may differ from the identification run's by this fraction.
@@ -23,21 +25,31 @@ impl App {
         self.view.errors.push(message);
     }
 
-    pub(super) fn export_model(&mut self, path: &Path) {
-        self.refresh();
-        match self.model_file().and_then(|(file, skipped)| {
-            write_model(path, &file)?;
-            Ok((file.outputs.len(), skipped))
-        }) {
-            Ok((written, skipped)) => {
-                let mut status = format!("Exported {written} output model(s) to {}", file_label(path));
-                if !skipped.is_empty() {
-                    status += &format!("; not exported (no valid model): {}", skipped.join(", "));
-                }
-                self.view.status = Some(status);
-            }
-            Err(err) => self.push_error(&err.context(format!("exporting the model to {}", path.display()))),
+    /// Carry out a file action on `path`; on success the status bar says what was done.
+    pub(super) fn file_action(&mut self, action: FileAction, path: &Path) -> Result<()> {
+        match action {
+            FileAction::ExportModel => self.export_model(path),
+            FileAction::ImportModel => self.import_model(path),
+            FileAction::SaveProject => self.save_project(path),
+            FileAction::OpenProject => self.open_project(path),
         }
+    }
+
+    fn export_model(&mut self, path: &Path) -> Result<()> {
+        self.refresh();
+        let (written, skipped) = self
+            .model_file()
+            .and_then(|(file, skipped)| {
+                write_model(path, &file)?;
+                Ok((file.outputs.len(), skipped))
+            })
+            .with_context(|| format!("exporting the model to {}", path.display()))?;
+        let mut status = format!("Exported {written} output model(s) to {}", file_label(path));
+        if !skipped.is_empty() {
+            status += &format!("; not exported (no valid model): {}", skipped.join(", "));
+        }
+        self.view.status = Some(status);
+        Ok(())
     }
 
     /// The committed model of every output that has one, and the names of those that have none.
@@ -77,7 +89,7 @@ impl App {
 
     /// Take the clusters of every output the file and the identification run share, as one
     /// undoable change; the model is fitted again on the session's runs.
-    pub(super) fn import_model(&mut self, path: &Path) {
+    fn import_model(&mut self, path: &Path) -> Result<()> {
         self.refresh();
         let clusters = read_model(path).and_then(|file| {
             let Some(ident) = &self.cache.ident else {
@@ -107,56 +119,46 @@ impl App {
             }
             Ok(shared)
         });
-        match clusters {
-            Ok(clusters) => {
-                let names: Vec<String> = clusters.iter().map(|(name, _, _)| name.clone()).collect();
-                let status = format!(
-                    "Imported the clusters of {} from {}; the model is fitted again on the session's runs",
-                    names.join(", "),
-                    file_label(path)
-                );
-                self.edit_setup(&status, |setup| {
-                    // The model's input dead time comes with its clusters: it is part of the
-                    // structure the clusters were chosen with.
-                    for (name, clusters, dead_time) in clusters {
-                        let output = setup.output_mut(&name);
-                        output.clusters = Some(clusters);
-                        output.settings.dead_time_samples = Some(dead_time);
-                    }
-                });
-                self.view.status = Some(status);
+        let clusters = clusters.context("importing a model (the clusters were kept)")?;
+        let names: Vec<String> = clusters.iter().map(|(name, _, _)| name.clone()).collect();
+        let status = format!(
+            "Imported the clusters of {} from {}; the model is fitted again on the session's runs",
+            names.join(", "),
+            file_label(path)
+        );
+        self.edit_setup(&status, |setup| {
+            // The model's input dead time comes with its clusters: it is part of the structure the
+            // clusters were chosen with.
+            for (name, clusters, dead_time) in clusters {
+                let output = setup.output_mut(&name);
+                output.clusters = Some(clusters);
+                output.settings.dead_time_samples = Some(dead_time);
             }
-            Err(err) => self.push_error(&err.context("importing a model (the clusters were kept)")),
-        }
+        });
+        self.view.status = Some(status);
+        Ok(())
     }
 
-    pub(super) fn save_project(&mut self, path: &Path) {
-        let written = project_io::project_text(&self.session, path)
-            .and_then(|(text, notes)| write_atomic(path, text.as_bytes()).map(|()| notes));
-        match written {
-            Ok(notes) => {
-                let mut status = format!("Saved the project as {}", file_label(path));
-                for note in notes {
-                    status += &format!("; {note}");
-                }
-                self.view.status = Some(status);
-            }
-            Err(err) => self.push_error(&err.context(format!("saving the project to {}", path.display()))),
+    fn save_project(&mut self, path: &Path) -> Result<()> {
+        let notes = project_io::project_text(&self.session, path)
+            .and_then(|(text, notes)| write_atomic(path, text.as_bytes()).map(|()| notes))
+            .with_context(|| format!("saving the project to {}", path.display()))?;
+        let mut status = format!("Saved the project as {}", file_label(path));
+        for note in notes {
+            status += &format!("; {note}");
         }
+        self.view.status = Some(status);
+        Ok(())
     }
 
     /// Replace the session by the project's, unless none of its runs can be read.
-    pub(super) fn open_project(&mut self, path: &Path) {
-        let project = match load_project(path) {
-            Ok(project) => project,
-            Err(err) => return self.push_error(&err.context("opening a project (the session was kept)")),
-        };
+    fn open_project(&mut self, path: &Path) -> Result<()> {
+        let project = load_project(path).context("opening a project (the session was kept)")?;
         let (mut session, failures) = project_io::session_from_project(&project);
         if session.runs.is_empty() {
             let why = failures.iter().map(|f| f.message.as_str()).collect::<Vec<_>>().join("; ");
-            let err = anyhow!("none of the project's runs could be read: {why}");
-            return self
-                .push_error(&err.context(format!("opening {} (the session was kept)", path.display())));
+            return Err(anyhow!("none of the project's runs could be read: {why}")
+                .context(format!("opening {} (the session was kept)", path.display())));
         }
         session.revision = self.session.revision + 1;
         let loaded = session.runs.len();
@@ -170,5 +172,6 @@ impl App {
             file_label(path),
             if failed > 0 { format!(", {failed} could not be read") } else { String::new() }
         ));
+        Ok(())
     }
 }

@@ -16,6 +16,7 @@ pub mod file_dialog;
 mod files;
 pub mod mapping_ui;
 pub mod panels_ui;
+pub mod path_prompt;
 pub mod project_io;
 pub mod screenshot;
 pub mod state;

@@ -48,6 +48,29 @@ pub fn menu_bar_ui(ui: &mut egui::Ui, history: &History) -> Vec<Command> {
     commands
 }
 
+/// The notice that the last session was restored, with the way back to a first start.
+pub fn restore_notice_ui(ui: &mut egui::Ui, runs: usize) -> Vec<Command> {
+    let mut commands = Vec::new();
+    ui.horizontal(|ui| {
+        let plural = if runs == 1 { "" } else { "s" };
+        ui.label(
+            RichText::new(format!("Restored the last session ({runs} run{plural}) —")).color(theme::WARNING),
+        );
+        let fresh = if super::bundled_sample_dir().is_some() {
+            "Drops these runs and their setup for the bundled sample runs"
+        } else {
+            "Drops these runs and their setup for an empty session"
+        };
+        if ui.button("Start fresh").on_hover_text(fresh).clicked() {
+            commands.push(Command::StartFresh);
+        }
+        if ui.button("Keep").on_hover_text("Hide this notice").clicked() {
+            commands.push(Command::DismissRestoreNotice);
+        }
+    });
+    commands
+}
+
 /// Model and project file errors, each with its whole message.
 pub fn errors_ui(ctx: &egui::Context, errors: &[String]) -> Vec<Command> {
     let mut commands = Vec::new();

@@ -45,8 +45,31 @@ pub fn screenshot_app(project: Option<&Path>, add_effects: &[EffectId]) -> Resul
     if let Some(error) = app.view.errors.first() {
         return Err(anyhow!("{error}"));
     }
+    if !add_effects.is_empty() {
+        // Each Apply named its own output; the last one would name only the last output.
+        app.view.status = Some(applied_status(add_effects, &outputs));
+    }
     app.settle();
     Ok(app)
+}
+
+/// "Effect thermal_soak applied to shaft_speed_rpm and thrust_n".
+fn applied_status(effects: &[EffectId], outputs: &[String]) -> String {
+    let effects: Vec<&str> = effects.iter().map(|e| e.name()).collect();
+    let plural = if effects.len() == 1 { "" } else { "s" };
+    format!("Effect{plural} {} applied to {}", and_list(&effects), and_list(outputs))
+}
+
+/// "a", "a and b", "a, b and c".
+fn and_list<S: AsRef<str>>(items: &[S]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.as_ref().to_owned(),
+        [rest @ .., last] => {
+            let rest: Vec<&str> = rest.iter().map(AsRef::as_ref).collect();
+            format!("{} and {}", rest.join(", "), last.as_ref())
+        }
+    }
 }
 
 pub struct ScreenshotApp {

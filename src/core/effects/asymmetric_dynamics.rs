@@ -3,6 +3,7 @@ use num_complex::Complex64;
 
 use super::Evidence;
 use super::stats::{ResidualTrace, diff};
+use super::wording::lags_or_leads;
 use super::{EffectError, ParamSpec};
 use crate::core::identification::wiener::unit_gain_tf;
 use crate::core::numerics::lstsq::solve_lstsq;
@@ -119,6 +120,12 @@ fn split_lags(traces: &[ResidualTrace], first: impl Fn(f64, f64) -> bool) -> Opt
 /// Lags that differ by more than this, s, differ (about one sample at 8.85 Hz).
 const LAG_DIFFERENCE_SECS: f64 = 0.1;
 
+/// "lags the model by 0.12 s", or "leads it by 0.07 s" for a negative lag.
+fn lag_clause(lag_secs: f64, model: &str) -> String {
+    let (verb, amount) = lags_or_leads(lag_secs);
+    format!("{verb} {model} by {amount}")
+}
+
 /// How far the measurement lags the model while the model's response rises and while it falls.
 pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let Some((lag_up, lag_down)) = split_lags(traces, |rate, _| rate > 0.0) else {
@@ -132,8 +139,9 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     };
     Evidence {
         sentence: format!(
-            "measured response lags the model by {lag_up:.2} s while it rises and {lag_down:.2} s while it \
-             falls: {meaning}"
+            "measured response {} while it rises and {} while it falls: {meaning}",
+            lag_clause(lag_up, "the model"),
+            lag_clause(lag_down, "it")
         ),
         supports: differ,
     }
@@ -155,8 +163,9 @@ pub(super) fn level_evidence(traces: &[ResidualTrace]) -> Evidence {
     };
     Evidence {
         sentence: format!(
-            "measured response lags the model by {lag_low:.2} s below the middle of the operating range and \
-             {lag_high:.2} s above it: {meaning}"
+            "measured response {} below the middle of the operating range and {} above it: {meaning}",
+            lag_clause(lag_low, "the model"),
+            lag_clause(lag_high, "it")
         ),
         supports: differ,
     }
@@ -173,6 +182,12 @@ block_impl!(
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+
+    #[test]
+    fn a_negative_lag_reads_as_a_lead() {
+        assert_eq!(lag_clause(0.12, "the model"), "lags the model by 0.12 s");
+        assert_eq!(lag_clause(-0.07, "it"), "leads it by 0.07 s");
+    }
 
     #[test]
     fn symmetric_factor_reproduces_the_linear_block() {

@@ -56,6 +56,7 @@ pub mod stats;
 mod structural;
 mod thermal_soak;
 pub mod transport_delay;
+mod wording;
 
 pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;

@@ -2,6 +2,7 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, median};
+use super::wording::after_or_before;
 
 /// Fuel line and valve dead time: the fuel command reaches the engine `delay_samples` samples late,
 /// so the input is delayed by z⁻ᵈ before the linear block. The delay may be fractional (linear
@@ -125,9 +126,11 @@ impl Lateness {
             "responses start with the model's"
         };
         format!(
-            "measured step responses start {:+.2} s and reach half their change {:+.2} s after the \
-             model's (median of {} steps): {meaning}",
-            self.onset_secs, self.middle_secs, self.steps
+            "measured step responses start {} the model's and reach half their change {} it (median of \
+             {} steps): {meaning}",
+            after_or_before(self.onset_secs),
+            after_or_before(self.middle_secs),
+            self.steps
         )
     }
 }
@@ -192,6 +195,20 @@ block_impl!(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_early_start_reads_as_before_the_models() {
+        let early = Lateness { onset_secs: -0.06, middle_secs: 0.07, steps: 5, dt_secs: 0.1 };
+        let sentence = early.sentence();
+        assert!(
+            sentence.starts_with(
+                "measured step responses start 0.06 s before the model's and reach half their change \
+                 0.07 s after it (median of 5 steps)"
+            ),
+            "{sentence}"
+        );
+        assert!(!sentence.contains('-') && !sentence.contains('−'), "no negative times: {sentence}");
+    }
 
     #[test]
     fn delay_shifts_and_holds_the_start() {

@@ -10,6 +10,8 @@ const TOP_PX: i32 = 30;
 const LEFT_PX: i32 = 20;
 const SWATCH_PX: i32 = 30;
 const MAX_LABEL_CHARS: usize = 24;
+/// A remark has no swatch, so its text starts at the swatch's left edge and may run longer.
+const MAX_REMARK_CHARS: usize = 28;
 
 /// How an entry's sample is drawn.
 #[derive(Clone, Copy, Debug)]
@@ -88,16 +90,31 @@ fn draw_entry(area: &Area<'_>, row: usize, entry: &LegendEntry) -> DrawResult {
         _ => x1 + 10,
     };
     let style = label_font().pos(Pos::new(HPos::Left, VPos::Center));
-    area.draw(&Text::new(shorten(&entry.label), (text_x, y), style))?;
+    area.draw(&Text::new(shorten(entry), (text_x, y), style))?;
     Ok(())
 }
 
-/// Cuts a label to [`MAX_LABEL_CHARS`] characters, marking the cut.
-fn shorten(label: &str) -> String {
-    if label.chars().count() <= MAX_LABEL_CHARS {
-        return label.to_owned();
+impl LegendEntry {
+    /// The most characters the label can show in the panel.
+    fn max_chars(&self) -> usize {
+        match self.swatch {
+            Swatch::None => MAX_REMARK_CHARS,
+            _ => MAX_LABEL_CHARS,
+        }
     }
-    let mut s: String = label.chars().take(MAX_LABEL_CHARS - 1).collect();
+
+    /// Whether the label is shown whole (a longer one is cut).
+    pub fn fits(&self) -> bool {
+        self.label.chars().count() <= self.max_chars()
+    }
+}
+
+/// Cuts a label that does not fit the panel, marking the cut.
+fn shorten(entry: &LegendEntry) -> String {
+    if entry.fits() {
+        return entry.label.clone();
+    }
+    let mut s: String = entry.label.chars().take(entry.max_chars() - 1).collect();
     s.push('…');
     s
 }

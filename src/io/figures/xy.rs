@@ -49,7 +49,8 @@ pub fn static_map_png(
 }
 
 /// Draws the measured trace with the model traces over it and, below, the residual of the first
-/// model (measured − model). Every trace must have one value per entry of `t_secs`.
+/// model (measured − model). The first model is the one the figure is about: it is drawn last, on
+/// top of the others. Every trace must have one value per entry of `t_secs`.
 pub fn traces_png(
     path: &Path,
     title: &str,
@@ -75,7 +76,7 @@ pub fn traces_png(
         let (top, bottom) = chart_area.split_vertically((TRACE_SHARE * h as f64) as u32);
         let mut series: Vec<(&[f64], RGBColor, u32)> = vec![(measured, palette::MEASURED, MEASURED_PX)];
         series.extend(
-            models.iter().enumerate().map(|(i, (_, y))| (y.as_slice(), palette::series(i), MODEL_PX)),
+            models.iter().enumerate().rev().map(|(i, (_, y))| (y.as_slice(), palette::series(i), MODEL_PX)),
         );
         draw_lines(&top, t_secs, t_range, &series, y_label)?;
         let mut entries = vec![LegendEntry::line("measured", palette::MEASURED, MEASURED_PX + 1)];
@@ -138,4 +139,34 @@ fn draw_lines(
         chart.draw_series(pieces.map(|piece| PathElement::new(piece, color.stroke_width(*width))))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// Pixels of exactly `colour` left of the legend panel.
+    fn pixels_of(image: &image::RgbImage, colour: RGBColor) -> usize {
+        let chart_width = image.width() - super::super::LEGEND_WIDTH;
+        image
+            .enumerate_pixels()
+            .filter(|(x, _, p)| *x < chart_width && p.0 == [colour.0, colour.1, colour.2])
+            .count()
+    }
+
+    #[test]
+    fn the_first_model_is_drawn_on_top_of_the_others() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("traces.png");
+        let t: Vec<f64> = (0..200).map(f64::from).collect();
+        let measured = vec![0.0; t.len()];
+        // Two models with the same trace: only the one on top shows.
+        let models =
+            vec![("gray-box".to_owned(), vec![1.0; t.len()]), ("other".to_owned(), vec![1.0; t.len()])];
+        traces_png(&path, "order", &t, &measured, &models, "y (N)").unwrap();
+        let image = image::open(&path).unwrap().to_rgb8();
+        assert!(pixels_of(&image, palette::series(0)) > 100, "the first model's line is visible");
+        assert_eq!(pixels_of(&image, palette::series(1)), 0, "the other model is under it");
+    }
 }

@@ -208,10 +208,11 @@ fn legend_entries(
         entries.push(LegendEntry::new("valid cluster", valid));
         entries.push(LegendEntry::new("invalid cluster", invalid));
     }
+    // Short enough for the legend panel: a cut number would be worse than a terse wording.
     entries.push(LegendEntry::text(format!("rays: ω = angle / {} s", sig(dt_secs, 4))));
     entries.push(LegendEntry::text(format!("Nyquist: {} rad/s", sig(PI / dt_secs, 4))));
     if outside > 0 {
-        entries.push(LegendEntry::text(format!("{outside} roots outside the view")));
+        entries.push(LegendEntry::text(format!("{outside} roots off the view")));
     }
     if !roots.is_empty() {
         entries.push(LegendEntry::text("segments:"));
@@ -220,4 +221,21 @@ fn legend_entries(
         entries.push(LegendEntry::new(segment.label.clone(), Swatch::Cross(palette::series(j))));
     }
     entries
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_legend_remarks_are_shown_whole() {
+        // The sample runs' sample time, and more roots off the view than any run has had.
+        let entries = legend_entries(&[], &[], 0.113_094, 1234);
+        let labels: Vec<&str> = entries.iter().map(|e| e.label.as_str()).collect();
+        assert!(labels.contains(&"rays: ω = angle / 0.1131 s"), "{labels:?}");
+        assert!(labels.contains(&"1234 roots off the view"), "{labels:?}");
+        for entry in &entries {
+            assert!(entry.fits(), "cut in the legend: {}", entry.label);
+        }
+    }
 }

@@ -21,6 +21,7 @@ use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
+use crate::ui::derived::live_model::ModelKey;
 use crate::ui::derived::model_cache::LiveModel;
 use crate::ui::state::session::Role;
 
@@ -114,8 +115,8 @@ pub(super) fn apply_effects(
 /// What a diagnosis of one output's current model needs (owned, for a worker thread).
 #[derive(Clone)]
 pub struct DiagnosisInput {
-    /// The live model the diagnosis is for.
-    pub model_id: u64,
+    /// The model the diagnosis is for.
+    pub model: ModelKey,
     pub output: String,
     /// The model as the views show it (with its effects).
     pub current: ExtendedModel,

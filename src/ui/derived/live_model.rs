@@ -1,6 +1,8 @@
 //! The committed or previewed model of one output as every view shows it: the gray-box model, its
 //! effects, its Bode and its simulation of every scored run.
+use crate::core::effects::EffectRecord;
 use crate::core::identification::pipeline::{GrayBoxModel, RunPrediction};
+use crate::core::identification::wiener::WienerModel;
 use crate::core::numerics::tf::BodePoint;
 use crate::ui::derived::diagnosis_model::EffectsOutcome;
 use crate::ui::state::session::Role;
@@ -50,7 +52,21 @@ pub struct LiveModel {
     pub polish_requested: bool,
 }
 
+/// A model by value: its Wiener part and its effects with their fitted parameters. A model built
+/// again from the same setup (after an Undo, say) has a new [`LiveModel::id`] but the same key, so
+/// a result computed for it is still current.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelKey {
+    wiener: WienerModel,
+    effects: Vec<EffectRecord>,
+}
+
 impl LiveModel {
+    pub fn key(&self) -> ModelKey {
+        let model = self.current_model();
+        ModelKey { effects: model.records(), wiener: model.wiener }
+    }
+
     /// Mean gray-box RMSPE over the validation runs (the figure of merit shown while dragging);
     /// the model's effects included.
     pub fn mean_validation_rmspe(&self) -> Option<f64> {

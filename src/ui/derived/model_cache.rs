@@ -415,7 +415,7 @@ impl OutputCache {
             return Err("give a run the role validation: the effects are scored on validation runs".into());
         }
         Ok(DiagnosisInput {
-            model_id: live.id,
+            model: live.key(),
             output: self.name.clone(),
             current: live.current_model(),
             ident: Arc::clone(ident),

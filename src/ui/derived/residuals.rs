@@ -3,6 +3,7 @@
 use crate::core::residuals::{ResidualAnalysis, ResidualSettings, analyse_residuals, steady_noise_sigma};
 use crate::ui::derived::model_cache::LiveModel;
 use crate::ui::state::session::{Role, Session};
+use crate::ui::widgets::at_noise_precision;
 
 /// One scored run's analysis.
 pub struct RunAnalysis {
@@ -27,7 +28,11 @@ fn steady_sigma(session: &Session, output: &str) -> Option<(f64, String)> {
         let sigma = steady_noise_sigma(&entry.run, output)?;
         Some((
             sigma,
-            format!("σ = {sigma:.4} from the normal fit of the steady run {}", entry.display_name()),
+            format!(
+                "σ = {} from the normal fit of the steady run {}",
+                at_noise_precision(sigma, sigma, false),
+                entry.display_name()
+            ),
         ))
     })
 }

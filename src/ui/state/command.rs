@@ -53,6 +53,8 @@ pub enum Command {
     },
     Undo,
     Redo,
+    /// Drop the restored session for the one of a first start: the bundled sample runs, else none.
+    StartFresh,
 
     // --- Files (errors are shown, the session is kept) ---
     /// Write the current model of every output as model.json.
@@ -70,6 +72,9 @@ pub enum Command {
     OpenRunDialog,
     /// Show the native file dialog for a model or project file.
     ChooseFile(FileAction),
+    /// Use the path typed in the in-app path field (shown where no native dialog can appear).
+    SubmitPath,
+    ClosePathPrompt,
     /// Open the column-mapping dialog for session run `index`.
     MapColumnsOfRun(usize),
     /// Open the column-mapping dialog for load failure `index` (a file that is not in the session).
@@ -77,6 +82,8 @@ pub enum Command {
     CloseMappingDialog,
     DismissFailure(usize),
     DismissAllFailures,
+    /// Hide the notice that the last session was restored.
+    DismissRestoreNotice,
     /// Close error message `index` (model and project files).
     DismissError(usize),
     SelectRun(usize),

@@ -2,6 +2,7 @@
 //! every view's zoom and toggles, dialogs, errors and the status line.
 use crate::ui::file_dialog::{PendingPick, PickPurpose};
 use crate::ui::mapping_ui::MappingDialog;
+use crate::ui::path_prompt::PathPrompt;
 use crate::ui::state::Tab;
 use crate::ui::state::session::LoadFailure;
 use crate::ui::state::setup::History;
@@ -28,6 +29,8 @@ pub struct ViewState {
     /// Files that could not be read, shown until dismissed.
     pub failures: Vec<LoadFailure>,
     pub mapping: Option<MappingDialog>,
+    /// The number of runs restored from the last session, while the notice saying so is shown.
+    pub restored_runs: Option<usize>,
     /// The latest message for the status bar.
     pub status: Option<String>,
     /// The duration of the previous frame's UI code, in ms.
@@ -38,6 +41,10 @@ pub struct ViewState {
     pub picker: Option<PendingPick>,
     /// A file dialog to open at the end of the frame.
     pub dialog_requested: Option<PickPurpose>,
+    /// Whether the system's file dialogs can appear; when not, [`Self::path_prompt`] asks instead.
+    pub native_dialogs: bool,
+    /// The in-app path field, open.
+    pub path_prompt: Option<PathPrompt>,
     pub quit_requested: bool,
 }
 

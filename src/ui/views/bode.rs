@@ -1,7 +1,7 @@
 //! The Bode view: magnitude and phase of every segment's ARX model (thin, coloured by segment) and
 //! of the reduced linear block G(z) (thick), against ω in rad/s on a log axis; the chirp run's
 //! empirical frequency response on top when the cache has one.
-use egui_plot::{Legend, Line, MarkerShape, PlotPoints, Points};
+use egui_plot::{ColorConflictHandling, Legend, Line, MarkerShape, PlotPoints, Points};
 
 use crate::core::numerics::tf::BodePoint;
 use crate::ui::derived::model_cache::EmpiricalPoint;
@@ -65,8 +65,14 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
         if last {
             plot = plot.x_axis_label("ω [rad/s]");
         } else {
-            plot =
-                plot.legend(Legend::default().position(egui_plot::Corner::RightTop).background_alpha(0.85));
+            // Bottom-left: a low-pass response runs along the top at low ω and falls to the right,
+            // so that corner has no curves. The chirp's points share one entry in the colour of
+            // the best-measured point (drawn first), not the grey of mixed colours.
+            let legend = Legend::default()
+                .position(egui_plot::Corner::LeftBottom)
+                .background_alpha(0.85)
+                .color_conflict_handling(ColorConflictHandling::PickFirst);
+            plot = plot.legend(legend);
         }
         plot.show(ui, |plot_ui| {
             draw_curves(plot_ui, &view, state, part);

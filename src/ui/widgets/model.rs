@@ -74,14 +74,15 @@ pub fn roots_text(roots: &[Complex64]) -> String {
     if shown.is_empty() { "–".to_owned() } else { shown.join(", ") }
 }
 
-/// Why a cluster is (in)valid, in a few words.
-pub fn status_text(eval: &ClusterEval) -> String {
+/// Why a cluster is (in)valid, in a word or two: the last, narrow column of the cluster table
+/// (the members column beside it has the counts, [`status_detail`] the numbers).
+pub fn status_text(eval: &ClusterEval) -> &'static str {
     match &eval.status {
-        ClusterStatus::Valid => "valid".to_owned(),
-        ClusterStatus::TooFewMembers { found, needed } => format!("{found} of {needed} segments"),
-        ClusterStatus::NearOrigin { .. } => "near the origin".to_owned(),
-        ClusterStatus::NearNyquist { .. } => "beyond the exclusion angle".to_owned(),
-        ClusterStatus::Unstable { .. } => "unstable (|z| ≥ 1)".to_owned(),
+        ClusterStatus::Valid => "valid",
+        ClusterStatus::TooFewMembers { .. } => "too few",
+        ClusterStatus::NearOrigin { .. } => "near 0",
+        ClusterStatus::NearNyquist { .. } => "excluded",
+        ClusterStatus::Unstable { .. } => "unstable",
     }
 }
 
@@ -99,7 +100,10 @@ pub fn status_detail(eval: &ClusterEval) -> String {
             format!("Centroid modulus {modulus:.4} is below {min_modulus:.4}: ARX noise roots gather there")
         }
         ClusterStatus::NearNyquist { angle_rad, limit_rad } => {
-            format!("Centroid angle {angle_rad:.4} rad is beyond the exclusion angle {limit_rad:.4} rad")
+            format!(
+                "Centroid angle {angle_rad:.4} rad is beyond the exclusion angle {limit_rad:.4} rad \
+                 (too near Nyquist): not in the reduced model"
+            )
         }
         ClusterStatus::Unstable { modulus } => {
             format!("Pole centroid modulus {modulus:.4} is on or outside the unit circle")

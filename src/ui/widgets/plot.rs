@@ -101,6 +101,32 @@ pub fn bode_panel<'a>(
         .y_axis_label(if phase { "phase [deg]" } else { "magnitude [dB]" })
 }
 
+/// One key of a legend drawn outside a plot: a short stretch of the line as the plot draws it
+/// (colour, width, solid or dashed), then its name. One widget, so a wrapping row never parts the
+/// stretch from its name.
+pub fn line_key_ui(ui: &mut egui::Ui, colour: egui::Color32, width: f32, dashed: bool, name: &str) {
+    const STRETCH: f32 = 24.0;
+    const GAP: f32 = 4.0;
+    let galley = egui::WidgetText::from(egui::RichText::new(name).color(colour)).into_galley(
+        ui,
+        Some(egui::TextWrapMode::Extend),
+        f32::INFINITY,
+        egui::TextStyle::Body,
+    );
+    let size = egui::vec2(STRETCH + GAP + galley.size().x, galley.size().y);
+    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, name));
+    let y = rect.center().y;
+    let points = [egui::pos2(rect.left(), y), egui::pos2(rect.left() + STRETCH, y)];
+    let stroke = egui::Stroke::new(width, colour);
+    if dashed {
+        ui.painter().extend(egui::Shape::dashed_line(&points, stroke, 6.0, 3.0));
+    } else {
+        ui.painter().line_segment(points, stroke);
+    }
+    ui.painter().galley(egui::pos2(rect.left() + STRETCH + GAP, rect.top()), galley, colour);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

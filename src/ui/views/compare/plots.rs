@@ -71,30 +71,52 @@ fn traces_ui(
     let t = &shown.run.t_secs;
     let series =
         |values: &[f64]| -> PlotPoints<'static> { t.iter().zip(values).map(|(t, v)| [*t, *v]).collect() };
+    let models: Vec<_> =
+        MODELS.iter().filter_map(|m| shown.models.iter().find(|r| r.model == *m).map(|r| (*m, r))).collect();
+    // The key sits above the plot: eight entries inside it covered the first minute of data.
+    let key_top = ui.cursor().top();
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 4.0;
+        plot_util::line_key_ui(ui, theme::MEASURED, MEASURED_WIDTH, false, "measured");
+        for (model, _) in &models {
+            let (width, dashed) = trace_style(*model);
+            ui.add_space(6.0);
+            plot_util::line_key_ui(ui, model_colour(*model), width, dashed, model.label());
+        }
+    });
+    let key_height = ui.cursor().top() - key_top;
     Plot::new(("compare_traces", &comparison.output, &shown.run.name))
-        .height(PLOT_HEIGHT - ui.spacing().interact_size.y)
+        .height(PLOT_HEIGHT - ui.spacing().interact_size.y - key_height)
         .x_axis_label("time [s]")
         .y_axis_label(output_label)
         .y_axis_min_width(Y_AXIS_WIDTH)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
-        .legend(Legend::default().position(egui_plot::Corner::LeftTop).follow_insertion_order(true))
         .show(ui, |plot_ui| {
-            plot_ui.line(Line::new("measured", series(&measured.values)).color(theme::MEASURED).width(2.0));
-            for model in MODELS.iter().rev() {
-                let Some(run) = shown.models.iter().find(|m| m.model == *model) else { continue };
+            plot_ui.line(
+                Line::new("measured", series(&measured.values)).color(theme::MEASURED).width(MEASURED_WIDTH),
+            );
+            // The gray-box model last, on top.
+            for (model, run) in models.iter().rev() {
+                let (width, dashed) = trace_style(*model);
                 let mut line =
-                    Line::new(model.label(), series(&run.y_hat)).color(model_colour(*model)).width(1.3);
-                if *model == ModelKind::Linear || model.is_reference() {
+                    Line::new(model.label(), series(&run.y_hat)).color(model_colour(*model)).width(width);
+                if dashed {
                     line = line.style(LineStyle::Dashed { length: 8.0 });
-                }
-                if model.is_reference() {
-                    line = line.width(1.0);
                 }
                 plot_ui.line(line);
             }
         });
     picked
+}
+
+const MEASURED_WIDTH: f32 = 2.0;
+
+/// A model's trace: width and whether dashed (the linear model and the simple references are, so
+/// the nonlinear models stand out).
+fn trace_style(model: ModelKind) -> (f32, bool) {
+    let width = if model.is_reference() { 1.0 } else { 1.3 };
+    (width, model == ModelKind::Linear || model.is_reference())
 }
 
 fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &FrequencyComparison) {
@@ -183,26 +205,27 @@ fn histogram_ui(ui: &mut egui::Ui, output: &str, model: ModelKind, result: &Mont
     let histogram = &result.histogram;
     let total = histogram.counts.iter().sum::<usize>().max(1) as f64;
     let width = histogram.edges.windows(2).next().map_or(1.0, |e| e[1] - e[0]);
-    // Densities, so that the fitted normal's pdf sits on the bars.
+    // Samples per bin (of every run), and the fitted normal scaled to the same: its pdf times the
+    // number of samples times the bin width.
     let bars: Vec<Bar> = histogram
         .centres()
         .iter()
         .zip(&histogram.counts)
-        .map(|(x, count)| Bar::new(*x, *count as f64 / (total * width)).width(width))
+        .map(|(x, count)| Bar::new(*x, *count as f64).width(width))
         .collect();
     let (lo, hi) =
         (histogram.edges.first().copied().unwrap_or(-1.0), histogram.edges.last().copied().unwrap_or(1.0));
     let pdf: PlotPoints<'_> = (0..=120)
         .map(|k| {
             let x = lo + (hi - lo) * f64::from(k) / 120.0;
-            [x, result.normal_fit.pdf(x)]
+            [x, result.normal_fit.pdf(x) * total * width]
         })
         .collect();
     Plot::new(("compare_mc", output, model.report_name()))
         .height(HISTOGRAM_HEIGHT)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
-        .show_axes([true, false])
+        .y_axis_label("samples")
         .allow_scroll(false)
         .show(ui, |plot_ui| {
             plot_ui.bar_chart(BarChart::new(model.label(), bars).color(colour.gamma_multiply(0.6)));

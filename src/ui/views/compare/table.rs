@@ -113,7 +113,7 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
     let columns = table1_columns(comparison);
     ui.vertical(|ui| {
         ui.label(RichText::new("Table 1: RMSPE % and SE of each model (best of each column in green)").strong());
-        egui::Grid::new(("compare_table1", &comparison.output)).striped(true).spacing([14.0, 3.0]).show(
+        let grid = egui::Grid::new(("compare_table1", &comparison.output)).striped(true).spacing([14.0, 3.0]).show(
             ui,
             |ui| {
                 ui.label("");
@@ -143,6 +143,9 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
                 }
             },
         );
+        // The notes wrap at the table's width: wider, they would push the summary beside the
+        // table out of the view.
+        ui.set_max_width(grid.response.rect.width());
         let failing: Vec<String> = comparison
             .runs
             .iter()

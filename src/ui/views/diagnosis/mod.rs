@@ -18,6 +18,7 @@ use crate::core::effects::EffectId;
 use crate::ui::derived::Derived;
 use crate::ui::derived::diagnosis_model::DiagnosisInput;
 use crate::ui::derived::jobs::Job;
+use crate::ui::derived::live_model::ModelKey;
 use crate::ui::state::command::Command;
 use crate::ui::state::session::Session;
 use crate::ui::theme;
@@ -34,8 +35,8 @@ pub enum Section {
 
 /// A diagnosis that has ended, for the model it was started on.
 pub struct FinishedDiagnosis {
-    /// The live model diagnosed (see [`crate::ui::derived::model_cache::LiveModel::id`]).
-    pub model_id: u64,
+    /// The model diagnosed, by value: undoing back to it makes the diagnosis current again.
+    pub model: ModelKey,
     pub outcome: Result<DiagnosisReport, String>,
     /// How long the diagnosis took on its worker thread.
     pub duration: Duration,
@@ -43,7 +44,7 @@ pub struct FinishedDiagnosis {
 
 struct RunningDiagnosis {
     output: String,
-    model_id: u64,
+    model: ModelKey,
     job: Job<(DiagnosisReport, Duration)>,
 }
 
@@ -71,12 +72,12 @@ impl DiagnosisViewState {
         if let Some(old) = self.running.take() {
             old.job.cancel();
         }
-        let (output, model_id) = (input.output.clone(), input.model_id);
+        let (output, model) = (input.output.clone(), input.model.clone());
         let job = Job::spawn(format!("Diagnosing {output}"), repaint, move |progress| {
             let started = Instant::now();
             input.run(progress).map(|report| (report, started.elapsed())).map_err(|e| e.to_string())
         });
-        self.running = Some(RunningDiagnosis { output, model_id, job });
+        self.running = Some(RunningDiagnosis { output, model, job });
     }
 
     /// Take the result of the running diagnosis when it has ended (call every frame).
@@ -90,21 +91,19 @@ impl DiagnosisViewState {
     /// Block until the running diagnosis ends (tests and screenshots, never in a frame).
     pub fn wait(&mut self) {
         let Some(running) = self.running.take() else { return };
-        let (output, model_id) = (running.output, running.model_id);
         let outcome = running.job.wait();
-        self.running = None;
-        self.store(output, model_id, outcome, Duration::ZERO);
+        self.store(running.output, running.model, outcome, Duration::ZERO);
     }
 
     fn finish(&mut self, outcome: Result<(DiagnosisReport, Duration), String>, elapsed: Duration) {
         let Some(running) = self.running.take() else { return };
-        self.store(running.output, running.model_id, outcome, elapsed);
+        self.store(running.output, running.model, outcome, elapsed);
     }
 
     fn store(
         &mut self,
         output: String,
-        model_id: u64,
+        model: ModelKey,
         outcome: Result<(DiagnosisReport, Duration), String>,
         elapsed: Duration,
     ) {
@@ -113,7 +112,7 @@ impl DiagnosisViewState {
         }
         let duration = outcome.as_ref().map_or(elapsed, |(_, d)| *d);
         let outcome = outcome.map(|(report, _)| report);
-        self.results.insert(output, FinishedDiagnosis { model_id, outcome, duration });
+        self.results.insert(output, FinishedDiagnosis { model, outcome, duration });
     }
 
     fn cancel(&mut self) {
@@ -195,7 +194,7 @@ fn which_effect_ui(
         });
     });
     ui.separator();
-    job_status_ui(ui, output, state, cache, live.id, is_preview);
+    job_status_ui(ui, output, state, cache, &live.key(), is_preview);
     let applied = &live.effects.requested;
     let Some(finished) = state.result(output) else { return commands };
     let report = match &finished.outcome {
@@ -242,7 +241,7 @@ fn job_status_ui(
     output: &str,
     state: &mut DiagnosisViewState,
     cache: &crate::ui::derived::model_cache::OutputCache,
-    model_id: u64,
+    model: &ModelKey,
     is_preview: bool,
 ) {
     let start = |state: &mut DiagnosisViewState, ui: &egui::Ui| match cache.diagnosis_input() {
@@ -251,10 +250,9 @@ fn job_status_ui(
             state.start(input, move || ctx.request_repaint());
         }
         Err(err) => {
-            let outcome = Err(err);
-            state
-                .results
-                .insert(output.to_owned(), FinishedDiagnosis { model_id, outcome, duration: Duration::ZERO });
+            let finished =
+                FinishedDiagnosis { model: model.clone(), outcome: Err(err), duration: Duration::ZERO };
+            state.results.insert(output.to_owned(), finished);
         }
     };
     if let Some(running) = &state.running {
@@ -275,12 +273,11 @@ fn job_status_ui(
         hint(ui, "A cluster is being dragged; the diagnosis waits for the committed model.");
         return;
     }
-    let finished = state.result(output).map(|f| (f.model_id, f.duration, f.outcome.is_ok()));
+    let finished = state.result(output).map(|f| (&f.model != model, f.duration, f.outcome.is_ok()));
     match finished {
         None => start(state, ui),
-        Some((id, duration, ok)) => {
+        Some((stale, duration, ok)) => {
             ui.horizontal_wrapped(|ui| {
-                let stale = id != model_id;
                 if stale {
                     ui.label(
                         RichText::new("The model changed since this diagnosis: the ranking below is stale.")

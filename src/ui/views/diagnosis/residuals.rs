@@ -15,6 +15,7 @@ pub use crate::ui::derived::residuals::{Analyses, RunAnalysis};
 use crate::ui::state::command::Command;
 use crate::ui::state::session::Session;
 use crate::ui::theme;
+use crate::ui::widgets::at_noise_precision;
 use crate::ui::widgets::model::{error_ui, hint};
 use crate::ui::widgets::plot as plot_util;
 
@@ -143,9 +144,9 @@ fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize)
     hint(
         ui,
         &format!(
-            "Noise band ±{}σ = ±{:.4} {}: {:.1} % of the samples lie outside it (noise alone: {:.1} %).",
+            "Noise band ±{}σ = ±{} {}: {:.1} % of the samples lie outside it (noise alone: {:.1} %).",
             band.band_sigmas,
-            band.half_width,
+            at_noise_precision(band.half_width, band.sigma, false),
             a.unit,
             100.0 * band.outside_fraction,
             100.0 * band.expected_outside_fraction
@@ -188,8 +189,10 @@ fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize)
                     t1_secs: s.end_secs,
                 });
             }
-            ui.label(RichText::new(format!("RMS {:.4} {}", s.rms, a.unit)).monospace());
-            ui.label(RichText::new(format!("mean {:+.4} {}", s.mean_error, a.unit)).monospace());
+            let rms = at_noise_precision(s.rms, band.sigma, false);
+            let mean = at_noise_precision(s.mean_error, band.sigma, true);
+            ui.label(RichText::new(format!("RMS {rms} {}", a.unit)).monospace());
+            ui.label(RichText::new(format!("mean {mean} {}", a.unit)).monospace());
             ui.label(format!("{:?}", s.motion).to_lowercase());
             ui.end_row();
         }

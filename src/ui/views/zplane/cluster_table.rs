@@ -76,8 +76,8 @@ fn clusters_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewSta
             let rim = roots.iter().any(|g| g.cluster == Some(i) && g.at_rim());
             let (text, detail, colour) = if rim {
                 (
-                    "valid, at rim".to_owned(),
-                    "The polish pushed the model's root to the circle's rim: the data want it further \
+                    "at rim",
+                    "Valid, but the polish pushed the model's root to the circle's rim: the data want it further \
                      out. Move or widen the circle to let it go."
                         .to_owned(),
                     theme::WARNING,

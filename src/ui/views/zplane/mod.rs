@@ -45,7 +45,7 @@ pub fn zplane_ui(
     let height = ui.available_height();
     ui.horizontal_top(|ui| {
         ui.allocate_ui(egui::vec2(plot_width, height), |ui| {
-            commands.extend(zplane_plot::main_plot_ui(ui, output, &view, state, height));
+            ui.vertical(|ui| commands.extend(zplane_plot::main_plot_ui(ui, output, &view, state, height)));
         });
         ui.allocate_ui(egui::vec2(side_width, height), |ui| {
             ui.vertical(|ui| {

@@ -6,8 +6,7 @@
 //! that does not move under a handle being dragged.
 use egui::{Align2, Pos2, RichText};
 use egui_plot::{
-    CoordinatesFormatter, Corner, Line, LineStyle, MarkerShape, Plot, PlotBounds, PlotPoint, PlotTransform,
-    PlotUi, Points, Text,
+    Line, LineStyle, MarkerShape, Plot, PlotBounds, PlotPoint, PlotTransform, PlotUi, Points, Text,
 };
 use num_complex::Complex64;
 
@@ -244,8 +243,10 @@ pub fn main_plot_ui(
         Ok(evals) => evals.iter().map(|e| e.valid).collect(),
         Err(_) => Vec::new(),
     };
+    // The pointer readout has a row of its own under the plot, so it never covers roots.
+    let readout_height = ui.text_style_height(&egui::TextStyle::Monospace) + ui.spacing().item_spacing.y;
     let plot = Plot::new(("zplane", output))
-        .height(height)
+        .height(height - readout_height)
         .data_aspect(1.0)
         .allow_drag(false)
         .allow_zoom(false)
@@ -259,20 +260,7 @@ pub fn main_plot_ui(
         .x_grid_spacer(plot_util::grid_125_equal)
         .y_grid_spacer(plot_util::grid_125_equal)
         .x_axis_formatter(plot_util::range_label)
-        .y_axis_formatter(plot_util::range_label)
-        .coordinates_formatter(
-            Corner::RightBottom,
-            CoordinatesFormatter::new(move |p, _| {
-                let z = Complex64::new(p.x, p.y);
-                format!(
-                    "z = {:.4} {:+.4}i   |z| = {:.4}   ω = {:.3} rad/s",
-                    p.x,
-                    p.y,
-                    z.norm(),
-                    z.arg().abs() / dt_secs
-                )
-            }),
-        );
+        .y_axis_formatter(plot_util::range_label);
     let selected = state.selected;
     let response = plot.show(ui, |plot_ui| {
         let committed = interact(plot_ui, output, view.clusters, state);
@@ -298,7 +286,21 @@ pub fn main_plot_ui(
     if state.drag.is_some() || hovering_handle.is_some() {
         ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
     }
+    let pointer = response.response.hover_pos().map(|pos| response.transform.value_from_position(pos));
+    let readout = pointer.map_or_else(String::new, |p| pointer_text(Complex64::new(p.x, p.y), dt_secs));
+    ui.label(RichText::new(readout).monospace().color(theme::HINT));
     response.inner
+}
+
+/// Where the pointer is on the z-plane, and the frequency of a root there.
+fn pointer_text(z: Complex64, dt_secs: f64) -> String {
+    format!(
+        "pointer: z = {:.4} {:+.4}i   |z| = {:.4}   ω = {:.3} rad/s",
+        z.re,
+        z.im,
+        z.norm(),
+        z.arg().abs() / dt_secs
+    )
 }
 
 /// Pointer handling: select, drag a handle (live preview, commit on release), pan, zoom.

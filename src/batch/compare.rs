@@ -9,16 +9,11 @@ use crate::core::compare::{
 use crate::core::identification::pipeline;
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::core::numerics::noise_fit::Distribution;
-use crate::core::numerics::stats::quantile;
 use crate::core::run::Run;
 use crate::io::report::OutputReport;
 
 use super::Timings;
 use super::load::Runs;
-
-/// Share of the identification input left out at each end of the identified range (a dropout or
-/// spike must not stretch it), as for the operating points.
-const RANGE_TAIL: f64 = 0.01;
 
 /// Every model simulated on every scored run that records `output`, into `report.models`; why a
 /// failing one fails, into `report.failure_reasons`.
@@ -30,7 +25,7 @@ pub fn score_output(
     notes: &mut Vec<String>,
 ) {
     let u = &runs.ident.input.values;
-    let ident_input = (quantile(u, RANGE_TAIL), quantile(u, 1.0 - RANGE_TAIL));
+    let ident_input = crate::core::control::identified_range(u);
     for run in runs.scored() {
         if run.output(output).is_none() {
             notes.push(format!("run '{}' has no '{output}' column; not scored for it", run.name));

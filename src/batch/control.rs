@@ -1,14 +1,10 @@
 //! The control-oriented part of an output's report: operating points across the identified range
 //! and the steady run's plateau, and the continuous-time equivalent of the linear block.
-use crate::core::control::{ContinuousTf, OperatingPoint, d2c_zoh, operating_points};
+use crate::core::control::{ContinuousTf, OperatingPoint, d2c_zoh, identified_range, operating_points};
 use crate::core::effects::ExtendedModel;
-use crate::core::numerics::stats::{mean, quantile};
+use crate::core::numerics::stats::mean;
 
 use super::load::Runs;
-
-/// Share of the identification input left out at each end of the identified range: a dropout or a
-/// spike (a few samples of a run of thousands) must not stretch the range a gain schedule covers.
-const RANGE_TAIL: f64 = 0.01;
 
 /// Operating points of `model` and the ZOH equivalent of its linear block; what could not be
 /// computed goes to `notes`.
@@ -19,7 +15,7 @@ pub(super) fn control_report(
 ) -> (Vec<OperatingPoint>, Option<ContinuousTf>) {
     let output = &model.output;
     let u = &runs.ident.input.values;
-    let range = (quantile(u, RANGE_TAIL), quantile(u, 1.0 - RANGE_TAIL));
+    let range = identified_range(u);
     let plateaus: Vec<(String, f64)> =
         runs.steady.iter().map(|s| (s.name.clone(), mean(&s.input.values))).collect();
     let points = operating_points(model, range, &plateaus).unwrap_or_else(|e| {

@@ -16,7 +16,7 @@ use nalgebra::DMatrix;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::core::numerics::poly::{self, poly_from_roots, polyval_complex};
+use crate::core::numerics::poly::{self, complex_poly_from_roots, poly_from_roots, polyval_complex};
 use crate::core::numerics::tf::{DiscreteTf, TfError};
 
 /// `Gc(s) = e^(−s·delay)·(b0·sᵐ + … + bm)/(sⁿ + a1·sⁿ⁻¹ + … + an)`, coefficients in descending
@@ -139,19 +139,6 @@ fn trim_leading(mut c: Vec<f64>) -> Vec<f64> {
     let first = c.iter().position(|x| x.abs() > scale * 1e-13).unwrap_or(c.len().saturating_sub(1));
     c.drain(..first);
     if c.is_empty() { vec![0.0] } else { c }
-}
-
-fn complex_poly_from_roots(roots: &[Complex64]) -> Vec<Complex64> {
-    let mut coeffs = vec![Complex64::new(1.0, 0.0)];
-    for r in roots {
-        let mut next = vec![Complex64::new(0.0, 0.0); coeffs.len() + 1];
-        for (i, c) in coeffs.iter().enumerate() {
-            next[i] += c;
-            next[i + 1] -= c * r;
-        }
-        coeffs = next;
-    }
-    coeffs
 }
 
 /// The zero-order-hold sampling of `gc` with sample time `dt_secs` (the delay must be whole

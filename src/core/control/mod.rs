@@ -6,5 +6,5 @@ pub mod operating_point;
 pub use d2c::{ContinuousTf, D2cError, c2d_zoh, d2c_zoh};
 pub use operating_point::{
     LocalPole, OperatingPoint, OperatingPointError, PointSource, StepFigures, effect_dynamics,
-    local_dynamics, operating_points,
+    identified_range, local_dynamics, operating_points,
 };

@@ -49,6 +49,28 @@ pub struct LocalPole {
     pub zeta: Option<f64>,
 }
 
+impl LocalPole {
+    /// "τ 1.820 s" for a real pole, "ωn 2.928, ζ 0.515" for a pair, the z-plane root otherwise;
+    /// `digits` after the point.
+    pub fn describe(&self, digits: usize) -> String {
+        match (self.tau_s, self.wn_rad_s, self.zeta) {
+            (Some(tau), _, _) => format!("τ {tau:.digits$} s"),
+            (None, Some(wn), Some(zeta)) => format!("ωn {wn:.digits$}, ζ {zeta:.digits$}"),
+            _ => format!("z {:.4}{:+.4}i", self.z.re, self.z.im),
+        }
+    }
+}
+
+/// Share of the identification input left out at each end of the identified range: a dropout or a
+/// spike (a few samples of a run of thousands) must not stretch the range a gain schedule covers.
+const RANGE_TAIL: f64 = 0.01;
+
+/// The identified input range of an identification input: its 1st to 99th percentile.
+pub fn identified_range(u: &[f64]) -> (f64, f64) {
+    use crate::core::numerics::stats::quantile;
+    (quantile(u, RANGE_TAIL), quantile(u, 1.0 - RANGE_TAIL))
+}
+
 /// Step-response figures of a local model (from rest, normalised by its final value).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StepFigures {

@@ -68,6 +68,11 @@ pub fn sort_roots(roots: &mut [Complex64]) {
 /// Monic real polynomial with the given roots (descending powers). Complex roots should come with
 /// their conjugates; the imaginary parts of the product are discarded.
 pub fn poly_from_roots(roots: &[Complex64]) -> Vec<f64> {
+    complex_poly_from_roots(roots).into_iter().map(|c| c.re).collect()
+}
+
+/// Monic complex polynomial with the given roots (descending powers).
+pub fn complex_poly_from_roots(roots: &[Complex64]) -> Vec<Complex64> {
     let mut coeffs = vec![Complex64::new(1.0, 0.0)];
     for r in roots {
         let mut next = vec![Complex64::new(0.0, 0.0); coeffs.len() + 1];
@@ -77,7 +82,7 @@ pub fn poly_from_roots(roots: &[Complex64]) -> Vec<f64> {
         }
         coeffs = next;
     }
-    coeffs.into_iter().map(|c| c.re).collect()
+    coeffs
 }
 
 /// Product of two polynomials (the coefficient order is kept: descending powers, or powers of z⁻¹).

@@ -387,15 +387,7 @@ fn control_section(out: &mut String, o: &OutputReport) {
             crate::core::control::PointSource::Grid => "grid".to_owned(),
             crate::core::control::PointSource::SteadyRun(run) => format!("steady run `{run}`"),
         };
-        let poles: Vec<String> = p
-            .poles
-            .iter()
-            .map(|r| match (r.tau_s, r.wn_rad_s, r.zeta) {
-                (Some(tau), _, _) => format!("τ {tau:.3} s"),
-                (None, Some(wn), Some(zeta)) => format!("ωn {wn:.3}, ζ {zeta:.3}"),
-                _ => format!("z {:.4}{:+.4}i", r.z.re, r.z.im),
-            })
-            .collect();
+        let poles: Vec<String> = p.poles.iter().map(|r| r.describe(3)).collect();
         let _ = writeln!(
             out,
             "| {source} | {:.4} | {:.4} | {:.5} | {} | {} | {} | {} | {:.1} |",

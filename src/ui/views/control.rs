@@ -5,8 +5,8 @@
 use egui::RichText;
 use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
 
-use crate::core::control::{OperatingPoint, PointSource, operating_points};
-use crate::core::numerics::stats::{mean, quantile};
+use crate::core::control::{OperatingPoint, PointSource, identified_range, operating_points};
+use crate::core::numerics::stats::mean;
 use crate::core::numerics::tf::log_space;
 use crate::ui::derived::Derived;
 use crate::ui::state::session::{Role, Session};
@@ -14,9 +14,6 @@ use crate::ui::theme;
 use crate::ui::widgets::model as model_ui;
 use crate::ui::widgets::plot as plot_util;
 
-/// Share of the identification input left out at each end of the identified range (as the batch
-/// report does: a dropout or spike must not stretch the schedule).
-const RANGE_TAIL: f64 = 0.01;
 const TABLE_HEIGHT: f32 = 230.0;
 const Y_AXIS_WIDTH: f32 = 64.0;
 /// Bode points of the local model.
@@ -54,7 +51,7 @@ pub fn control_ui(
     if !fresh {
         let model = live.current_model();
         let u = &ident.run.input.values;
-        let range = (quantile(u, RANGE_TAIL), quantile(u, 1.0 - RANGE_TAIL));
+        let range = identified_range(u);
         let plateaus: Vec<(String, f64)> = session
             .runs
             .iter()
@@ -280,15 +277,7 @@ fn table_ui(ui: &mut egui::Ui, points: &[OperatingPoint], selected: &mut usize, 
                 ui.label(RichText::new(format!("{:.4}", p.u)).monospace());
                 ui.label(RichText::new(format!("{:.1}", p.y)).monospace());
                 ui.label(RichText::new(format!("{:.4e}", p.gain)).monospace());
-                let poles: Vec<String> = p
-                    .poles
-                    .iter()
-                    .map(|r| match (r.tau_s, r.wn_rad_s, r.zeta) {
-                        (Some(tau), _, _) => format!("τ {tau:.3} s"),
-                        (None, Some(wn), Some(zeta)) => format!("ωn {wn:.2}, ζ {zeta:.2}"),
-                        _ => format!("z {:.3}{:+.3}i", r.z.re, r.z.im),
-                    })
-                    .collect();
+                let poles: Vec<String> = p.poles.iter().map(|r| r.describe(2)).collect();
                 ui.label(poles.join("; "));
                 ui.label(RichText::new(opt(p.bandwidth_rad_s)).monospace());
                 ui.label(RichText::new(opt(p.step.rise_s)).monospace());

@@ -66,3 +66,35 @@ fn held_out_runs_are_scored_saved_and_never_chosen_on() {
     assert_eq!(saved["held_out"].as_array().map(Vec::len), Some(2), "{text}");
     assert_eq!(saved["validate"].as_array().map(Vec::len), Some(1), "{text}");
 }
+
+#[test]
+fn several_identification_runs_are_joined_as_the_batch_joins_them_and_saved() {
+    let dir = tempfile::tempdir().unwrap();
+    let runs = sample("sr30");
+    let project = dir.path().join("project.toml");
+    std::fs::write(
+        &project,
+        format!(
+            "ident = [{:?}, {:?}]\nvalidate = [{:?}]\n",
+            runs.join("ident.csv"),
+            runs.join("validation.csv"),
+            runs.join("chirp.csv"),
+        ),
+    )
+    .unwrap();
+    let mut app = App::new(Session::default());
+    app.apply(Command::OpenProject(project.clone()));
+    assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
+    app.settle();
+    let lens: Vec<usize> =
+        app.session.runs.iter().filter(|r| r.role == Role::Identification).map(|r| r.run.len()).collect();
+    let ident = app.cache.ident.as_ref().expect("identified");
+    assert_eq!(ident.run.len(), lens.iter().sum::<usize>(), "both runs, end to end");
+    let segments = ident.segments.as_ref().unwrap();
+    assert!(segments.iter().all(|s| s.end <= lens[0] || s.start >= lens[0]), "no segment crosses the join");
+    let notes = &app.cache.output("shaft_speed_rpm").unwrap().notes;
+    assert!(notes.iter().any(|n| n.contains("joined end to end")), "{notes:?}");
+    let (text, _) = jetid::ui::project_io::project_text(&app.session, &project).unwrap();
+    let saved: toml::Value = toml::from_str(&text).unwrap();
+    assert_eq!(saved["ident"].as_array().map(Vec::len), Some(2), "{text}");
+}

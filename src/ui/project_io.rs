@@ -14,7 +14,7 @@ use crate::ui::state::session::{LoadFailure, Role, Session, SessionRun};
 use crate::ui::state::setup::{ModelSetup, OutputSetup};
 
 /// The project file text for `session`, to be written at `project_path`; the notes say what a
-/// project file cannot hold (a second identification, chirp or steady run).
+/// project file cannot hold (a second chirp or steady run).
 pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, Vec<String>)> {
     let base = project_path.parent().unwrap_or(Path::new(""));
     let mut notes = Vec::new();
@@ -30,7 +30,8 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         }
         first
     };
-    let ident = single(Role::Identification);
+    let idents: Vec<RunEntry> =
+        session.runs.iter().filter(|r| r.role == Role::Identification).map(|r| run_entry(r, base)).collect();
     let chirp = single(Role::Chirp);
     let steady = single(Role::Steady);
     let validate =
@@ -44,7 +45,11 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
     let output = names.into_iter().map(|name| (name.clone(), output_spec(&session.setup, name))).collect();
     let file = ProjectFile {
         name: project_path.file_stem().map(|s| s.to_string_lossy().into_owned()),
-        ident: ident.map(IdentEntry::One),
+        ident: match idents.len() {
+            0 => None,
+            1 => idents.into_iter().next().map(IdentEntry::One),
+            _ => Some(IdentEntry::Many(idents)),
+        },
         validate,
         held_out: session
             .runs

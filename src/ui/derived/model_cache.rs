@@ -19,15 +19,15 @@ use crate::core::identification::pipeline::{
     self, LiveResult, OutputSettings, SegmentFits, fit_segments_for, live_update, live_update_proposed,
     segments_for, step_signal,
 };
-use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments};
+use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
 use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::{BodePoint, log_space};
-use crate::core::run::Run;
+use crate::core::run::{Run, join_runs};
 
 use crate::ui::derived::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
 use crate::ui::derived::jobs::Job;
 pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
-use crate::ui::state::session::{Role, Session};
+use crate::ui::state::session::{Role, Session, SessionRun};
 use crate::ui::state::setup::OutputSetup;
 
 /// Frequencies of the Bode curves: log-spaced from this to the Nyquist frequency.
@@ -44,7 +44,15 @@ pub type EmpiricalPoint = (f64, f64, f64, f64);
 pub struct IdentCache {
     /// Index of the identification run in the session.
     pub run_index: usize,
+    /// The identification run: the session's identification runs joined end to end when there
+    /// are several (as the batch joins a project's), each later one starting at a junction.
     pub run: Arc<Run>,
+    /// The session's identification runs `run` was made from.
+    sources: Vec<Arc<Run>>,
+    /// Where each later identification run starts in `run`.
+    junctions: Vec<usize>,
+    /// How `run` was made from several runs, or why it could not be, in words.
+    join_note: Option<String>,
     given_segments: Option<Vec<Segment>>,
     steps_from: Option<String>,
     /// The segments in use: the user's (checked) or the detected ones.
@@ -57,8 +65,17 @@ impl IdentCache {
     /// Bring `old` (the previous cache, if any) up to date with the session; `None` when the
     /// session has no identification run.
     pub fn refresh(old: Option<Self>, session: &Session) -> Option<Self> {
-        let (run_index, entry) = session.ident_run()?;
-        let run = Arc::clone(&entry.run);
+        let idents: Vec<(usize, &SessionRun)> =
+            session.runs.iter().enumerate().filter(|(_, r)| r.role == Role::Identification).collect();
+        let run_index = idents.first()?.0;
+        let sources: Vec<Arc<Run>> = idents.iter().map(|(_, e)| Arc::clone(&e.run)).collect();
+        let same_sources = old.as_ref().is_some_and(|o| {
+            o.sources.len() == sources.len() && o.sources.iter().zip(&sources).all(|(a, b)| Arc::ptr_eq(a, b))
+        });
+        let (run, junctions, join_note) = match &old {
+            Some(o) if same_sources => (Arc::clone(&o.run), o.junctions.clone(), o.join_note.clone()),
+            _ => join_identification(&sources)?,
+        };
         let given = session.setup.segments.clone();
         let steps_from = session.setup.steps_from.clone();
         let (segments, mut old_outputs) = match old {
@@ -69,8 +86,10 @@ impl IdentCache {
             {
                 (old.segments, old.outputs)
             }
-            Some(old) => (detect_or_check(&run, given.as_deref(), steps_from.as_deref()), old.outputs),
-            None => (detect_or_check(&run, given.as_deref(), steps_from.as_deref()), Vec::new()),
+            Some(old) => {
+                (detect_or_check(&run, &junctions, given.as_deref(), steps_from.as_deref()), old.outputs)
+            }
+            None => (detect_or_check(&run, &junctions, given.as_deref(), steps_from.as_deref()), Vec::new()),
         };
         let outputs = run
             .outputs
@@ -81,12 +100,23 @@ impl IdentCache {
                     None => OutputCache::new(&channel.name, &channel.unit),
                 };
                 let scored = scored_runs(session, &run, &channel.name, &mut cache.notes);
+                cache.notes.splice(0..0, join_note.iter().cloned());
                 cache.update(&run, &segments, session.setup.output(&channel.name), scored);
                 crate::ui::derived::empirical_bode::refresh_empirical_bode(&mut cache, session, &run);
                 cache
             })
             .collect();
-        Some(Self { run_index, run, given_segments: given, steps_from, segments, outputs })
+        Some(Self {
+            run_index,
+            run,
+            sources,
+            junctions,
+            join_note,
+            given_segments: given,
+            steps_from,
+            segments,
+            outputs,
+        })
     }
 
     pub fn output(&self, name: &str) -> Option<&OutputCache> {
@@ -121,20 +151,54 @@ impl IdentCache {
     }
 }
 
-/// The user's segments (checked), else steps detected on the input or on the `steps_from` channel.
+/// The identification run from the session's identification runs: the one, or all of them joined
+/// end to end with the junctions (what the batch does with a project's); when they cannot be joined,
+/// the first alone, and the note says why.
+fn join_identification(sources: &[Arc<Run>]) -> Option<(Arc<Run>, Vec<usize>, Option<String>)> {
+    let first = sources.first()?;
+    if sources.len() == 1 {
+        return Some((Arc::clone(first), Vec::new(), None));
+    }
+    let names: Vec<&str> = sources.iter().map(|r| r.name.as_str()).collect();
+    let runs: Vec<Run> = sources.iter().map(|r| Run::clone(r)).collect();
+    Some(match join_runs(&runs) {
+        Ok((joined, junctions)) => (
+            Arc::new(joined),
+            junctions,
+            Some(format!(
+                "identified on {} joined end to end (no segment crosses a join)",
+                names.join(" + ")
+            )),
+        ),
+        Err(e) => (
+            Arc::clone(first),
+            Vec::new(),
+            Some(format!(
+                "the identification runs cannot be joined ({e}): identified on {} alone",
+                first.name
+            )),
+        ),
+    })
+}
+
+/// The user's segments (checked), else steps detected on the input or on the `steps_from` channel,
+/// each joined run on its own.
 fn detect_or_check(
     run: &Run,
+    junctions: &[usize],
     given: Option<&[Segment]>,
     steps_from: Option<&str>,
 ) -> Result<Vec<Segment>, String> {
-    match (given, steps_from) {
-        (None, Some(name)) => {
-            let signal = step_signal(run, steps_from).map_err(|e| e.to_string())?;
-            auto_segments(signal, run.dt_secs, &SegmentSettings::default())
-                .map_err(|e| format!("segmentation of '{}' on {name}: {e}", run.name))
-        }
-        _ => segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string()),
+    if given.is_some() {
+        return segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string());
     }
+    let signal = step_signal(run, steps_from).map_err(|e| e.to_string())?;
+    auto_segments_joined(signal, junctions, run.dt_secs, &SegmentSettings::default()).map_err(|e| {
+        match steps_from {
+            Some(name) => format!("segmentation of '{}' on {name}: {e}", run.name),
+            None => e.to_string(),
+        }
+    })
 }
 
 /// A run a model is scored on.

@@ -93,23 +93,13 @@ fn agree(expected: &Path, actual: &Path) -> f64 {
     worst
 }
 
-/// The effects the simulator can switch on (scheduled_time_constant is how every turbojet behaves,
-/// so the simulator always has it).
-const SIMULATED: [&str; 7] = [
-    "transport_delay",
-    "thermal_soak",
-    "ambient_correction",
-    "asymmetric_dynamics",
-    "sensor_dynamics",
-    "static_map_order",
-    "calibration_drift",
-];
-
 /// A model fitted on a simulated identification run (with `effect` in the engine when the
 /// simulator has it, and added to the model), and a run of another seed it was not fitted on.
 fn fit(dir: &Path, effect: Option<&str>, output: Option<&str>) -> (PathBuf, PathBuf) {
-    let sim_effect: Vec<&str> =
-        effect.filter(|e| SIMULATED.contains(e)).map(|e| vec!["--effect", e]).unwrap_or_default();
+    let sim_effect: Vec<&str> = effect
+        .filter(|e| jetid::sim::effects::EFFECT_IDS.iter().any(|id| id.name() == *e))
+        .map(|e| vec!["--effect", e])
+        .unwrap_or_default();
     let simulate = |test: &str, seed: &str, out: &Path| {
         let mut args = vec!["simulate", "--test", test, "--seed", seed, "--out", s(out)];
         args.extend(&sim_effect);

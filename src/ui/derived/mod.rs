@@ -3,6 +3,7 @@
 //! of a cluster drag.
 pub mod diagnosis_model;
 pub mod empirical_bode;
+mod ident_runs;
 pub mod jobs;
 pub mod live_model;
 pub mod model_cache;

@@ -17,14 +17,14 @@ use std::sync::Arc;
 use crate::core::identification::cluster::{self, Cluster, ClusterEval};
 use crate::core::identification::pipeline::{
     self, LiveResult, OutputSettings, SegmentFits, fit_segments_for, live_update, live_update_proposed,
-    segments_for, step_signal,
 };
-use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
+use crate::core::identification::segment::Segment;
 use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::{BodePoint, log_space};
-use crate::core::run::{Run, join_runs};
+use crate::core::run::Run;
 
 use crate::ui::derived::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
+use crate::ui::derived::ident_runs::{ScoredSource, detect_or_check, join_identification, scored_runs};
 use crate::ui::derived::jobs::Job;
 pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
 use crate::ui::state::session::{Role, Session, SessionRun};
@@ -99,7 +99,7 @@ impl IdentCache {
                     Some(i) => old_outputs.swap_remove(i),
                     None => OutputCache::new(&channel.name, &channel.unit),
                 };
-                let scored = scored_runs(session, &run, &channel.name, &mut cache.notes);
+                let scored = scored_runs(session, &run, &channel.name, &mut cache.notes, &cache.scored);
                 cache.notes.splice(0..0, join_note.iter().cloned());
                 cache.update(&run, &segments, session.setup.output(&channel.name), scored);
                 crate::ui::derived::empirical_bode::refresh_empirical_bode(&mut cache, session, &run);
@@ -149,100 +149,6 @@ impl IdentCache {
     pub fn segments_are_automatic(&self) -> bool {
         self.given_segments.is_none()
     }
-}
-
-/// The identification run from the session's identification runs: the one, or all of them joined
-/// end to end with the junctions (what the batch does with a project's); when they cannot be joined,
-/// the first alone, and the note says why.
-fn join_identification(sources: &[Arc<Run>]) -> Option<(Arc<Run>, Vec<usize>, Option<String>)> {
-    let first = sources.first()?;
-    if sources.len() == 1 {
-        return Some((Arc::clone(first), Vec::new(), None));
-    }
-    let names: Vec<&str> = sources.iter().map(|r| r.name.as_str()).collect();
-    let runs: Vec<Run> = sources.iter().map(|r| Run::clone(r)).collect();
-    Some(match join_runs(&runs) {
-        Ok((joined, junctions)) => (
-            Arc::new(joined),
-            junctions,
-            Some(format!(
-                "identified on {} joined end to end (no segment crosses a join)",
-                names.join(" + ")
-            )),
-        ),
-        Err(e) => (
-            Arc::clone(first),
-            Vec::new(),
-            Some(format!(
-                "the identification runs cannot be joined ({e}): identified on {} alone",
-                first.name
-            )),
-        ),
-    })
-}
-
-/// The user's segments (checked), else steps detected on the input or on the `steps_from` channel,
-/// each joined run on its own.
-fn detect_or_check(
-    run: &Run,
-    junctions: &[usize],
-    given: Option<&[Segment]>,
-    steps_from: Option<&str>,
-) -> Result<Vec<Segment>, String> {
-    if given.is_some() {
-        return segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string());
-    }
-    let signal = step_signal(run, steps_from).map_err(|e| e.to_string())?;
-    auto_segments_joined(signal, junctions, run.dt_secs, &SegmentSettings::default()).map_err(|e| {
-        match steps_from {
-            Some(name) => format!("segmentation of '{}' on {name}: {e}", run.name),
-            None => e.to_string(),
-        }
-    })
-}
-
-/// A run a model is scored on.
-#[derive(Clone)]
-struct ScoredSource {
-    index: usize,
-    role: Role,
-    run: Arc<Run>,
-}
-
-/// Validation runs, held-out runs, then chirp runs, that have the output and the identification
-/// run's sampling. A run resampled from an irregular log onto its own median step (the load
-/// option "resample") is put on the identification run's grid, as the batch does.
-fn scored_runs(session: &Session, ident: &Run, output: &str, notes: &mut Vec<String>) -> Vec<ScoredSource> {
-    notes.clear();
-    let mut scored = Vec::new();
-    for role in [Role::Validation, Role::HeldOut, Role::Chirp] {
-        for (index, entry) in session.runs.iter().enumerate().filter(|(_, r)| r.role == role) {
-            let name = entry.display_name();
-            let off_grid = (entry.run.dt_secs / ident.dt_secs - 1.0).abs() > DT_TOLERANCE;
-            if entry.run.output(output).is_none() {
-                notes.push(format!("{} run {name} has no {output} column; not scored", role.label()));
-            } else if off_grid && entry.options.resample {
-                notes.push(format!(
-                    "{} run {name}: resampled again from {:.5} s onto the identification run's {:.5} s grid",
-                    role.label(),
-                    entry.run.dt_secs,
-                    ident.dt_secs
-                ));
-                scored.push(ScoredSource { index, role, run: Arc::new(entry.run.resampled(ident.dt_secs)) });
-            } else if off_grid {
-                notes.push(format!(
-                    "{} run {name} is sampled every {:.4} s, the identification run every {:.4} s; not scored \
-                     (the load option \"resample\" puts it on the identification run's grid)",
-                    role.label(),
-                    entry.run.dt_secs,
-                    ident.dt_secs
-                ));
-            } else {
-                scored.push(ScoredSource { index, role, run: Arc::clone(&entry.run) });
-            }
-        }
-    }
-    scored
 }
 
 /// The automatic proposal of one output: the structure search's result, or its job while it runs.

@@ -1,0 +1,126 @@
+//! Which runs a model is identified on and scored on: the session's identification runs joined end
+//! to end, their segments, and the validation, held-out and chirp runs on the identification grid.
+use std::sync::Arc;
+
+use crate::core::identification::pipeline::{segments_for, step_signal};
+use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
+use crate::core::run::{Run, join_runs};
+use crate::ui::derived::model_cache::DT_TOLERANCE;
+use crate::ui::state::session::{Role, Session};
+
+/// The identification run from the session's identification runs: the one, or all of them joined
+/// end to end with the junctions (what the batch does with a project's); when they cannot be joined,
+/// the first alone, and the note says why.
+pub(super) fn join_identification(sources: &[Arc<Run>]) -> Option<(Arc<Run>, Vec<usize>, Option<String>)> {
+    let first = sources.first()?;
+    if sources.len() == 1 {
+        return Some((Arc::clone(first), Vec::new(), None));
+    }
+    let names: Vec<&str> = sources.iter().map(|r| r.name.as_str()).collect();
+    let runs: Vec<Run> = sources.iter().map(|r| Run::clone(r)).collect();
+    Some(match join_runs(&runs) {
+        Ok((joined, junctions)) => (
+            Arc::new(joined),
+            junctions,
+            Some(format!(
+                "identified on {} joined end to end (no segment crosses a join)",
+                names.join(" + ")
+            )),
+        ),
+        Err(e) => (
+            Arc::clone(first),
+            Vec::new(),
+            Some(format!(
+                "the identification runs cannot be joined ({e}): identified on {} alone",
+                first.name
+            )),
+        ),
+    })
+}
+
+/// The user's segments (checked), else steps detected on the input or on the `steps_from` channel,
+/// each joined run on its own.
+pub(super) fn detect_or_check(
+    run: &Run,
+    junctions: &[usize],
+    given: Option<&[Segment]>,
+    steps_from: Option<&str>,
+) -> Result<Vec<Segment>, String> {
+    if given.is_some() {
+        return segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string());
+    }
+    let signal = step_signal(run, steps_from).map_err(|e| e.to_string())?;
+    auto_segments_joined(signal, junctions, run.dt_secs, &SegmentSettings::default()).map_err(|e| {
+        match steps_from {
+            Some(name) => format!("segmentation of '{}' on {name}: {e}", run.name),
+            None => e.to_string(),
+        }
+    })
+}
+
+/// A run a model is scored on.
+#[derive(Clone)]
+pub(super) struct ScoredSource {
+    /// Index of the run in the session.
+    pub(super) index: usize,
+    pub(super) role: Role,
+    /// The run as scored (on the identification run's grid).
+    pub(super) run: Arc<Run>,
+    /// The session's run it was made from.
+    pub(super) source: Arc<Run>,
+}
+
+/// Validation runs, held-out runs, then chirp runs, that have the output and the identification
+/// run's sampling. A run resampled from an irregular log onto its own median step (the load
+/// option "resample") is put on the identification run's grid, as the batch does; the copy made
+/// for `previous` (the last call's runs) is kept while its session run is the same, so a refresh
+/// neither resamples again nor takes the unchanged run for a new one.
+pub(super) fn scored_runs(
+    session: &Session,
+    ident: &Run,
+    output: &str,
+    notes: &mut Vec<String>,
+    previous: &[ScoredSource],
+) -> Vec<ScoredSource> {
+    notes.clear();
+    let mut scored = Vec::new();
+    for role in [Role::Validation, Role::HeldOut, Role::Chirp] {
+        for (index, entry) in session.runs.iter().enumerate().filter(|(_, r)| r.role == role) {
+            let name = entry.display_name();
+            let off_grid = (entry.run.dt_secs / ident.dt_secs - 1.0).abs() > DT_TOLERANCE;
+            if entry.run.output(output).is_none() {
+                notes.push(format!("{} run {name} has no {output} column; not scored", role.label()));
+            } else if off_grid && entry.options.resample {
+                notes.push(format!(
+                    "{} run {name}: resampled again from {:.5} s onto the identification run's {:.5} s grid",
+                    role.label(),
+                    entry.run.dt_secs,
+                    ident.dt_secs
+                ));
+                let kept = previous.iter().find(|p| {
+                    Arc::ptr_eq(&p.source, &entry.run)
+                        && (p.run.dt_secs - ident.dt_secs).abs() <= f64::EPSILON * ident.dt_secs
+                });
+                let run =
+                    kept.map_or_else(|| Arc::new(entry.run.resampled(ident.dt_secs)), |p| Arc::clone(&p.run));
+                scored.push(ScoredSource { index, role, run, source: Arc::clone(&entry.run) });
+            } else if off_grid {
+                notes.push(format!(
+                    "{} run {name} is sampled every {:.4} s, the identification run every {:.4} s; not scored \
+                     (the load option \"resample\" puts it on the identification run's grid)",
+                    role.label(),
+                    entry.run.dt_secs,
+                    ident.dt_secs
+                ));
+            } else {
+                scored.push(ScoredSource {
+                    index,
+                    role,
+                    run: Arc::clone(&entry.run),
+                    source: Arc::clone(&entry.run),
+                });
+            }
+        }
+    }
+    scored
+}

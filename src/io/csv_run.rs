@@ -37,6 +37,7 @@ mod column_map;
 mod error;
 mod read;
 mod repair;
+mod table;
 mod window;
 mod write;
 
@@ -196,7 +197,7 @@ pub fn load_run(path: &Path, opts: &LoadOptions) -> Result<Run, RunFileError> {
 pub fn load_run_with_notes(path: &Path, opts: &LoadOptions) -> Result<(Run, LoadNotes), RunFileError> {
     // Streamed: a long log is parsed cell by cell into numbers, never held as text.
     std::fs::metadata(path).map_err(|io| RunFileError::Unreadable { file: path.to_owned(), io })?;
-    read::parse(path, read::Source::File(path), opts)
+    read::parse(path, table::Source::File(path), opts)
 }
 
 /// Read a run from CSV bytes in memory; `name` stands for the file in errors and names the run
@@ -211,7 +212,7 @@ pub fn parse_run_with_notes(
     bytes: &[u8],
     opts: &LoadOptions,
 ) -> Result<(Run, LoadNotes), RunFileError> {
-    read::parse(Path::new(name), read::Source::Bytes(bytes), opts)
+    read::parse(Path::new(name), table::Source::Bytes(bytes), opts)
 }
 
 /// Write a run file atomically (temporary file in the same directory, then rename); a missing

@@ -1,0 +1,362 @@
+
+#define JETID_T_STD_K 288.15
+#define JETID_P_STD_KPA 101.325
+#define JETID_KELVIN_FROM_CELSIUS 273.15
+#define JETID_PI 3.14159265358979323846
+#define JETID_STEP_DELAY 1
+#define JETID_STEP_AMBIENT 2
+#define JETID_STEP_SENSOR 3
+
+/* G(z) in z^-1: num[0] + num[1] z^-1 + ... over 1 + den[1] z^-1 + ... */
+typedef struct {
+    int n_num;
+    const double *num;
+    int n_den;
+    const double *den;
+    double steady_gain; /* G(1), or 0 without a steady state: the start is u0, steady_gain * u0 */
+} jetid_filter;
+
+typedef struct {
+    int kind;
+    int whole;
+    double frac;
+} jetid_input_step;
+
+typedef struct {
+    int kind;
+    double theta_exp, delta_exp;
+    double freq_hz, zeta, lag_s;
+} jetid_output_step;
+
+/* Everything one output's model needs, in signal-path order. */
+typedef struct {
+    const char *name;
+    jetid_filter tf;
+    double offset;
+    double v_center, v_scale;
+    int n_coeffs;
+    const double *coeffs;
+    int has_kink;
+    double knot_v, slope_change;
+    int has_calibration;
+    double hold_s, calibration_dc_gain;
+    int n_input_steps;
+    jetid_input_step input_steps[2];
+    int split;
+    int dead_time;
+    int has_rest;
+    jetid_filter rest;
+    double ln_root_re, ln_root_im;
+    int pair;
+    double gain, decel;
+    int has_schedule;
+    double log_ratio, state_log_ratio, ref_input, input_span;
+    int has_soak;
+    double soak_gain, soak_tau_s;
+    int n_output_steps;
+    jetid_output_step output_steps[2];
+} jetid_params;
+
+typedef struct {
+    double u[JETID_FILTER_LEN]; /* u[k], u[k-1], ... */
+    double y[JETID_FILTER_LEN]; /* y[k-1], y[k-2], ... */
+} jetid_filter_state;
+
+typedef struct {
+    double line[JETID_DELAY_LINE]; /* u[k], u[k-1], ... */
+} jetid_delay_state;
+
+typedef struct {
+    int lag;
+    double a, ramp, omega, h;
+    int steps;
+    double y_prev, x, lagged, pos, vel;
+} jetid_sensor_state;
+
+typedef struct {
+    const jetid_params *p;
+    double dt, calibration_offset;
+    int started;
+    jetid_delay_state input_delay[2];
+    jetid_filter_state linear, rest;
+    jetid_delay_state dead;
+    double x, x_old, prev, prev_old; /* the spool: output now and before, its input before */
+    double soak_a, soak_s;
+    jetid_sensor_state sensor[2];
+} jetid_state;
+
+static double jetid_filter_step(const jetid_filter *f, jetid_filter_state *s, double x, int first)
+{
+    int j;
+    double acc = 0.0;
+    if (first) {
+        for (j = 0; j < JETID_FILTER_LEN; j++) {
+            s->u[j] = x;
+            s->y[j] = f->steady_gain * x;
+        }
+    }
+    for (j = f->n_num - 1; j > 0; j--) s->u[j] = s->u[j - 1];
+    s->u[0] = x;
+    for (j = 0; j < f->n_num; j++) acc += f->num[j] * s->u[j];
+    for (j = 1; j < f->n_den; j++) acc -= f->den[j] * s->y[j - 1];
+    for (j = f->n_den - 1; j > 0; j--) s->y[j] = s->y[j - 1];
+    s->y[0] = acc;
+    return acc;
+}
+
+static double jetid_delay_step(jetid_delay_state *s, int whole, double frac, double x, int first)
+{
+    int j;
+    if (first) {
+        for (j = 0; j < whole + 2; j++) s->line[j] = x;
+    }
+    for (j = whole + 1; j > 0; j--) s->line[j] = s->line[j - 1];
+    s->line[0] = x;
+    return (1.0 - frac) * s->line[whole] + frac * s->line[whole + 1];
+}
+
+static double jetid_spool_step(jetid_state *s, double u, int first)
+{
+    const jetid_params *p = s->p;
+    double r, factor = 1.0, f, mag, re, im, next;
+    u = jetid_delay_step(&s->dead, p->dead_time, 0.0, u, first);
+    r = p->has_rest ? jetid_filter_step(&p->rest, &s->rest, u, first) : u;
+    if (first) s->x = s->x_old = s->prev = s->prev_old = r;
+    if (p->has_schedule)
+        factor = exp(-(p->log_ratio * (s->prev - p->ref_input) + p->state_log_ratio * (s->x - p->ref_input)) /
+                     p->input_span);
+    if (s->prev < s->x) factor *= p->decel;
+    f = factor > DBL_MIN ? factor : DBL_MIN;
+    mag = exp(p->ln_root_re / f);
+    re = mag * cos(p->ln_root_im / f);
+    im = mag * sin(p->ln_root_im / f);
+    if (p->pair) {
+        double a1 = 2.0 * re, a2 = re * re + im * im;
+        next = a1 * s->x - a2 * s->x_old + (1.0 - a1 + a2) * s->prev_old;
+    } else {
+        next = re * s->x + (1.0 - re) * s->prev;
+    }
+    s->x_old = s->x;
+    s->x = next;
+    s->prev_old = s->prev;
+    s->prev = r;
+    return p->gain * s->x;
+}
+
+static void jetid_sensor_init(jetid_sensor_state *s, const jetid_output_step *o, double dt)
+{
+    s->lag = o->lag_s > 1e-3;
+    if (s->lag) {
+        s->a = exp(-dt / o->lag_s);
+        s->ramp = 1.0 - o->lag_s * (1.0 - s->a) / dt;
+    }
+    s->omega = 2.0 * JETID_PI * o->freq_hz;
+    s->steps = (int)ceil(s->omega * dt / 0.25);
+    if (s->steps < 4) s->steps = 4;
+    s->h = dt / s->steps;
+}
+
+static void jetid_deriv(double omega, double zeta, double pos, double vel, double u, double *dpos, double *dvel)
+{
+    *dpos = vel;
+    *dvel = omega * omega * (u - pos) - 2.0 * zeta * omega * vel;
+}
+
+static double jetid_sensor_step(jetid_sensor_state *s, const jetid_output_step *o, double dt, double y, int first)
+{
+    double lagged, w0, w1, h = s->h, z = o->zeta, w = s->omega;
+    int k;
+    if (first) {
+        s->y_prev = s->x = s->lagged = s->pos = y;
+        s->vel = 0.0;
+        return s->pos;
+    }
+    if (s->lag) {
+        s->x = s->a * s->x + (1.0 - s->a) * s->y_prev + (y - s->y_prev) * s->ramp;
+        lagged = s->x;
+    } else {
+        lagged = y;
+    }
+    s->y_prev = y;
+    w0 = s->lagged;
+    w1 = lagged;
+    for (k = 0; k < s->steps; k++) {
+        double t = k * h, p1, v1, p2, v2, p3, v3, p4, v4;
+        double u0 = w0 + (w1 - w0) * t / dt, u1 = w0 + (w1 - w0) * (t + 0.5 * h) / dt,
+               u2 = w0 + (w1 - w0) * (t + h) / dt;
+        jetid_deriv(w, z, s->pos, s->vel, u0, &p1, &v1);
+        jetid_deriv(w, z, s->pos + 0.5 * h * p1, s->vel + 0.5 * h * v1, u1, &p2, &v2);
+        jetid_deriv(w, z, s->pos + 0.5 * h * p2, s->vel + 0.5 * h * v2, u1, &p3, &v3);
+        jetid_deriv(w, z, s->pos + h * p3, s->vel + h * v3, u2, &p4, &v4);
+        s->pos += h / 6.0 * (p1 + 2.0 * p2 + 2.0 * p3 + p4);
+        s->vel += h / 6.0 * (v1 + 2.0 * v2 + 2.0 * v3 + v4);
+    }
+    s->lagged = lagged;
+    return s->pos;
+}
+
+/* f(v): the polynomial in (v - v_center)/v_scale, plus the kink of static_map_order. */
+static double jetid_static_map(const jetid_params *p, double v)
+{
+    double x = (v - p->v_center) / p->v_scale, y = 0.0, kink = 0.0;
+    int i;
+    for (i = p->n_coeffs - 1; i >= 0; i--) y = y * x + p->coeffs[i];
+    if (p->has_kink) kink = p->slope_change * (v - p->knot_v > 0.0 ? v - p->knot_v : 0.0);
+    return y + kink;
+}
+
+static void jetid_init(jetid_state *s, const jetid_params *p, double dt, double calibration_offset)
+{
+    int i;
+    memset(s, 0, sizeof *s);
+    s->p = p;
+    s->dt = dt;
+    s->calibration_offset = calibration_offset;
+    s->started = 0;
+    if (p->has_soak) s->soak_a = exp(-dt / (p->soak_tau_s > DBL_MIN ? p->soak_tau_s : DBL_MIN));
+    for (i = 0; i < p->n_output_steps; i++)
+        if (p->output_steps[i].kind == JETID_STEP_SENSOR) jetid_sensor_init(&s->sensor[i], &p->output_steps[i], dt);
+}
+
+/* The input as the linear block sees it: delayed, corrected for inlet conditions. */
+static double jetid_input_stage(jetid_state *s, double u, double temp_c, double pressure_kpa)
+{
+    const jetid_params *p = s->p;
+    int i;
+    for (i = 0; i < p->n_input_steps; i++) {
+        const jetid_input_step *st = &p->input_steps[i];
+        if (st->kind == JETID_STEP_DELAY) {
+            u = jetid_delay_step(&s->input_delay[i], st->whole, st->frac, u, !s->started);
+        } else {
+            double theta = (temp_c + JETID_KELVIN_FROM_CELSIUS) / JETID_T_STD_K, delta = pressure_kpa / JETID_P_STD_KPA;
+            u = u / (delta * sqrt(theta));
+        }
+    }
+    return u;
+}
+
+static double jetid_step(jetid_state *s, double u, double temp_c, double pressure_kpa)
+{
+    const jetid_params *p = s->p;
+    int first = !s->started, i;
+    double v, y;
+    u = jetid_input_stage(s, u, temp_c, pressure_kpa) + s->calibration_offset;
+    v = p->split ? jetid_spool_step(s, u, first) : jetid_filter_step(&p->tf, &s->linear, u, first);
+    if (p->has_soak) {
+        if (first) s->soak_s = v;
+        s->soak_s = s->soak_a * s->soak_s + (1.0 - s->soak_a) * v;
+        v = v + p->soak_gain * (s->soak_s - v);
+    }
+    v += p->offset;
+    y = jetid_static_map(p, v);
+    for (i = 0; i < p->n_output_steps; i++) {
+        const jetid_output_step *st = &p->output_steps[i];
+        if (st->kind == JETID_STEP_SENSOR) {
+            y = jetid_sensor_step(&s->sensor[i], st, s->dt, y, first);
+        } else {
+            double theta = (temp_c + JETID_KELVIN_FROM_CELSIUS) / JETID_T_STD_K, delta = pressure_kpa / JETID_P_STD_KPA;
+            y *= pow(theta, st->theta_exp) * pow(delta, st->delta_exp);
+        }
+    }
+    s->started = 1;
+    return y;
+}
+
+static double jetid_mean(const double *x, size_t n)
+{
+    double s = 0.0;
+    size_t i;
+    for (i = 0; i < n; i++) s += x[i];
+    return n ? s / (double)n : 0.0;
+}
+
+static double jetid_steady(const jetid_params *p, double x)
+{
+    return jetid_static_map(p, p->calibration_dc_gain * x + p->offset);
+}
+
+static double jetid_holds_cost(const jetid_params *p, const double *hu, const double *hy, size_t n, double b)
+{
+    double c = 0.0, r;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        r = hy[i] - jetid_steady(p, hu[i] + b);
+        c += r * r;
+    }
+    return c;
+}
+
+/* calibration_drift: the input offset that puts the model's steady states on the run's own holds of
+ * the measured output (last half of every stretch holding within 1 % of its range for hold_s), by
+ * Gauss-Newton on the holds' means. u: the raw input; it goes through the input stage first. */
+static double jetid_calibration_offset(const jetid_params *p, const double *u, const double *temp_c,
+                                       const double *pressure_kpa, const double *y, size_t n, double dt)
+{
+    jetid_state s;
+    double *us, *hu, *hy, lo, hi, tol, span, h, offset = 0.0;
+    size_t k, start = 0, n_holds = 0, need, tail;
+    int it;
+    if (!p->has_calibration || n == 0) return 0.0;
+    us = malloc(n * sizeof *us);
+    hu = malloc(n * sizeof *hu);
+    hy = malloc(n * sizeof *hy);
+    if (!us || !hu || !hy) {
+        free(us);
+        free(hu);
+        free(hy);
+        return 0.0;
+    }
+    jetid_init(&s, p, dt, 0.0);
+    for (k = 0; k < n; k++) {
+        us[k] = jetid_input_stage(&s, u[k], temp_c ? temp_c[k] : 0.0, pressure_kpa ? pressure_kpa[k] : 0.0);
+        s.started = 1;
+    }
+    lo = hi = y[0];
+    for (k = 1; k < n; k++) {
+        if (y[k] < lo) lo = y[k];
+        if (y[k] > hi) hi = y[k];
+    }
+    tol = 0.01 * (hi - lo > DBL_MIN ? hi - lo : DBL_MIN);
+    need = (size_t)ceil(p->hold_s / dt);
+    tail = (size_t)round(0.5 * p->hold_s / dt);
+    if (tail < 2) tail = 2;
+    for (k = 1; k <= n; k++) {
+        if (k == n || fabs(y[k] - y[start]) > tol) {
+            if (k - start >= (need > tail ? need : tail)) {
+                hu[n_holds] = jetid_mean(us + (k - tail), tail);
+                hy[n_holds] = jetid_mean(y + (k - tail), tail);
+                n_holds++;
+            }
+            start = k;
+        }
+    }
+    lo = hi = us[0];
+    for (k = 1; k < n; k++) {
+        if (us[k] < lo) lo = us[k];
+        if (us[k] > hi) hi = us[k];
+    }
+    span = hi - lo > DBL_MIN ? hi - lo : DBL_MIN;
+    h = 1e-4 * span;
+    for (it = 0; n_holds > 0 && isfinite(span) && it < 30; it++) {
+        double jtj = 0.0, jtr = 0.0, step;
+        for (k = 0; k < n_holds; k++) {
+            double r = hy[k] - jetid_steady(p, hu[k] + offset);
+            double j = (jetid_steady(p, hu[k] + offset + h) - jetid_steady(p, hu[k] + offset - h)) / (2.0 * h);
+            jtj += j * j;
+            jtr += j * r;
+        }
+        if (jtj <= DBL_MIN) break;
+        step = jtr / jtj;
+        if (step < -0.1 * span) step = -0.1 * span;
+        if (step > 0.1 * span) step = 0.1 * span;
+        while (fabs(step) > 1e-12 * span &&
+               jetid_holds_cost(p, hu, hy, n_holds, offset + step) > jetid_holds_cost(p, hu, hy, n_holds, offset))
+            step *= 0.5;
+        offset += step;
+        if (fabs(step) <= 1e-9 * span) break;
+    }
+    free(us);
+    free(hu);
+    free(hy);
+    return isfinite(offset) && fabs(offset) <= 0.5 * span ? offset : 0.0;
+}

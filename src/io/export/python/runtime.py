@@ -1,0 +1,422 @@
+
+_MIN_POSITIVE = sys.float_info.min
+_T_STD_K = 288.15
+_P_STD_KPA = 101.325
+_KELVIN_FROM_CELSIUS = 273.15
+AMBIENT_CHANNELS = ("ambient_temp_c", "ambient_pressure_kpa")
+
+
+def _round_half_away(x):
+    """Rust's f64::round for x >= 0 (Python's round() rounds half to even)."""
+    return math.floor(x + 0.5)
+
+
+class _Filter:
+    """G(z) in z^-1 simulated from the steady state of its first input."""
+
+    def __init__(self, f):
+        self.num, self.den, self.steady_gain = f["num"], f["den"], f["steady_gain"]
+        self.u = None
+
+    def step(self, x):
+        if self.u is None:
+            self.u = [x] * len(self.num)
+            self.y = [self.steady_gain * x] * len(self.den)
+        self.u = [x] + self.u[:-1]
+        acc = 0.0
+        for b, uk in zip(self.num, self.u):
+            acc += b * uk
+        for a, yk in zip(self.den[1:], self.y):
+            acc -= a * yk
+        self.y = [acc] + self.y[:-1]
+        return acc
+
+
+class _Delay:
+    """u(k - whole - frac), linearly interpolated; the samples before the start equal the first."""
+
+    def __init__(self, whole, frac):
+        self.whole, self.frac = whole, frac
+        self.line = None
+
+    def step(self, x):
+        if self.line is None:
+            self.line = [x] * (self.whole + 2)
+        self.line = [x] + self.line[:-1]
+        return (1.0 - self.frac) * self.line[self.whole] + self.frac * self.line[self.whole + 1]
+
+
+class _Spool:
+    """The linear block split into its spool root and the rest: the spool's time constant scaled by
+    the operating point it is heading for (schedule) and while falling (decel)."""
+
+    def __init__(self, s):
+        self.dead = _Delay(s["dead_time"], 0.0)
+        self.rest = _Filter(s["rest"]) if s["rest"] is not None else None
+        self.ln_re, self.ln_im = s["ln_root"]
+        self.pair, self.gain, self.decel, self.schedule = s["pair"], s["gain"], s["decel"], s["schedule"]
+        self.started = False
+
+    def step(self, u):
+        u = self.dead.step(u)
+        r = self.rest.step(u) if self.rest is not None else u
+        if not self.started:
+            self.x = self.x_old = self.prev = self.prev_old = r
+            self.started = True
+        factor = 1.0
+        if self.schedule is not None:
+            log_ratio, state_log_ratio, ref, span = self.schedule
+            factor = math.exp(-(log_ratio * (self.prev - ref) + state_log_ratio * (self.x - ref)) / span)
+        if self.prev < self.x:
+            factor *= self.decel
+        f = max(factor, _MIN_POSITIVE)
+        mag = math.exp(self.ln_re / f)
+        root_re, root_im = mag * math.cos(self.ln_im / f), mag * math.sin(self.ln_im / f)
+        if self.pair:
+            a1, a2 = 2.0 * root_re, root_re * root_re + root_im * root_im
+            nxt = a1 * self.x - a2 * self.x_old + (1.0 - a1 + a2) * self.prev_old
+        else:
+            nxt = root_re * self.x + (1.0 - root_re) * self.prev
+        self.x_old, self.x = self.x, nxt
+        self.prev_old, self.prev = self.prev, r
+        return self.gain * self.x
+
+
+class _Soak:
+    """Thermal soak: v + g (S_tau(z) v - v), S_tau a unit-gain first-order lag from v's first value."""
+
+    def __init__(self, gain, tau_s, dt):
+        self.gain, self.a = gain, math.exp(-dt / max(tau_s, _MIN_POSITIVE))
+        self.s = None
+
+    def step(self, v):
+        if self.s is None:
+            self.s = v
+        self.s = self.a * self.s + (1.0 - self.a) * v
+        return v + self.gain * (self.s - v)
+
+
+class _Sensor:
+    """Sensor lag (exact for an input linear between samples) and resonance (RK4)."""
+
+    def __init__(self, freq_hz, zeta, lag_s, dt):
+        self.dt, self.zeta = dt, zeta
+        self.lag = lag_s > 1e-3
+        if self.lag:
+            self.a = math.exp(-dt / lag_s)
+            self.ramp = 1.0 - lag_s * (1.0 - self.a) / dt
+        self.omega = 2.0 * math.pi * freq_hz
+        self.steps = max(math.ceil(self.omega * dt / 0.25), 4)
+        self.h = dt / self.steps
+        self.started = False
+
+    def _deriv(self, pos, vel, u):
+        return vel, self.omega * self.omega * (u - pos) - 2.0 * self.zeta * self.omega * vel
+
+    def step(self, y):
+        if not self.started:
+            self.started = True
+            self.y_prev = self.x = self.lagged = self.pos = y
+            self.vel = 0.0
+            return self.pos
+        if self.lag:
+            self.x = self.a * self.x + (1.0 - self.a) * self.y_prev + (y - self.y_prev) * self.ramp
+            lagged = self.x
+        else:
+            lagged = y
+        self.y_prev = y
+        w0, w1, h, dt = self.lagged, lagged, self.h, self.dt
+        pos, vel = self.pos, self.vel
+        for k in range(self.steps):
+            t = k * h
+            u0 = w0 + (w1 - w0) * t / dt
+            u1 = w0 + (w1 - w0) * (t + 0.5 * h) / dt
+            u2 = w0 + (w1 - w0) * (t + h) / dt
+            k1 = self._deriv(pos, vel, u0)
+            k2 = self._deriv(pos + 0.5 * h * k1[0], vel + 0.5 * h * k1[1], u1)
+            k3 = self._deriv(pos + 0.5 * h * k2[0], vel + 0.5 * h * k2[1], u1)
+            k4 = self._deriv(pos + h * k3[0], vel + h * k3[1], u2)
+            pos += h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
+            vel += h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
+        self.pos, self.vel, self.lagged = pos, vel, lagged
+        return pos
+
+
+def static_map(output, v):
+    """f(v): the polynomial in (v - v_center)/v_scale, plus the kink of static_map_order."""
+    p = OUTPUTS[output]
+    center, scale, coeffs = p["map"]
+    x = (v - center) / scale
+    y = 0.0
+    for c in reversed(coeffs):
+        y = y * x + c
+    kink = 0.0
+    if p["kink"] is not None:
+        knot, slope_change = p["kink"]
+        kink = slope_change * max(v - knot, 0.0)
+    return y + kink
+
+
+def static_map_slope(output, v):
+    """df/dv, the kink included."""
+    p = OUTPUTS[output]
+    center, scale, coeffs = p["map"]
+    x = (v - center) / scale
+    d = 0.0
+    for i in range(len(coeffs) - 1, 0, -1):
+        d = d * x + i * coeffs[i]
+    slope = d / scale
+    if p["kink"] is not None and v > p["kink"][0]:
+        slope += p["kink"][1]
+    return slope
+
+
+def _conditions(temp_c, pressure_kpa):
+    if not (math.isfinite(temp_c) and temp_c > -_KELVIN_FROM_CELSIUS):
+        raise ValueError(f"ambient_temp_c = {temp_c} is not a temperature")
+    if not (math.isfinite(pressure_kpa) and pressure_kpa > 0.0):
+        raise ValueError(f"ambient_pressure_kpa = {pressure_kpa} is not a pressure")
+    return (temp_c + _KELVIN_FROM_CELSIUS) / _T_STD_K, pressure_kpa / _P_STD_KPA
+
+
+class Model:
+    """One output's model, stepped one sample at a time (as the C export's step function)."""
+
+    def __init__(self, output, dt=DT, calibration_offset=0.0):
+        p = OUTPUTS[output]
+        self.output, self.p, self.offset = output, p, calibration_offset
+        self.input_steps = [_Delay(s[1], s[2]) if s[0] == "delay" else None for s in p["input_steps"]]
+        self.linear = _Spool(p["split"]) if p["split"] is not None else _Filter(p["tf"])
+        self.soak = _Soak(p["soak"][0], p["soak"][1], dt) if p["soak"] is not None else None
+        self.output_steps = [_Sensor(s[1], s[2], s[3], dt) if s[0] == "sensor" else None for s in p["output_steps"]]
+
+    def input_stage(self, u, temp_c=None, pressure_kpa=None):
+        """The input as the linear block sees it: delayed, corrected for inlet conditions."""
+        for spec, delay in zip(self.p["input_steps"], self.input_steps):
+            if delay is not None:
+                u = delay.step(u)
+            else:
+                theta, delta = _conditions(temp_c, pressure_kpa)
+                u = u / (delta * math.sqrt(theta))
+        return u
+
+    def step(self, u, temp_c=None, pressure_kpa=None):
+        """The next output sample from the next input sample (and inlet conditions, when corrected)."""
+        u = self.input_stage(u, temp_c, pressure_kpa) + self.offset
+        v = self.linear.step(u)
+        if self.soak is not None:
+            v = self.soak.step(v)
+        v += self.p["offset"]
+        y = static_map(self.output, v)
+        for spec, sensor in zip(self.p["output_steps"], self.output_steps):
+            if sensor is not None:
+                y = sensor.step(y)
+            else:
+                theta, delta = _conditions(temp_c, pressure_kpa)
+                y *= theta ** spec[1] * delta ** spec[2]
+        return y
+
+
+def _plateaus(y, dt, hold_s, tail_s):
+    """Windows (start, end): the last tail_s of each stretch where y holds within 1 % of its range."""
+    lo, hi = min(y), max(y)
+    tol = 0.01 * max(hi - lo, _MIN_POSITIVE)
+    need = math.ceil(hold_s / dt)
+    tail = max(_round_half_away(tail_s / dt), 2)
+    out, start = [], 0
+    for k in range(1, len(y) + 1):
+        if k == len(y) or abs(y[k] - y[start]) > tol:
+            if k - start >= max(need, tail):
+                out.append((k - tail, k))
+            start = k
+    return out
+
+
+def _mean(x):
+    s = 0.0
+    for v in x:
+        s += v
+    return s / len(x) if len(x) else 0.0
+
+
+def calibration_offset(output, u_stage, y, dt=DT):
+    """calibration_drift's input offset for one run: the offset that puts the steady states on the
+    run's own holds of the measured output y (u_stage: the input after the input stage)."""
+    p = OUTPUTS[output]
+    if p["calibration"] is None:
+        return 0.0
+    hold_s, dc = p["calibration"]
+
+    def steady(x):
+        return static_map(output, dc * x + p["offset"])
+
+    holds = [(_mean(u_stage[a:b]), _mean(y[a:b])) for a, b in _plateaus(y, dt, hold_s, 0.5 * hold_s)]
+    lo, hi = min(u_stage), max(u_stage)
+    span = max(hi - lo, _MIN_POSITIVE)
+    if not holds or not math.isfinite(span):
+        return 0.0
+
+    def cost(b):
+        s = 0.0
+        for uh, yh in holds:
+            s += (yh - steady(uh + b)) ** 2
+        return s
+
+    h = 1e-4 * span
+    offset = 0.0
+    for _ in range(30):
+        jtj = jtr = 0.0
+        for uh, yh in holds:
+            r = yh - steady(uh + offset)
+            j = (steady(uh + offset + h) - steady(uh + offset - h)) / (2.0 * h)
+            jtj += j * j
+            jtr += j * r
+        if jtj <= _MIN_POSITIVE:
+            break
+        step = min(max(jtr / jtj, -0.1 * span), 0.1 * span)
+        while abs(step) > 1e-12 * span and cost(offset + step) > cost(offset):
+            step *= 0.5
+        offset += step
+        if abs(step) <= 1e-9 * span:
+            break
+    return offset if math.isfinite(offset) and abs(offset) <= 0.5 * span else 0.0
+
+
+def needs_ambient(output):
+    return any(s[0] == "ambient" for s in OUTPUTS[output]["input_steps"])
+
+
+def simulate(u, aux=None, measured=None, dt=DT):
+    """Every output from the input u (array), from the steady state of u[0].
+
+    aux: {channel: array}, with ambient_temp_c and ambient_pressure_kpa for outputs corrected for
+    inlet conditions. measured: {output: array} of measured outputs, used only by calibration_drift
+    (its per-run offset); without it the run is simulated uncalibrated, as `jetid predict` does for
+    a run without that output. Returns {output: numpy array}."""
+    u = [float(x) for x in u]
+    aux = aux or {}
+    measured = measured or {}
+    out = {}
+    for name in OUTPUTS:
+        temp = pres = [None] * len(u)
+        if needs_ambient(name):
+            missing = [c for c in AMBIENT_CHANNELS if c not in aux]
+            if missing:
+                raise ValueError(f"output '{name}' is corrected for inlet conditions and needs {missing}")
+            temp, pres = [float(x) for x in aux[AMBIENT_CHANNELS[0]]], [float(x) for x in aux[AMBIENT_CHANNELS[1]]]
+        offset = 0.0
+        if OUTPUTS[name]["calibration"] is not None and name in measured:
+            stage = Model(name, dt)
+            u_stage = [stage.input_stage(uk, tk, pk) for uk, tk, pk in zip(u, temp, pres)]
+            offset = calibration_offset(name, u_stage, [float(y) for y in measured[name]], dt)
+        model = Model(name, dt, offset)
+        out[name] = np.array([model.step(uk, tk, pk) for uk, tk, pk in zip(u, temp, pres)])
+    return out
+
+
+def _tf_zinv(num, den):
+    """A control.TransferFunction from coefficients in z^-1 (padded to equal length)."""
+    n = max(len(num), len(den))
+    return control.TransferFunction(list(num) + [0.0] * (n - len(num)), list(den) + [0.0] * (n - len(den)), DT)
+
+
+def local_dynamics(output, u_star):
+    """The unit-steady-gain local dynamics at the steady input u_star, in z^-1 (num, den), as jetid's
+    operating points build them: the linear block (its spool at the time constant of u_star when
+    scheduled; the rising one when asymmetric), then the effects' dead time, soak and sensor."""
+    p = OUTPUTS[output]
+    s = p["split"]
+    if s is None:
+        g1 = p["tf"]["steady_gain"]
+        num, den = np.array(p["tf"]["num"]) / g1, np.array(p["tf"]["den"])
+    else:
+        factor = 1.0
+        if s["schedule"] is not None:
+            log_ratio, state_log_ratio, ref, span = s["schedule"]
+            factor = math.exp(-(log_ratio + state_log_ratio) * (u_star - ref) / span)
+        f = max(factor, _MIN_POSITIVE)
+        mag = math.exp(s["ln_root"][0] / f)
+        re, im = mag * math.cos(s["ln_root"][1] / f), mag * math.sin(s["ln_root"][1] / f)
+        if s["pair"]:
+            a1, a2 = 2.0 * re, re * re + im * im
+            spool_num, spool_den = [0.0, 0.0, 1.0 - a1 + a2], [1.0, -a1, a2]
+        else:
+            spool_num, spool_den = [0.0, 1.0 - re], [1.0, -re]
+        num, den = np.convolve([0.0] * s["dead_time"] + [1.0], spool_num), np.array(spool_den)
+        if s["rest"] is not None:
+            num, den = np.convolve(num, s["rest"]["num"]), np.convolve(den, s["rest"]["den"])
+    fixed = p["effect_dynamics"]
+    num, den = np.convolve(num, fixed["num"]), np.convolve(den, fixed["den"])
+    return num / (np.sum(num) / np.sum(den)), den
+
+
+def operating_point(output, u_star):
+    """The local linear model at the steady state of input u_star (on a standard day, without
+    calibration offset), as a control.TransferFunction: K G(z)/G(1) with K = f'(v*) G(1) the local
+    gain, v* = G(1) u_star + offset the linear block's steady output, and the effects linearised
+    where they act (see local_dynamics)."""
+    p = OUTPUTS[output]
+    g1 = p["tf"]["steady_gain"]
+    v_star = g1 * u_star + p["offset"]
+    k = static_map_slope(output, v_star) * g1
+    num, den = local_dynamics(output, u_star)
+    return _tf_zinv(k * num, den)
+
+
+def _median_step(t):
+    steps = sorted(b - a for a, b in zip(t, t[1:]))
+    if not steps:
+        return 0.0
+    mid = len(steps) // 2
+    m = 0.5 * (steps[mid - 1] + steps[mid]) if len(steps) % 2 == 0 else steps[mid]
+    return float("%.11e" % m)
+
+
+def _read_csv(path, columns):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        raise ValueError(f"{path} is empty")
+    header = [h.strip() for h in rows[0]]
+    data = {}
+    for name in columns:
+        if name not in header:
+            raise ValueError(f"{path} has no column '{name}' (it has {', '.join(header)})")
+        i = header.index(name)
+        data[name] = [float(r[i]) for r in rows[1:] if any(c.strip() for c in r)]
+    return data
+
+
+def main(argv):
+    args = [a for a in argv[1:] if a != "--calibrate"]
+    calibrate = len(args) != len(argv) - 1
+    if len(args) != 2:
+        print(f"usage: {argv[0]} IN.csv OUT.csv [--calibrate]", file=sys.stderr)
+        return 2
+    wanted = ["time_s", INPUT]
+    if any(needs_ambient(name) for name in OUTPUTS):
+        wanted += list(AMBIENT_CHANNELS)
+    if calibrate:
+        wanted += [n for n in OUTPUTS if OUTPUTS[n]["calibration"] is not None]
+    data = _read_csv(args[0], wanted)
+    t = data["time_s"]
+    dt = _median_step(t)
+    if not abs(dt / DT - 1.0) <= 0.02:
+        print(f"error: {args[0]} is sampled every {dt} s but the model every {DT} s", file=sys.stderr)
+        return 1
+    aux = {c: data[c] for c in AMBIENT_CHANNELS if c in data}
+    measured = {n: data[n] for n in OUTPUTS if n in data}
+    y = simulate(data[INPUT], aux, measured, dt)
+    with open(args[1], "w", newline="") as f:
+        f.write(",".join(["time_s", INPUT] + list(OUTPUTS)) + "\n")
+        for k in range(len(t)):
+            f.write(",".join(repr(float(x)) for x in [t[k], data[INPUT][k]] + [y[n][k] for n in OUTPUTS]) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main(sys.argv))
+    except (OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        sys.exit(1)

@@ -6,12 +6,12 @@ use crate::core::effects::EffectId;
 
 use crate::ui::derived::Derived;
 use crate::ui::derived::model_cache::IdentCache;
-use crate::ui::file_dialog::{self, PendingPick, PickPoll, PickPurpose};
+use crate::ui::file_dialog::{self, PickPurpose};
 use crate::ui::mapping_ui::{self, MappingDialog, MappingTarget};
 use crate::ui::panels_ui;
-use crate::ui::path_prompt::{self, PathPrompt};
+use crate::ui::path_prompt;
 use crate::ui::state::command::{Command, FileAction};
-use crate::ui::state::session::{LoadFailure, Role, SavedSession, Session, SessionRun, file_label};
+use crate::ui::state::session::{LoadFailure, SavedSession, Session, SessionRun, file_label};
 use crate::ui::state::{Tab, ViewState};
 use crate::ui::views;
 
@@ -409,93 +409,6 @@ impl App {
     /// The output the model views show: the chosen one, else the first one identified.
     pub fn selected_output(&self) -> Option<String> {
         views::selected_output(&self.view, &self.cache)
-    }
-
-    /// A file action whose failure goes to the error window.
-    fn file_action_shown(&mut self, action: FileAction, path: &std::path::Path) {
-        if let Err(err) = self.file_action(action, path) {
-            self.push_error(&err);
-        }
-    }
-
-    /// Use the in-app path field's path. A model or project file that fails keeps the field open
-    /// with the error; a run file that fails goes to the load-failure window like any other.
-    fn submit_path(&mut self) {
-        let Some(mut prompt) = self.view.path_prompt.take() else { return };
-        let path = prompt.path();
-        match prompt.purpose {
-            PickPurpose::Runs => {
-                let role = Role::guess_from_path(&path, &self.session);
-                self.apply(Command::load(path, role));
-            }
-            PickPurpose::File(action) => {
-                if let Err(err) = self.file_action(action, &path) {
-                    self.view.status = Some(format!("{} failed", prompt.title()));
-                    prompt.error = Some(format!("{err:#}"));
-                    self.view.path_prompt = Some(prompt);
-                }
-            }
-        }
-    }
-
-    /// The folder a file dialog starts in: the selected run's.
-    fn start_dir(&self) -> Option<std::path::PathBuf> {
-        self.view
-            .selected_run
-            .and_then(|i| self.session.runs.get(i))
-            .and_then(|r| r.path.parent().map(ToOwned::to_owned))
-    }
-
-    /// The in-app path field for `purpose`, starting in the selected run's folder (else the
-    /// working folder).
-    fn open_path_prompt(&mut self, purpose: PickPurpose, note: Option<String>) {
-        let dir = self.start_dir().or_else(|| std::env::current_dir().ok()).unwrap_or_default();
-        let mut prompt = PathPrompt::new(purpose, &dir);
-        prompt.note = note;
-        self.view.status = Some(format!("{}: type the path", prompt.title()));
-        self.view.path_prompt = Some(prompt);
-    }
-
-    fn open_picker(&mut self, ctx: &egui::Context, purpose: PickPurpose) {
-        if self.view.picker.is_some() || self.view.path_prompt.is_some() {
-            return;
-        }
-        if !self.view.native_dialogs {
-            return self.open_path_prompt(purpose, None);
-        }
-        let start_dir = self.start_dir();
-        let ctx = ctx.clone();
-        let repaint = move || ctx.request_repaint();
-        self.view.picker = Some(match purpose {
-            PickPurpose::Runs => PendingPick::open_runs(start_dir, repaint),
-            PickPurpose::File(action) => PendingPick::open_file(action, start_dir, repaint),
-        });
-        self.view.status = Some("Choosing a file…".into());
-    }
-
-    fn poll_picker(&mut self) {
-        let Some(picker) = &self.view.picker else { return };
-        let purpose = picker.purpose;
-        let paths = match picker.poll() {
-            PickPoll::Waiting => return,
-            PickPoll::Done(paths) => paths,
-            PickPoll::NoDialog => {
-                // No dialog came up; ask here from now on.
-                self.view.picker = None;
-                self.view.native_dialogs = false;
-                let note = "The system's file dialog could not be opened.".to_owned();
-                return self.open_path_prompt(purpose, Some(note));
-            }
-        };
-        self.view.picker = None;
-        self.view.status = None;
-        for path in paths {
-            let command = match purpose {
-                PickPurpose::Runs => Command::load(path.clone(), Role::guess_from_path(&path, &self.session)),
-                PickPurpose::File(action) => action.command(path),
-            };
-            self.apply(command);
-        }
     }
 }
 

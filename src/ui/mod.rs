@@ -13,6 +13,7 @@ pub mod app;
 pub mod derived;
 mod edit;
 pub mod file_dialog;
+mod file_picking;
 mod files;
 pub mod mapping_ui;
 pub mod panels_ui;

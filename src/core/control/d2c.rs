@@ -72,17 +72,11 @@ pub fn d2c_zoh(tf: &DiscreteTf) -> Result<ContinuousTf, D2cError> {
             return Err(D2cError::RepeatedPole { re: p.re, im: p.im });
         }
     }
-    // Direct feedthrough D, and the strictly proper remainder N(z) − D·A(z).
-    let n = den_z.len() - 1;
-    let padded: Vec<f64> =
-        std::iter::repeat_n(0.0, n + 1 - num_z.len()).chain(num_z.iter().copied()).collect();
-    let feedthrough = padded[0] / den_z[0];
-    let remainder: Vec<f64> = padded.iter().zip(&den_z).map(|(b, a)| b - feedthrough * a).collect();
-    let den_deriv: Vec<f64> = den_z[..n].iter().enumerate().map(|(i, a)| a * (n - i) as f64).collect();
+    let (feedthrough, residues) = partial_fractions(&num_z, &den_z, &poles);
     let modes: Vec<(Complex64, Complex64)> = poles
         .iter()
-        .map(|p| {
-            let residue = polyval_complex(&remainder, *p) / polyval_complex(&den_deriv, *p);
+        .zip(residues)
+        .map(|(p, residue)| {
             let lambda = Complex64::new(p.norm().ln(), p.arg()) / dt;
             let gain = if (p - 1.0).norm() < 1e-12 { residue / dt } else { residue * lambda / (p - 1.0) };
             (lambda, gain)
@@ -191,19 +185,27 @@ pub fn c2d_zoh(gc: &ContinuousTf, dt_secs: f64) -> Result<DiscreteTf, D2cError> 
     Ok(DiscreteTf::new(num_z, char_poly, dt_secs)?.with_input_delay(delay))
 }
 
+/// `num/den` (descending powers, deg num ≤ deg den, distinct `roots` of `den`) as `D + Σ rᵢ/(x − rootᵢ)`:
+/// the direct feedthrough D and the residues, `rᵢ = (num − D·den)(rootᵢ) / den′(rootᵢ)`.
+fn partial_fractions(num: &[f64], den: &[f64], roots: &[Complex64]) -> (f64, Vec<Complex64>) {
+    let n = den.len().saturating_sub(1);
+    let padded: Vec<f64> =
+        std::iter::repeat_n(0.0, (n + 1).saturating_sub(num.len())).chain(num.iter().copied()).collect();
+    let lead = den.first().copied().unwrap_or(1.0);
+    let feedthrough = padded.first().copied().unwrap_or(0.0) / lead;
+    let remainder: Vec<f64> = padded.iter().zip(den).map(|(b, a)| b - feedthrough * a).collect();
+    let den_deriv: Vec<f64> = den[..n].iter().enumerate().map(|(i, a)| a * (n - i) as f64).collect();
+    let residues =
+        roots.iter().map(|r| polyval_complex(&remainder, *r) / polyval_complex(&den_deriv, *r)).collect();
+    (feedthrough, residues)
+}
+
 /// Unit-step response of `gc` at times `t` (s), from the modal form: `D + Σ cᵢ/λᵢ·(e^(λᵢ·t) − 1)`
 /// after the delay. Poles must be distinct and nonzero (as [`d2c_zoh`] gives them).
 pub fn step_response(gc: &ContinuousTf, t: &[f64]) -> Result<Vec<f64>, D2cError> {
     let lambdas = poly::roots(&gc.den_s)?;
-    let n = lambdas.len();
-    let den_deriv: Vec<f64> = gc.den_s[..n].iter().enumerate().map(|(i, a)| a * (n - i) as f64).collect();
-    let padded: Vec<f64> = std::iter::repeat_n(0.0, (n + 1).saturating_sub(gc.num_s.len()))
-        .chain(gc.num_s.iter().copied())
-        .collect();
-    let d = padded[0] / gc.den_s[0];
-    let rem: Vec<f64> = padded.iter().zip(&gc.den_s).map(|(b, a)| b - d * a).collect();
-    let modes: Vec<(Complex64, Complex64)> =
-        lambdas.iter().map(|l| (*l, polyval_complex(&rem, *l) / polyval_complex(&den_deriv, *l))).collect();
+    let (d, residues) = partial_fractions(&gc.num_s, &gc.den_s, &lambdas);
+    let modes: Vec<(Complex64, Complex64)> = lambdas.into_iter().zip(residues).collect();
     Ok(t.iter()
         .map(|&tk| {
             let s = tk - gc.delay_secs;

@@ -92,6 +92,11 @@ fn several_identification_runs_are_joined_as_the_batch_joins_them_and_saved() {
     assert_eq!(ident.run.len(), lens.iter().sum::<usize>(), "both runs, end to end");
     let segments = ident.segments.as_ref().unwrap();
     assert!(segments.iter().all(|s| s.end <= lens[0] || s.start >= lens[0]), "no segment crosses the join");
+    // The Data view draws each run's own segments: the second run starts at the junction.
+    let ident_indices: Vec<usize> =
+        (0..app.session.runs.len()).filter(|&i| app.session.runs[i].role == Role::Identification).collect();
+    assert_eq!(ident.part_start(ident_indices[0]), Some(0));
+    assert_eq!(ident.part_start(ident_indices[1]), Some(lens[0]));
     let notes = &app.cache.output("shaft_speed_rpm").unwrap().notes;
     assert!(notes.iter().any(|n| n.contains("joined end to end")), "{notes:?}");
     let (text, _) = jetid::ui::project_io::project_text(&app.session, &project).unwrap();

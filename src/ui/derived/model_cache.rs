@@ -47,8 +47,9 @@ pub struct IdentCache {
     /// The identification run: the session's identification runs joined end to end when there
     /// are several (as the batch joins a project's), each later one starting at a junction.
     pub run: Arc<Run>,
-    /// The session's identification runs `run` was made from.
+    /// The session's identification runs `run` was made from, and their indices in the session.
     sources: Vec<Arc<Run>>,
+    source_indices: Vec<usize>,
     /// Where each later identification run starts in `run`.
     junctions: Vec<usize>,
     /// How `run` was made from several runs, or why it could not be, in words.
@@ -69,6 +70,7 @@ impl IdentCache {
             session.runs.iter().enumerate().filter(|(_, r)| r.role == Role::Identification).collect();
         let run_index = idents.first()?.0;
         let sources: Vec<Arc<Run>> = idents.iter().map(|(_, e)| Arc::clone(&e.run)).collect();
+        let source_indices: Vec<usize> = idents.iter().map(|(i, _)| *i).collect();
         let same_sources = old.as_ref().is_some_and(|o| {
             o.sources.len() == sources.len() && o.sources.iter().zip(&sources).all(|(a, b)| Arc::ptr_eq(a, b))
         });
@@ -110,6 +112,7 @@ impl IdentCache {
             run_index,
             run,
             sources,
+            source_indices,
             junctions,
             join_note,
             given_segments: given,
@@ -121,6 +124,16 @@ impl IdentCache {
 
     pub fn output(&self, name: &str) -> Option<&OutputCache> {
         self.outputs.iter().find(|o| o.name == name)
+    }
+
+    /// Where the session's run `index` starts in the identification run, when it is part of it
+    /// (the first identification run at 0, a later one at its junction).
+    pub fn part_start(&self, index: usize) -> Option<usize> {
+        let k = self.source_indices.iter().position(|&i| i == index)?;
+        match k {
+            0 => Some(0),
+            _ => self.junctions.get(k - 1).copied(),
+        }
     }
 
     /// Take every automatic proposal whose job has ended and rebuild its output's model; true when
@@ -143,6 +156,11 @@ impl IdentCache {
     /// True while a proposal is computed on a worker thread.
     pub fn is_proposing(&self) -> bool {
         self.outputs.iter().any(|o| o.proposal.is_running())
+    }
+
+    /// The channel the segments' steps are detected on, when it is not the input.
+    pub fn steps_from(&self) -> Option<&str> {
+        self.steps_from.as_deref()
     }
 
     /// True when the segments were detected (the user has not moved them).

@@ -47,9 +47,15 @@ pub fn data_ui(
     };
 
     header_ui(ui, entry);
-    let ident = cache.ident.as_ref().filter(|ident| ident.run_index == index);
+    let part = cache.ident.as_ref().and_then(|ident| Some((ident, ident.part_start(index)?)));
+    let ident = part.map(|(ident, _)| ident);
     if let Some(ident) = ident {
-        commands.extend(segments_header_ui(ui, &ident.segments, ident.segments_are_automatic()));
+        let how = match (ident.segments_are_automatic(), ident.steps_from()) {
+            (false, _) => "moved by hand".to_owned(),
+            (true, None) => "detected from the input steps".to_owned(),
+            (true, Some(channel)) => format!("detected from the steps of {channel}"),
+        };
+        commands.extend(segments_header_ui(ui, &ident.segments, ident.segments_are_automatic(), &how));
     }
     let aux: Vec<&Trace> = run_traces.aux().collect();
     if !aux.is_empty() {
@@ -62,12 +68,15 @@ pub fn data_ui(
         .chain(run_traces.outputs())
         .chain(aux.iter().copied().filter(|t| state.shown_aux.contains(&t.name)))
         .collect();
-    let overlay = ident.and_then(|ident| ident.segments.as_ref().ok()).map(|segments| SegmentOverlay {
-        segments,
-        t0_secs: entry.run.t_secs.first().copied().unwrap_or(0.0),
-        dt_secs: entry.run.dt_secs,
-        samples: entry.run.len(),
-    });
+    let overlay = part.and_then(|(ident, offset)| Some((ident.segments.as_ref().ok()?, offset))).map(
+        |(segments, offset)| SegmentOverlay {
+            segments,
+            offset,
+            t0_secs: entry.run.t_secs.first().copied().unwrap_or(0.0),
+            dt_secs: entry.run.dt_secs,
+            samples: entry.run.len(),
+        },
+    );
     commands.extend(plots_ui(ui, index, &shown, overlay.as_ref(), state));
     commands
 }
@@ -76,12 +85,12 @@ fn segments_header_ui(
     ui: &mut egui::Ui,
     segments: &Result<Vec<crate::core::identification::segment::Segment>, String>,
     automatic: bool,
+    how: &str,
 ) -> Option<Command> {
     let mut command = None;
     ui.horizontal_wrapped(|ui| {
         match segments {
             Ok(segments) => {
-                let how = if automatic { "detected from the input steps" } else { "moved by hand" };
                 ui.label(RichText::new(format!("{} segments, {how}", segments.len())).strong());
                 ui.label(
                     RichText::new("drag a boundary (yellow line) to move it; the fits are redone on release")

@@ -29,9 +29,12 @@ pub struct EdgeDrag {
     hi: usize,
 }
 
-/// The segments of the run drawn, and how samples map to time.
+/// The segments of the run drawn, and how samples map to time. The segments index the
+/// identification run, of which the run drawn may be a part (several runs joined end to end): it
+/// starts at sample `offset` and holds `samples`; only the segments inside it are drawn.
 pub struct SegmentOverlay<'a> {
     pub segments: &'a [Segment],
+    pub offset: usize,
     pub t0_secs: f64,
     pub dt_secs: f64,
     pub samples: usize,
@@ -39,18 +42,23 @@ pub struct SegmentOverlay<'a> {
 
 impl SegmentOverlay<'_> {
     fn time(&self, sample: usize) -> f64 {
-        self.t0_secs + sample as f64 * self.dt_secs
+        self.t0_secs + (sample as f64 - self.offset as f64) * self.dt_secs
     }
 
     fn sample(&self, t_secs: f64) -> usize {
         let k = ((t_secs - self.t0_secs) / self.dt_secs).round();
-        if k <= 0.0 { 0 } else { (k as usize).min(self.samples) }
+        self.offset + if k <= 0.0 { 0 } else { (k as usize).min(self.samples) }
+    }
+
+    /// Whether segment `s` lies in the run drawn.
+    fn shows(&self, s: &Segment) -> bool {
+        s.start >= self.offset && s.end <= self.offset + self.samples
     }
 
     /// Every edge sample with the edges there (a shared boundary is one entry).
     fn boundaries(&self) -> Vec<(usize, Vec<(usize, Side)>)> {
         let mut out: Vec<(usize, Vec<(usize, Side)>)> = Vec::new();
-        for (i, s) in self.segments.iter().enumerate() {
+        for (i, s) in self.segments.iter().enumerate().filter(|(_, s)| self.shows(s)) {
             for (sample, side) in [(s.start, Side::Start), (s.end, Side::End)] {
                 match out.iter_mut().find(|(k, _)| *k == sample) {
                     Some((_, edges)) => edges.push((i, side)),
@@ -64,7 +72,7 @@ impl SegmentOverlay<'_> {
     /// Where the edges at `sample` may go: past neither a step nor a neighbour not moved with them.
     fn limits(&self, sample: usize, edges: &[(usize, Side)]) -> (usize, usize) {
         let moved = |i: usize, side: Side| edges.contains(&(i, side));
-        let (mut lo, mut hi) = (0, self.samples);
+        let (mut lo, mut hi) = (self.offset, self.offset + self.samples);
         for &(i, side) in edges {
             let Some(s) = self.segments.get(i) else { continue };
             match side {
@@ -112,7 +120,7 @@ pub fn draw_segments(
         Some(drag) => overlay.moved(drag),
         None => overlay.segments.to_vec(),
     };
-    for (i, s) in segments.iter().enumerate() {
+    for (i, s) in segments.iter().enumerate().filter(|(_, s)| overlay.shows(s)) {
         let span = Span::new("", overlay.time(s.start)..=overlay.time(s.end))
             .fill(theme::segment_fill(i))
             .border_width(0.0);

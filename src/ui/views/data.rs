@@ -176,6 +176,7 @@ fn plots_ui(
                 .y_axis_min_width(Y_AXIS_WIDTH)
                 .x_grid_spacer(plot_util::grid_125_x)
                 .y_grid_spacer(plot_util::grid_125_y)
+                .y_axis_formatter(plot_util::range_label)
                 // Time tick labels only under the bottom plot: the axes are linked.
                 .show_axes([last, true])
                 .allow_drag(!on_boundary);

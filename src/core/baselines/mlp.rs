@@ -29,21 +29,48 @@ impl MlpShape {
         y
     }
 
-    /// The network output for input `x`, writing `∂ŷ/∂w` into `grad`; NaN (and `grad` untouched)
-    /// when a length is wrong.
-    pub fn output_and_gradient(&self, w: &[f64], x: &[f64], grad: &mut [f64]) -> f64 {
+    /// The hidden units' activations `tanh(bⱼ + Σᵢ Wⱼᵢ xᵢ)` for input `x`, written into `h`; `false`
+    /// (and `h` untouched) when a length is wrong.
+    pub fn hidden_activations(&self, w: &[f64], x: &[f64], h: &mut [f64]) -> bool {
+        let (n, stride) = (self.n_inputs, self.n_inputs + 1);
+        if w.len() != self.n_weights() || x.len() != n || h.len() != self.hidden {
+            return false;
+        }
+        for (j, hj) in h.iter_mut().enumerate() {
+            *hj = pre_activation(w, x, j * stride, n).tanh();
+        }
+        true
+    }
+
+    /// The network output from the hidden activations `h` of [`Self::hidden_activations`]: the same
+    /// sum in the same order as [`Self::output`], so the two agree to the last bit.
+    pub fn output_from_hidden(&self, w: &[f64], h: &[f64]) -> f64 {
+        let out0 = self.hidden * (self.n_inputs + 1);
+        if w.len() != self.n_weights() || h.len() != self.hidden {
+            return f64::NAN;
+        }
+        let mut y = w[out0 + self.hidden];
+        for j in 0..self.hidden {
+            y += w[out0 + j] * h[j];
+        }
+        y
+    }
+
+    /// The network output for input `x`, writing `∂ŷ/∂w` into `grad`, from the hidden activations `h`
+    /// of `x` already computed (the tanh is most of the cost of a training pass); NaN (and `grad`
+    /// untouched) when a length is wrong.
+    pub fn output_and_gradient_from_hidden(&self, w: &[f64], x: &[f64], h: &[f64], grad: &mut [f64]) -> f64 {
         let (n, stride, out0) = (self.n_inputs, self.n_inputs + 1, self.hidden * (self.n_inputs + 1));
-        if w.len() != self.n_weights() || x.len() != n || grad.len() != w.len() {
+        if w.len() != self.n_weights() || x.len() != n || grad.len() != w.len() || h.len() != self.hidden {
             return f64::NAN;
         }
         let mut y = w[out0 + self.hidden];
         for j in 0..self.hidden {
             let unit = j * stride;
-            let h = pre_activation(w, x, unit, n).tanh();
             let v = w[out0 + j];
-            y += v * h;
-            grad[out0 + j] = h;
-            let delta = v * (1.0 - h * h);
+            y += v * h[j];
+            grad[out0 + j] = h[j];
+            let delta = v * (1.0 - h[j] * h[j]);
             for i in 0..n {
                 grad[unit + i] = delta * x[i];
             }
@@ -96,9 +123,12 @@ mod tests {
         let w = shape.random_weights(&mut rng);
         assert_eq!(w.len(), 61);
         let x = [0.3, -1.2, 0.7, 2.0];
+        let mut h = vec![0.0; shape.hidden];
+        assert!(shape.hidden_activations(&w, &x, &mut h));
+        assert_eq!(shape.output_from_hidden(&w, &h).to_bits(), shape.output(&w, &x).to_bits());
         let mut grad = vec![0.0; w.len()];
-        let y = shape.output_and_gradient(&w, &x, &mut grad);
-        assert!((y - shape.output(&w, &x)).abs() < 1e-15);
+        let y = shape.output_and_gradient_from_hidden(&w, &x, &h, &mut grad);
+        assert_eq!(y.to_bits(), shape.output(&w, &x).to_bits());
         for j in 0..w.len() {
             let h = 1e-6;
             let mut wp = w.clone();

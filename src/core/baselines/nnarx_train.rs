@@ -98,20 +98,34 @@ fn sum_sq_half(x: &[f64]) -> f64 {
     0.5 * x.iter().map(|v| v * v).sum::<f64>()
 }
 
-fn one_step_errors(shape: MlpShape, w: &[f64], data: &TrainData) -> Vec<f64> {
-    data.x.chunks_exact(shape.n_inputs).zip(&data.t).map(|(x, t)| shape.output(w, x) - t).collect()
+/// The hidden activations of every regressor row (row-major, `hidden` each) at weights `w`.
+fn activations(shape: MlpShape, w: &[f64], data: &TrainData) -> Vec<f64> {
+    let mut h = vec![0.0; data.t.len() * shape.hidden];
+    for (x, hk) in data.x.chunks_exact(shape.n_inputs).zip(h.chunks_exact_mut(shape.hidden.max(1))) {
+        shape.hidden_activations(w, x, hk);
+    }
+    h
 }
 
-/// `[J e]ᵀ[J e]` in one product. The rows `[∂ŷ/∂w, e]` are stored as the columns of a faer matrix,
-/// whose aligned allocation keeps the product's summation order, and so the result, the same from
-/// run to run (a product over an arbitrary slice can round differently with its address).
-fn linearise(shape: MlpShape, w: &[f64], data: &TrainData) -> Linearisation {
+fn one_step_errors(shape: MlpShape, w: &[f64], h: &[f64], data: &TrainData) -> Vec<f64> {
+    h.chunks_exact(shape.hidden.max(1))
+        .zip(&data.t)
+        .map(|(hk, t)| shape.output_from_hidden(w, hk) - t)
+        .collect()
+}
+
+/// `[J e]ᵀ[J e]` in one product, from the hidden activations `h` at `w`. The rows `[∂ŷ/∂w, e]` are
+/// stored as the columns of a faer matrix, whose aligned allocation keeps the product's summation
+/// order, and so the result, the same from run to run (a product over an arbitrary slice can round
+/// differently with its address).
+fn linearise(shape: MlpShape, w: &[f64], h: &[f64], data: &TrainData) -> Linearisation {
     let p = shape.n_weights();
     let n = data.t.len();
     let mut m = Mat::<f64>::zeros(p + 1, n);
-    for (i, (x, t)) in data.x.chunks_exact(shape.n_inputs).zip(&data.t).enumerate() {
+    let rows = data.x.chunks_exact(shape.n_inputs).zip(h.chunks_exact(shape.hidden.max(1))).zip(&data.t);
+    for (i, ((x, hk), t)) in rows.enumerate() {
         let (grad, err) = m.col_as_slice_mut(i).split_at_mut(p);
-        let y = shape.output_and_gradient(w, x, grad);
+        let y = shape.output_and_gradient_from_hidden(w, x, hk, grad);
         if let Some(e) = err.first_mut() {
             *e = y - t;
         }
@@ -129,6 +143,20 @@ struct Bayesian<'a> {
     data: &'a TrainData,
     alpha: f64,
     beta: f64,
+    /// The weights of the last objective evaluation and their hidden activations: Levenberg–
+    /// Marquardt linearises next at the step it just accepted, whose tanh values (most of a pass's
+    /// cost) are then already known. Reused only for bit-identical weights, so results are unchanged.
+    last: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Bayesian<'_> {
+    /// The hidden activations at `w`, from the last evaluation when it was at `w`.
+    fn activations_at(&mut self, w: &[f64]) -> Vec<f64> {
+        match self.last.take() {
+            Some((last_w, h)) if last_w == w => h,
+            _ => activations(self.shape, w, self.data),
+        }
+    }
 }
 
 impl LmProblem for Bayesian<'_> {
@@ -136,14 +164,17 @@ impl LmProblem for Bayesian<'_> {
     type Error = BaselineError;
 
     fn objective(&mut self, w: &[f64]) -> Option<f64> {
-        let m =
-            self.beta * sum_sq_half(&one_step_errors(self.shape, w, self.data)) + self.alpha * sum_sq_half(w);
+        let h = activations(self.shape, w, self.data);
+        let m = self.beta * sum_sq_half(&one_step_errors(self.shape, w, &h, self.data))
+            + self.alpha * sum_sq_half(w);
+        self.last = Some((w.to_vec(), h));
         m.is_finite().then_some(m)
     }
 
     fn linearise(&mut self, w: &[f64], _objective: f64) -> Result<(Linearisation, f64), BaselineError> {
         let n = self.data.t.len() as f64;
-        let lin = linearise(self.shape, w, self.data);
+        let h = self.activations_at(w);
+        let lin = linearise(self.shape, w, &h, self.data);
         let gamma = lin.gamma(self.alpha, self.beta)?;
         self.alpha = (gamma / (2.0 * lin.e_w.max(f64::MIN_POSITIVE))).clamp(1e-10, 1e10);
         self.beta = ((n - gamma) / (2.0 * lin.e_d.max(f64::MIN_POSITIVE))).clamp(1e-10, 1e14);
@@ -181,11 +212,12 @@ pub(super) fn train(
     max_iterations: usize,
     on_iteration: &mut dyn FnMut(usize) -> Result<(), BaselineError>,
 ) -> Result<TrainOutcome, BaselineError> {
-    let mut problem = Bayesian { shape, data, alpha: 0.01, beta: 1.0 };
+    let mut problem = Bayesian { shape, data, alpha: 0.01, beta: 1.0, last: None };
     let settings = LmSettings { max_iterations, cost_tol: COST_TOL, damping: DAMPING };
     let fitted = minimise(&mut problem, &w0, &settings, on_iteration)?;
     let (alpha, beta, w) = (problem.alpha, problem.beta, fitted.theta);
-    let lin = linearise(shape, &w, data);
+    let h = problem.activations_at(&w);
+    let lin = linearise(shape, &w, &h, data);
     let gamma = lin.gamma(alpha, beta)?;
     let log_evidence = lin.log_evidence(alpha, beta, data.t.len())?;
     Ok(TrainOutcome { weights: w, iterations: fitted.iterations, alpha, beta, gamma, log_evidence })

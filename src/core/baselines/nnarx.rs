@@ -296,11 +296,14 @@ fn all_equilibria_normalised(shape: MlpShape, w: &[f64], u0_n: f64, nu: usize, n
         shape.output(w, &x) - y
     };
     let bound = shape.output_bound(w) + 1.0;
-    let grid: Vec<f64> = (0..=2000).map(|i| -bound + 2.0 * bound * i as f64 / 2000.0).collect();
+    // Each grid value once: the scan is the cost of the equilibrium checks.
+    let grid: Vec<(f64, f64)> = (0..=2000)
+        .map(|i| -bound + 2.0 * bound * i as f64 / 2000.0)
+        .map(|y| (y, g(y)))
+        .collect();
     let mut roots = Vec::new();
     for pair in grid.windows(2) {
-        let &[mut lo, mut hi] = pair else { continue };
-        let (f_lo, f_hi) = (g(lo), g(hi));
+        let &[(mut lo, f_lo), (mut hi, f_hi)] = pair else { continue };
         if f_lo.is_nan() || f_hi.is_nan() || (f_lo > 0.0) == (f_hi > 0.0) {
             continue;
         }
@@ -435,7 +438,9 @@ pub fn fit_nnarx(
     let trained = train_restarts(shape, &data, starts, opts.max_iterations, progress)?;
     let mut outcomes = Vec::with_capacity(opts.restarts);
     let mut summaries = Vec::with_capacity(opts.restarts);
+    let mut equilibria_checks = Vec::with_capacity(opts.restarts);
     for out in trained {
+        let several = several_equilibria(shape, &out.weights, &u_n, opts);
         let one_step: Vec<f64> =
             data.x.chunks_exact(shape.n_inputs).map(|x| shape.output(&out.weights, x)).collect();
         let oe_rms = rms_error(&simulate_normalised(shape, &out.weights, &u_n, opts.nu, opts.ny), &y_n);
@@ -445,9 +450,10 @@ pub fn fit_nnarx(
             gamma: out.gamma,
             one_step_rms: rms_error(&one_step, &data.t) * output_scaling.scale,
             oe_rms: if oe_rms.is_finite() { oe_rms * output_scaling.scale } else { f64::INFINITY },
-            several_equilibria: several_equilibria(shape, &out.weights, &u_n, opts).len(),
+            several_equilibria: several.len(),
         });
         outcomes.push(out);
+        equilibria_checks.push(several);
     }
     let chosen = choose_restart(&summaries)
         .ok_or(BaselineError::Diverged { stage: "NNARX", rms_normalised: f64::INFINITY })?;
@@ -458,7 +464,10 @@ pub fn fit_nnarx(
     };
     let u0 = u_n.first().copied().unwrap_or(0.0);
     let (_, training_start) = equilibrium_normalised(shape, &out.weights, u0, opts.nu, opts.ny);
-    let several_equilibria_at = several_equilibria(shape, &out.weights, &u_n, opts)
+    let several_equilibria_at = equilibria_checks
+        .into_iter()
+        .nth(chosen)
+        .unwrap_or_default()
         .into_iter()
         .map(|u| input_scaling.physical_from_normalised(u))
         .collect();

@@ -297,10 +297,8 @@ fn all_equilibria_normalised(shape: MlpShape, w: &[f64], u0_n: f64, nu: usize, n
     };
     let bound = shape.output_bound(w) + 1.0;
     // Each grid value once: the scan is the cost of the equilibrium checks.
-    let grid: Vec<(f64, f64)> = (0..=2000)
-        .map(|i| -bound + 2.0 * bound * i as f64 / 2000.0)
-        .map(|y| (y, g(y)))
-        .collect();
+    let grid: Vec<(f64, f64)> =
+        (0..=2000).map(|i| -bound + 2.0 * bound * i as f64 / 2000.0).map(|y| (y, g(y))).collect();
     let mut roots = Vec::new();
     for pair in grid.windows(2) {
         let &[(mut lo, f_lo), (mut hi, f_hi)] = pair else { continue };

@@ -218,11 +218,42 @@ impl Batch<'_> {
             .time(&format!("identify_{output}"), || identify::identify(project, runs, output))
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
         let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
-        let sequence = timings.time(&format!("effects_{output}"), || {
-            effects::apply_effects(project, runs, &identified, output, notes)
-        })?;
+        // The baselines need only the identified model, so they train on their own thread while the
+        // effects loop and the diagnosis run; their notes keep their place in the report.
+        let (sequence, diagnosis, baselines) = std::thread::scope(|scope| {
+            let mut baseline_timings = Timings(BTreeMap::new(), timings.1.clone());
+            let identified = &identified;
+            let baselines = scope.spawn(move || {
+                let mut notes = Vec::new();
+                let models = baseline_timings.time(&format!("baselines_{output}"), || {
+                    fit_baselines(identified, &runs.ident, output, &mut notes)
+                });
+                (models, notes, baseline_timings)
+            });
+            let mut sequence = timings.time(&format!("effects_{output}"), || {
+                effects::apply_effects(project, runs, identified, output, notes)
+            });
+            let diagnosis = sequence.as_mut().ok().map(|sequence| {
+                let final_diagnosis = sequence.final_diagnosis.take();
+                timings.time(&format!("diagnosis_{output}"), || {
+                    diagnose::diagnose_output(
+                        project,
+                        runs,
+                        identified,
+                        &sequence.model,
+                        output,
+                        final_diagnosis,
+                    )
+                })
+            });
+            (sequence, diagnosis, baselines.join())
+        });
+        let (mut models, baseline_notes, baseline_timings) = baselines
+            .map_err(|_| anyhow::anyhow!("fitting the baselines of '{output}' stopped unexpectedly"))?;
+        timings.0.extend(baseline_timings.0);
+        let sequence = sequence?;
+        notes.extend(baseline_notes);
         let extended = sequence.model;
-        let final_diagnosis = sequence.final_diagnosis;
         model_file.push(&identified.model, &unit);
         if let Some(last) = model_file.outputs.last_mut() {
             // Effects are fitted together with the gain and static map they sit beside.
@@ -234,8 +265,6 @@ impl Batch<'_> {
                 (last.poles, last.zeros) = (poles, zeros);
             }
         }
-        let mut models = timings
-            .time(&format!("baselines_{output}"), || fit_baselines(&identified, &runs.ident, output, notes));
         models.initial_state = project.settings_for(output).initial_state;
         let mut out = report::output_report(&identified, &models, unit);
         out.effects_applied = extended.effect_ids();
@@ -243,15 +272,13 @@ impl Batch<'_> {
         if !extended.effects.is_empty() {
             models.extended = Some(extended.clone());
         }
-        let diagnosis = timings.time(&format!("diagnosis_{output}"), || {
-            diagnose::diagnose_output(project, runs, &identified, &extended, output, final_diagnosis)
-        });
         match diagnosis {
-            Ok((entries, skipped)) => {
+            Some(Ok((entries, skipped))) => {
                 out.diagnosis = entries;
                 notes.extend(skipped);
             }
-            Err(e) => notes.push(format!("diagnosis of '{output}': {e}")),
+            Some(Err(e)) => notes.push(format!("diagnosis of '{output}': {e}")),
+            None => {}
         }
         let described: Vec<&_> = std::iter::once(&runs.ident)
             .chain(runs.compared())

@@ -24,7 +24,7 @@ impl MlpShape {
         // Index loops on checked lengths: this is the training hot path, run unoptimised in tests.
         let mut y = w[out0 + self.hidden];
         for j in 0..self.hidden {
-            y += w[out0 + j] * tanh(pre_activation(w, x, j * stride, n));
+            y += w[out0 + j] * pre_activation(w, x, j * stride, n).tanh();
         }
         y
     }
@@ -37,7 +37,7 @@ impl MlpShape {
             return false;
         }
         for (j, hj) in h.iter_mut().enumerate() {
-            *hj = tanh(pre_activation(w, x, j * stride, n));
+            *hj = pre_activation(w, x, j * stride, n).tanh();
         }
         true
     }
@@ -96,22 +96,6 @@ impl MlpShape {
     /// A bound on `|ŷ|` over all inputs: `|c| + Σ|vⱼ|`.
     pub fn output_bound(&self, w: &[f64]) -> f64 {
         w.iter().skip(self.hidden * (self.n_inputs + 1)).map(|v| v.abs()).sum()
-    }
-}
-
-/// `tanh x` through `exp` rather than libm's `tanh` (which goes through `expm1` and is most of the
-/// training's time). For `|x| ≥ 0.55`, `q = 2/(e^{2|x|} + 1) ≤ 0.5`, so `1 − q` loses at most one
-/// bit to the subtraction and the result is within 2 ulp of the exact value; below that the
-/// subtraction would cancel, and libm's `tanh` is kept. Past `|x| = 22`, `tanh x` is ±1 in f64.
-#[inline]
-fn tanh(x: f64) -> f64 {
-    let a = x.abs();
-    if a < 0.55 {
-        x.tanh()
-    } else if a < 22.0 {
-        (1.0 - 2.0 / ((2.0 * a).exp() + 1.0)).copysign(x)
-    } else {
-        1.0_f64.copysign(x)
     }
 }
 

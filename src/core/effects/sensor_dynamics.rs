@@ -25,6 +25,34 @@ const MIN_FREQ_HZ: f64 = 0.05;
 /// Welch segment length for the residual spectrum, samples.
 const SPECTRUM_SEGMENT: usize = 128;
 
+/// One sample of the resonance as the linear map it is: `(pos, vel)⁺ = m1·pos + m2·vel + n0·w0 +
+/// n1·w1`, each column the RK4 integration of a unit state or input.
+struct ResonanceMap {
+    m1: (f64, f64),
+    m2: (f64, f64),
+    n0: (f64, f64),
+    n1: (f64, f64),
+}
+
+impl ResonanceMap {
+    fn of(sensor: &SensorDynamics, dt_secs: f64) -> Self {
+        let col = |pos, vel, w0, w1| sensor.advance(pos, vel, w0, w1, dt_secs);
+        Self {
+            m1: col(1.0, 0.0, 0.0, 0.0),
+            m2: col(0.0, 1.0, 0.0, 0.0),
+            n0: col(0.0, 0.0, 1.0, 0.0),
+            n1: col(0.0, 0.0, 0.0, 1.0),
+        }
+    }
+
+    fn advance(&self, pos: f64, vel: f64, w0: f64, w1: f64) -> (f64, f64) {
+        (
+            self.m1.0 * pos + self.m2.0 * vel + self.n0.0 * w0 + self.n1.0 * w1,
+            self.m1.1 * pos + self.m2.1 * vel + self.n0.1 * w0 + self.n1.1 * w1,
+        )
+    }
+}
+
 impl SensorDynamics {
     /// Highest admissible resonance for a sample time, Hz.
     pub fn max_freq_hz(dt_secs: f64) -> f64 {
@@ -49,12 +77,15 @@ impl SensorDynamics {
         } else {
             y.to_vec()
         };
+        // The RK4 sub-steps of one sample are a linear map of (pos, vel, w0, w1): read it off once
+        // (see `discrete_tf`) rather than integrating every sample, the diagnosis's hot path.
+        let map = ResonanceMap::of(self, dt_secs);
         let mut pos = lagged.first().copied().unwrap_or(0.0);
         let mut vel = 0.0;
         let mut out = Vec::with_capacity(lagged.len());
         out.push(pos);
         for w in lagged.windows(2) {
-            (pos, vel) = self.advance(pos, vel, w[0], w[1], dt_secs);
+            (pos, vel) = map.advance(pos, vel, w[0], w[1]);
             out.push(pos);
         }
         out
@@ -88,13 +119,7 @@ impl SensorDynamics {
     /// resonance's one-sample map `x⁺ = M·x + n₀·w[k] + n₁·w[k+1]` is read off [`Self::advance`] on
     /// unit states and inputs (it is linear), and `pos = e₁ᵀ(zI − M)⁻¹(n₀ + z·n₁)·w`.
     pub fn discrete_tf(&self, dt_secs: f64) -> (Vec<f64>, Vec<f64>) {
-        let col = |pos, vel, w0, w1| self.advance(pos, vel, w0, w1, dt_secs);
-        let (m1, m2, n0, n1) = (
-            col(1.0, 0.0, 0.0, 0.0),
-            col(0.0, 1.0, 0.0, 0.0),
-            col(0.0, 0.0, 1.0, 0.0),
-            col(0.0, 0.0, 0.0, 1.0),
-        );
+        let ResonanceMap { m1, m2, n0, n1 } = ResonanceMap::of(self, dt_secs);
         // M = [[m1.0, m2.0], [m1.1, m2.1]].
         let (m11, m12, m21, m22) = (m1.0, m2.0, m1.1, m2.1);
         let num = vec![n1.0, n0.0 - m22 * n1.0 + m12 * n1.1, -m22 * n0.0 + m12 * n0.1];

@@ -1,7 +1,7 @@
 //! The Bode view: magnitude and phase of every segment's ARX model (thin, coloured by segment) and
 //! of the reduced linear block G(z) (thick), against ω in rad/s on a log axis; the chirp run's
 //! empirical frequency response on top when the cache has one.
-use egui_plot::{ColorConflictHandling, Legend, Line, MarkerShape, PlotPoints, Points};
+use egui_plot::{Line, MarkerShape, PlotPoints, Points};
 
 use crate::core::numerics::tf::BodePoint;
 use crate::ui::derived::model_cache::EmpiricalPoint;
@@ -13,6 +13,8 @@ use crate::ui::widgets::plot as plot_util;
 const Y_AXIS_WIDTH: f32 = 64.0;
 /// The legend entry of the chirp's measured points.
 const EMPIRICAL_NAME: &str = "chirp (measured)";
+/// The legend entry of the reduced model.
+const REDUCED_NAME: &str = "reduced model G(z)";
 
 #[derive(Default)]
 pub struct BodeViewState {
@@ -53,6 +55,7 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
     if !model_ui::model_state_ui(ui, &view) && view.output.segment_bode.is_empty() {
         return;
     }
+    legend_ui(ui, &view, state);
     let spacing = ui.spacing().item_spacing.y;
     let height = ((ui.available_height() - spacing) / 2.0).max(120.0);
     let group = egui::Id::unique(("bode_omega_axis", output));
@@ -64,15 +67,6 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
             .show_axes([last, true]);
         if last {
             plot = plot.x_axis_label("ω [rad/s]");
-        } else {
-            // Bottom-left: a low-pass response runs along the top at low ω and falls to the right,
-            // so that corner has no curves. The chirp's points share one entry in the colour of
-            // the best-measured point (drawn first), not the grey of mixed colours.
-            let legend = Legend::default()
-                .position(egui_plot::Corner::LeftBottom)
-                .background_alpha(0.85)
-                .color_conflict_handling(ColorConflictHandling::PickFirst);
-            plot = plot.legend(legend);
         }
         plot.show(ui, |plot_ui| {
             draw_curves(plot_ui, &view, state, part);
@@ -82,6 +76,33 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
     if unit.is_empty() {
         model_ui::hint(ui, "The output has no unit; magnitudes are in output units per input unit.");
     }
+}
+
+/// The key of both plots, in a row above them: inside a plot a legend covers curves somewhere on
+/// a Bode plot (every corner has a curve at some ω), and egui_plot's legend draws the chirp's
+/// diamonds as a dot.
+fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &BodeViewState) {
+    ui.horizontal_wrapped(|ui| {
+        if !state.hide_segments
+            && let Ok(fits) = &view.output.fits
+        {
+            for (i, segment) in fits.segments.iter().enumerate().take(view.output.segment_bode.len()) {
+                plot_util::line_key_ui(
+                    ui,
+                    theme::segment_colour(i),
+                    1.0,
+                    false,
+                    &format!("segment {}", segment.label),
+                );
+            }
+        }
+        if view.live.is_ok() {
+            plot_util::line_key_ui(ui, theme::REDUCED, 3.0, false, REDUCED_NAME);
+        }
+        if !view.output.empirical_bode.is_empty() {
+            plot_util::diamond_key_ui(ui, theme::EMPIRICAL, EMPIRICAL_NAME);
+        }
+    });
 }
 
 fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: &BodeViewState, part: Part) {
@@ -94,17 +115,14 @@ fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: 
         }
     }
     if let Ok(live) = view.live {
-        plot_ui
-            .line(Line::new("reduced model G(z)", curve(&live.bode, part)).color(theme::REDUCED).width(3.0));
+        plot_ui.line(Line::new(REDUCED_NAME, curve(&live.bode, part)).color(theme::REDUCED).width(3.0));
     }
 }
 
 /// The chirp's measured points: (ω, |G| dB, ∠G deg, coherence). Points with low coherence are drawn
-/// smaller and fainter; the best-measured point comes first so the legend shows it.
+/// smaller and fainter.
 fn draw_empirical(plot_ui: &mut egui_plot::PlotUi<'_>, points: &[EmpiricalPoint], part: Part) {
-    let mut sorted: Vec<&EmpiricalPoint> = points.iter().collect();
-    sorted.sort_by(|a, b| b.3.total_cmp(&a.3));
-    for (omega, mag_db, phase_deg, coherence) in sorted {
+    for (omega, mag_db, phase_deg, coherence) in points {
         let y = if part == Part::Magnitude { *mag_db } else { *phase_deg };
         let weight = coherence.clamp(0.15, 1.0) as f32;
         plot_ui.points(

@@ -127,6 +127,31 @@ pub fn line_key_ui(ui: &mut egui::Ui, colour: egui::Color32, width: f32, dashed:
     ui.painter().galley(egui::pos2(rect.left() + STRETCH + GAP, rect.top()), galley, colour);
 }
 
+/// One key of a legend drawn outside a plot for points drawn as diamonds (egui_plot's own legend
+/// draws every item as a dot, whatever its marker): a filled diamond, then its name.
+pub fn diamond_key_ui(ui: &mut egui::Ui, colour: egui::Color32, name: &str) {
+    const HALF: f32 = 5.0;
+    const GAP: f32 = 4.0;
+    let galley = egui::WidgetText::from(egui::RichText::new(name).color(colour)).into_galley(
+        ui,
+        Some(egui::TextWrapMode::Extend),
+        f32::INFINITY,
+        egui::TextStyle::Body,
+    );
+    let size = egui::vec2(2.0 * HALF + GAP + galley.size().x, galley.size().y);
+    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, name));
+    let c = egui::pos2(rect.left() + HALF, rect.center().y);
+    let corners = vec![
+        c + egui::vec2(0.0, -HALF),
+        c + egui::vec2(HALF, 0.0),
+        c + egui::vec2(0.0, HALF),
+        c + egui::vec2(-HALF, 0.0),
+    ];
+    ui.painter().add(egui::Shape::convex_polygon(corners, colour, egui::Stroke::NONE));
+    ui.painter().galley(egui::pos2(rect.left() + 2.0 * HALF + GAP, rect.top()), galley, colour);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

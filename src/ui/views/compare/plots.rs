@@ -1,7 +1,7 @@
 //! The Compare view's plots: every model over the measurement of one scored run, the chirp's
 //! frequency response (measured points and each model's, all by the same Welch estimate) and the
 //! Monte Carlo histograms with their normal fits.
-use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, MarkerShape, Plot, PlotPoints, Points};
+use egui_plot::{Bar, BarChart, Line, LineStyle, MarkerShape, Plot, PlotPoints, Points};
 
 use crate::core::compare::{FrequencyComparison, ModelKind, OutputComparison};
 use crate::core::monte_carlo::MonteCarloResult;
@@ -124,7 +124,24 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
         "Each model's simulation of the chirp input goes through the same Welch estimate as the measurement.",
     );
     let group = egui::Id::unique(("compare_freq_axis", &comparison.output));
-    let height = (PLOT_HEIGHT - ui.spacing().interact_size.y - ui.spacing().item_spacing.y) / 2.0;
+    let models: Vec<ModelKind> =
+        MODELS.iter().copied().filter(|m| freq.responses.contains_key(m.report_name())).collect();
+    // The key sits above the plots, as the traces' does: egui_plot's legend would draw the chirp's
+    // diamonds as a dot, and inside a Bode plot every corner has a curve at some ω.
+    let key_top = ui.cursor().top();
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 4.0;
+        if freq.responses.contains_key("measured") {
+            plot_util::diamond_key_ui(ui, theme::EMPIRICAL, "measured (chirp)");
+        }
+        for model in &models {
+            ui.add_space(6.0);
+            plot_util::line_key_ui(ui, model_colour(*model), 1.5, false, model.label());
+        }
+    });
+    let key_height = ui.cursor().top() - key_top;
+    let height =
+        (PLOT_HEIGHT - ui.spacing().interact_size.y - ui.spacing().item_spacing.y - key_height) / 2.0;
     for phase in [false, true] {
         let mut plot =
             plot_util::bode_panel(("compare_freq", phase, &comparison.output), group, height, phase)
@@ -132,13 +149,6 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
                 .show_axes([phase, true]);
         if phase {
             plot = plot.x_axis_label("ω [rad/s]");
-        } else {
-            plot = plot.legend(
-                Legend::default()
-                    .position(egui_plot::Corner::LeftBottom)
-                    .follow_insertion_order(true)
-                    .background_alpha(0.85),
-            );
         }
         plot.show(ui, |plot_ui| {
             if let Some(measured) = freq.responses.get("measured") {
@@ -156,7 +166,7 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
                 }
             }
             // The gray-box model last, on top.
-            for model in MODELS.iter().rev() {
+            for model in models.iter().rev() {
                 let Some(response) = freq.responses.get(model.report_name()) else { continue };
                 let values = if phase { &response.phase_deg } else { &response.mag_db };
                 let points: PlotPoints<'_> =

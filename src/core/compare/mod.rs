@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
+use crate::core::control::identified_range;
 use crate::core::effects::ExtendedModel;
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::SegmentFits;
@@ -68,6 +69,8 @@ pub struct ModelRun {
     pub model: ModelKind,
     pub y_hat: Vec<f64>,
     pub metrics: Result<Metrics, String>,
+    /// Why the model fails on the run (fit below 50 %), in words; empty when it does not fail.
+    pub failure_reasons: Vec<String>,
 }
 
 /// Every model on one scored run.
@@ -128,7 +131,7 @@ pub fn compare_output(
         .map(|(run, is_chirp)| RunComparison {
             run: Arc::clone(run),
             is_chirp: *is_chirp,
-            models: models_on_run(&models, run, output),
+            models: models_on_run(&models, run, output, identified_range(&input.ident.input.values)),
         })
         .collect();
     let frequency = input
@@ -165,15 +168,20 @@ pub fn compare_output(
     Ok(OutputComparison { output: output.to_owned(), runs, frequency, noise, monte_carlo, notes })
 }
 
-/// Every model simulated on `run` from its input alone, scored against the measured output.
-fn models_on_run(models: &OutputModels, run: &Run, output: &str) -> Vec<ModelRun> {
+/// Every model simulated on `run` from its input alone, scored against the measured output; a
+/// failing one with its reasons (`ident_input`: the identification input's range).
+fn models_on_run(models: &OutputModels, run: &Run, output: &str, ident_input: (f64, f64)) -> Vec<ModelRun> {
     let Some(y) = run.output(output) else { return Vec::new() };
     models
         .simulate_run(run)
         .into_iter()
         .map(|(model, y_hat)| {
             let metrics = metrics(&y.values, &y_hat).map_err(|e| e.to_string());
-            ModelRun { model, y_hat, metrics }
+            let reasons = match &metrics {
+                Ok(m) if m.fails() => failure_reasons(&y.values, &y_hat, &run.input.values, ident_input),
+                _ => Vec::new(),
+            };
+            ModelRun { model, y_hat, metrics, failure_reasons: reasons }
         })
         .collect()
 }

@@ -152,18 +152,18 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
             .flat_map(|run| {
                 run.models.iter().filter_map(move |m| {
                     let failure = m.metrics.as_ref().ok()?.failure()?;
-                    Some(format!("{} on '{}': {failure}", m.model.label(), run_title(run)))
+                    let why = m.failure_reasons.join("; ");
+                    Some(format!("• {} on '{}': {failure}: {why}", m.model.label(), run_title(run)))
                 })
             })
             .collect();
         if !failing.is_empty() {
             ui.label(
-                RichText::new(format!(
-                    "Fails (explains less than half of the output's variation): {}",
-                    failing.join("; ")
-                ))
-                .color(theme::WARNING),
+                RichText::new("Fails (explains less than half of the output's variation):").color(theme::WARNING),
             );
+            for line in &failing {
+                ui.add(egui::Label::new(RichText::new(line).color(theme::WARNING)).wrap());
+            }
         }
         if PaperOutput::of(&comparison.output).is_some() {
             crate::ui::widgets::model::hint(

@@ -352,8 +352,11 @@ impl App {
         if self.refresh() {
             ctx.request_repaint();
         }
-        if self.cache.ident.as_ref().is_some_and(IdentCache::is_proposing) {
-            // The proposal's job cannot reach the context; look for its result a few times a second.
+        // The proposal's and the finishing model's jobs cannot reach the context: look for their
+        // results. A proposal takes seconds, a finishing model a few frames: it is looked for sooner.
+        if self.cache.ident.as_ref().is_some_and(IdentCache::is_finishing) {
+            ctx.request_repaint_after(FINISH_POLL);
+        } else if self.cache.ident.as_ref().is_some_and(IdentCache::is_proposing) {
             ctx.request_repaint_after(PROPOSAL_POLL);
         }
         if let Some(purpose) = self.view.dialog_requested.take() {
@@ -390,18 +393,18 @@ impl App {
     pub fn refresh(&mut self) -> bool {
         let stale = self.cache.revision() != Some(self.session.revision);
         self.cache.refresh(&self.session);
-        let proposed = self.cache.ident.as_mut().is_some_and(IdentCache::poll_proposals);
+        let proposed = self.cache.ident.as_mut().is_some_and(IdentCache::poll_jobs);
         let drag = self.view.views.zplane.preview_request();
         let preview_changed = self.cache.set_preview(drag.as_ref().map(|(o, c)| (o.as_str(), c.as_slice())));
         stale || proposed || preview_changed
     }
 
-    /// [`Self::refresh`], then wait for the automatic proposals computed in the background (tests,
-    /// screenshots and the headless paths; never in a frame).
+    /// [`Self::refresh`], then wait for the automatic proposals and the models finished in the
+    /// background (tests, screenshots and the headless paths; never in a frame).
     pub fn settle(&mut self) {
         self.refresh();
         if let Some(ident) = self.cache.ident.as_mut() {
-            ident.wait_for_proposals();
+            ident.wait_for_jobs();
         }
         self.refresh();
     }
@@ -438,6 +441,9 @@ fn shortcut_commands(ui: &egui::Ui) -> Vec<Command> {
 /// that the model appears without a felt delay (a tenth of a second is below what a user notices
 /// after a second of waiting), slow enough to cost nothing while idle.
 const PROPOSAL_POLL: std::time::Duration = std::time::Duration::from_millis(100);
+/// How often a model being finished is looked for: about a frame at 60 Hz, so the polished model
+/// follows the release with no visible wait (an idle frame costs well under a millisecond).
+const FINISH_POLL: std::time::Duration = std::time::Duration::from_millis(16);
 
 /// Set an output's clusters. Leaving the automatic proposal for edited clusters carries the
 /// proposal's dead time into the settings (unless one is set), so the edited model keeps the delay

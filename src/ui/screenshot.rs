@@ -128,7 +128,7 @@ impl eframe::App for ScreenshotApp {
             return;
         }
         self.frames += 1;
-        let proposing = self.app.cache.ident.as_ref().is_some_and(|i| i.is_proposing());
+        let proposing = self.app.cache.ident.as_ref().is_some_and(|i| i.is_busy());
         self.idle_frames =
             if self.app.view.views.compare.any_running() || proposing { 0 } else { self.idle_frames + 1 };
         if let Ok(image) = self.image_rx.try_recv() {

@@ -50,6 +50,9 @@ pub struct LiveModel {
     /// The centroids were polished by simulation error (asked for in the settings, not while
     /// dragging).
     pub polish_requested: bool,
+    /// The committed model's first look: not polished and without its effects, shown while the
+    /// finished model is computed on a worker thread.
+    pub finishing: bool,
 }
 
 /// A model by value: its Wiener part and its effects with their fitted parameters. A model built

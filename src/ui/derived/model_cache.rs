@@ -23,9 +23,10 @@ use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::{BodePoint, log_space};
 use crate::core::run::Run;
 
+use crate::core::effects::EffectId;
 use crate::ui::derived::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
 use crate::ui::derived::ident_runs::{ScoredSource, detect_or_check, join_identification, scored_runs};
-use crate::ui::derived::jobs::Job;
+use crate::ui::derived::jobs::{Job, JobResult};
 pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
 use crate::ui::state::session::{Role, Session, SessionRun};
 use crate::ui::state::setup::OutputSetup;
@@ -136,26 +137,39 @@ impl IdentCache {
         }
     }
 
-    /// Take every automatic proposal whose job has ended and rebuild its output's model; true when
-    /// any did (call every frame).
-    pub fn poll_proposals(&mut self) -> bool {
+    /// Take every automatic proposal and finished model whose job has ended, and rebuild its
+    /// output's model; true when any did (call every frame).
+    pub fn poll_jobs(&mut self) -> bool {
         let mut any = false;
         for output in &mut self.outputs {
             any |= output.poll_proposal();
+            any |= output.poll_finished();
         }
         any
     }
 
-    /// Block until every automatic proposal has ended (tests and screenshots, never in a frame).
-    pub fn wait_for_proposals(&mut self) {
+    /// Block until every automatic proposal and every model being finished has ended (tests,
+    /// screenshots and the headless paths, never in a frame).
+    pub fn wait_for_jobs(&mut self) {
         for output in &mut self.outputs {
             output.wait_for_proposal();
+            output.wait_for_finished();
         }
     }
 
     /// True while a proposal is computed on a worker thread.
     pub fn is_proposing(&self) -> bool {
         self.outputs.iter().any(|o| o.proposal.is_running())
+    }
+
+    /// True while a proposal is computed or a committed model is finished on a worker thread.
+    pub fn is_busy(&self) -> bool {
+        self.is_proposing() || self.is_finishing()
+    }
+
+    /// True while a committed model is finished on a worker thread.
+    pub fn is_finishing(&self) -> bool {
+        self.outputs.iter().any(|o| o.finishing.is_some())
     }
 
     /// The channel the segments' steps are detected on, when it is not the input.
@@ -238,6 +252,9 @@ pub struct OutputCache {
     pub evals: Result<Vec<ClusterEval>, String>,
     scored: Vec<ScoredSource>,
     pub live: Result<LiveModel, String>,
+    /// The committed model being finished on a worker thread (centroids polished, effects
+    /// refitted); `live` is its unpolished first look meanwhile.
+    finishing: Option<Job<Built>>,
     /// The chirp run's empirical frequency response; drawn on the Bode view when not empty.
     pub empirical_bode: Vec<EmpiricalPoint>,
     pub(super) empirical_source: Option<crate::ui::derived::empirical_bode::EmpiricalSource>,
@@ -261,6 +278,7 @@ impl OutputCache {
             evals: Err("not computed yet".into()),
             scored: Vec::new(),
             live: Err("not computed yet".into()),
+            finishing: None,
             empirical_bode: Vec::new(),
             empirical_source: None,
             notes: Vec::new(),
@@ -320,36 +338,78 @@ impl OutputCache {
 
     /// The clusters in use, their evaluation and the committed model (with its effects), from the
     /// current fits, setup and proposal.
+    ///
+    /// Polishing the centroids by simulation error and refitting the effects take longer than a
+    /// frame (tens of milliseconds for a polish, seconds for some effects), so they run on a worker
+    /// thread ([`Self::finishing`]). Meanwhile the model is the one a drag previews (not polished,
+    /// without its effects), marked [`LiveModel::finishing`]; [`Self::poll_finished`] puts the
+    /// finished model in its place.
     fn rebuild(&mut self) {
         let Some(run) = self.source.clone() else { return };
-        let (clusters, (evals, mut live)) = match (&self.setup.clusters, &self.proposal) {
-            (Some(clusters), _) => (clusters.clone(), self.evaluate(&run, clusters, &self.setup.settings)),
-            (None, Proposed::Ready(proposal)) => {
-                (proposal.clusters.clone(), self.evaluate_proposal(&run, proposal))
-            }
+        // A job for an older setup is dropped: its result is for a model nobody shows any more.
+        self.finishing = None;
+        let source = match (&self.setup.clusters, &self.proposal) {
+            (Some(clusters), _) => ModelSource::Clusters(clusters.clone()),
+            (None, Proposed::Ready(proposal)) => ModelSource::Proposal(Arc::clone(proposal)),
             (None, Proposed::Running(_)) => {
                 let why = "the automatic proposal is being computed".to_owned();
-                (Vec::new(), (Ok(Vec::new()), Err(why)))
+                (self.clusters, self.evals, self.live) = (Vec::new(), Ok(Vec::new()), Err(why));
+                return;
             }
             (None, Proposed::Failed(err)) => {
                 let why = format!("the automatic cluster proposal failed: {err}");
-                (Vec::new(), (Ok(Vec::new()), Err(why)))
+                (self.clusters, self.evals, self.live) = (Vec::new(), Ok(Vec::new()), Err(why));
+                return;
             }
         };
-        if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
-            let runs: Vec<Arc<Run>> = self.scored.iter().map(|s| Arc::clone(&s.run)).collect();
-            diagnosis_model::apply_effects(
-                live,
-                &self.setup.effects,
-                &run,
-                fits,
-                &self.setup.settings,
-                &runs,
-            );
+        let inputs = self.inputs(&run);
+        let settings = self.setup.settings.clone();
+        self.clusters = source.clusters();
+        if !settings.refine && inputs.effects.is_empty() {
+            (self.evals, self.live) = inputs.finish(&source, &settings);
+            return;
         }
-        self.clusters = clusters;
-        self.evals = evals;
-        self.live = live;
+        let quick = OutputSettings { refine: false, ..settings.clone() };
+        let (evals, mut live) = inputs.build(&source, &quick);
+        if let Ok(live) = &mut live {
+            live.finishing = true;
+            live.effects.left_out_for_preview = !live.effects.requested.is_empty();
+        }
+        (self.evals, self.live) = (evals, live);
+        let label = format!("Finishing the model of {}", self.name);
+        self.finishing = Some(Job::spawn(label, || {}, move |_| Ok(inputs.finish(&source, &settings))));
+    }
+
+    /// Take the finished model when its job has ended; true when it did.
+    fn poll_finished(&mut self) -> bool {
+        let Some(result) = self.finishing.as_ref().and_then(Job::poll) else { return false };
+        self.finishing = None;
+        self.take_finished(result);
+        true
+    }
+
+    fn take_finished(&mut self, result: JobResult<Built>) {
+        match result {
+            Ok((evals, live)) => (self.evals, self.live) = (evals, live),
+            Err(err) => self.live = Err(format!("the model could not be finished: {err}")),
+        }
+    }
+
+    fn wait_for_finished(&mut self) {
+        if let Some(job) = self.finishing.take() {
+            self.take_finished(job.wait());
+        }
+    }
+
+    /// What building this output's model needs, owned (for a worker thread).
+    fn inputs(&self, run: &Arc<Run>) -> ModelInputs {
+        ModelInputs {
+            run: Arc::clone(run),
+            fits: self.fits.clone(),
+            scored: self.scored.clone(),
+            omegas_rad_s: self.omegas_rad_s.clone(),
+            effects: self.setup.effects.clone(),
+        }
     }
 
     /// Take the proposal when its job has ended, and rebuild the model when it follows it.
@@ -392,6 +452,9 @@ impl OutputCache {
     /// validation run.
     pub fn diagnosis_input(&self) -> Result<DiagnosisInput, String> {
         let live = self.live.as_ref().map_err(|e| format!("no model: {e}"))?;
+        if live.finishing {
+            return Err("the model is being finished (centroids polished, effects refitted); a moment".into());
+        }
         let fits = self.fits.as_ref().map_err(|e| format!("no segment fits: {e}"))?;
         let ident = self.source.as_ref().ok_or("no identification run")?;
         if let Some(problem) = live.effects.problems.first().filter(|_| live.effects.model.is_none()) {
@@ -412,16 +475,58 @@ impl OutputCache {
             settings: self.setup.settings.clone(),
         })
     }
+}
+
+/// The model a cache builds: the user's clusters, or the automatic proposal's model.
+enum ModelSource {
+    Clusters(Vec<Cluster>),
+    Proposal(Arc<Proposal>),
+}
+
+impl ModelSource {
+    fn clusters(&self) -> Vec<Cluster> {
+        match self {
+            Self::Clusters(clusters) => clusters.clone(),
+            Self::Proposal(proposal) => proposal.clusters.clone(),
+        }
+    }
+}
+
+/// Cluster evaluations and the model, as a cache keeps them.
+type Built = (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>);
+
+/// What building one output's model needs, owned so that a worker thread can do it.
+struct ModelInputs {
+    run: Arc<Run>,
+    fits: Result<Arc<SegmentFits>, String>,
+    scored: Vec<ScoredSource>,
+    omegas_rad_s: Vec<f64>,
+    effects: Vec<EffectId>,
+}
+
+impl ModelInputs {
+    /// The model of `source` with `settings`, without its effects.
+    fn build(&self, source: &ModelSource, settings: &OutputSettings) -> Built {
+        match source {
+            ModelSource::Clusters(clusters) => self.evaluate(clusters, settings),
+            ModelSource::Proposal(proposal) => self.evaluate_proposal(proposal, settings),
+        }
+    }
+
+    /// [`Self::build`], then the effects added and refitted.
+    fn finish(&self, source: &ModelSource, settings: &OutputSettings) -> Built {
+        let (evals, mut live) = self.build(source, settings);
+        if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
+            let runs: Vec<Arc<Run>> = self.scored.iter().map(|s| Arc::clone(&s.run)).collect();
+            diagnosis_model::apply_effects(live, &self.effects, &self.run, fits, settings, &runs);
+        }
+        (evals, live)
+    }
 
     /// Cluster evaluations and the live path for `clusters` with `settings`: one core call, which
     /// evaluates the clusters once; only when it gives no model are the clusters evaluated alone, so
     /// that the z-plane still says which cluster fails.
-    fn evaluate(
-        &self,
-        run: &Run,
-        clusters: &[Cluster],
-        settings: &OutputSettings,
-    ) -> (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>) {
+    fn evaluate(&self, clusters: &[Cluster], settings: &OutputSettings) -> Built {
         let fits = match &self.fits {
             Ok(fits) => fits,
             Err(err) => return (Err(err.clone()), Err(err.clone())),
@@ -431,7 +536,7 @@ impl OutputCache {
             return (Ok(Vec::new()), Err(why));
         }
         let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        match live_update(fits, run, clusters, settings, &runs, &self.omegas_rad_s) {
+        match live_update(fits, &self.run, clusters, settings, &runs, &self.omegas_rad_s) {
             Ok(result) => self.split_result(result, settings),
             Err(err) => {
                 let evals =
@@ -443,29 +548,20 @@ impl OutputCache {
     }
 
     /// The model of the automatic proposal (its clusters with its dead time, or its direct fit).
-    fn evaluate_proposal(
-        &self,
-        run: &Run,
-        proposal: &Proposal,
-    ) -> (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>) {
+    fn evaluate_proposal(&self, proposal: &Proposal, settings: &OutputSettings) -> Built {
         let fits = match &self.fits {
             Ok(fits) => fits,
             Err(err) => return (Err(err.clone()), Err(err.clone())),
         };
         let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        let settings = &self.setup.settings;
-        match live_update_proposed(fits, run, proposal, settings, &runs, &self.omegas_rad_s) {
+        match live_update_proposed(fits, &self.run, proposal, settings, &runs, &self.omegas_rad_s) {
             Ok(result) => self.split_result(result, settings),
             Err(err) => (Ok(Vec::new()), Err(err.to_string())),
         }
     }
 
     /// The core's live result as the cache keeps it: the evaluations apart, the model with its runs.
-    fn split_result(
-        &self,
-        mut result: LiveResult,
-        settings: &OutputSettings,
-    ) -> (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>) {
+    fn split_result(&self, mut result: LiveResult, settings: &OutputSettings) -> Built {
         let evals = std::mem::take(&mut result.evals);
         (Ok(evals), Ok(self.live_model(result, settings)))
     }
@@ -487,11 +583,12 @@ impl OutputCache {
             .collect();
         LiveModel {
             id: diagnosis_model::next_model_id(),
-            effects: EffectsOutcome { requested: self.setup.effects.clone(), ..EffectsOutcome::default() },
+            effects: EffectsOutcome { requested: self.effects.clone(), ..EffectsOutcome::default() },
             model: result.model,
             bode: result.bode,
             runs: scored,
             polish_requested: settings.refine,
+            finishing: false,
         }
     }
 }
@@ -508,7 +605,7 @@ impl Preview {
     /// The live path on `clusters` for `output`, without polishing (fast enough for every frame).
     pub fn compute(ident: &IdentCache, output: &str, clusters: Vec<Cluster>) -> Option<Self> {
         let cache = ident.output(output)?;
-        let (evals, mut live) = cache.evaluate(&ident.run, &clusters, &cache.preview_settings());
+        let (evals, mut live) = cache.inputs(&ident.run).evaluate(&clusters, &cache.preview_settings());
         if let Ok(live) = &mut live {
             live.effects.left_out_for_preview = !live.effects.requested.is_empty();
         }

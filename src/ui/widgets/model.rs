@@ -50,6 +50,19 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
             ui.label(RichText::new(text + ")").color(theme::WARNING));
             true
         }
+        Ok(live) if live.finishing => {
+            let mut text = "Polishing the centroids".to_owned();
+            if live.effects.left_out_for_preview {
+                text += &format!(
+                    " and refitting the effects {}",
+                    EffectId::names(&live.effects.requested).join(", ")
+                );
+            }
+            ui.label(
+                RichText::new(text + "…; meanwhile the model without them is shown").color(theme::WARNING),
+            );
+            true
+        }
         Ok(live) => {
             for problem in &live.effects.problems {
                 error_ui(ui, &format!("Effects: {problem}"));

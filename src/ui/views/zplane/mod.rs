@@ -230,7 +230,9 @@ fn live_strip_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
             return;
         }
     };
-    if !view.is_preview && live.polish_requested {
+    if live.finishing {
+        ui.label(RichText::new("polishing the centroids…").color(theme::WARNING).small());
+    } else if !view.is_preview && live.polish_requested {
         let text = if live.model.refinement.is_some() {
             "centroids polished"
         } else {

@@ -30,8 +30,11 @@ pub fn failure_reasons(y: &[f64], y_hat: &[f64], u: &[f64], ident_input: (f64, f
     if !beyond.is_finite() || beyond > RUNAWAY_SHARE * span {
         let reached = if sim_hi - hi >= lo - sim_lo { sim_hi } else { sim_lo };
         reasons.push(format!(
-            "its simulation leaves the measured range: it reaches {reached:.4e} where the measurement stays within \
-             [{lo:.4e}, {hi:.4e}] (an unstable recursion, or the model resting at another equilibrium)"
+            "its simulation leaves the measured range: it reaches {} where the measurement stays within \
+             [{}, {}] (an unstable recursion, or the model resting at another equilibrium)",
+            value(reached),
+            value(lo),
+            value(hi)
         ));
     }
     let e: Vec<f64> = y.iter().zip(y_hat).map(|(a, b)| a - b).collect();
@@ -39,14 +42,16 @@ pub fn failure_reasons(y: &[f64], y_hat: &[f64], u: &[f64], ident_input: (f64, f
     let mse = e.iter().map(|x| x * x).sum::<f64>() / n as f64;
     if mse > 0.0 && bias * bias >= OFFSET_SHARE * mse {
         reasons.push(format!(
-            "{:.0} % of its squared error is a constant offset of {bias:.4e}: it settles where the engine does not",
-            100.0 * bias * bias / mse
+            "{:.0} % of its squared error is a constant offset of {}: it settles where the engine does not",
+            100.0 * bias * bias / mse,
+            value(bias)
         ));
     } else if let Some((share, worst)) = steady_error(&e, u, mse) {
         reasons.push(format!(
-            "{:.0} % of its squared error sits on the settled ends of the input's holds, up to {worst:.4e} off: \
+            "{:.0} % of its squared error sits on the settled ends of the input's holds, up to {} off: \
              its steady states are wrong (a model resting at another equilibrium)",
-            100.0 * share
+            100.0 * share,
+            value(worst)
         ));
     }
     let (u_lo, u_hi) = ident_input;
@@ -65,6 +70,20 @@ pub fn failure_reasons(y: &[f64], y_hat: &[f64], u: &[f64], ident_input: (f64, f
         );
     }
     reasons
+}
+
+/// `value` to four significant digits: plain between 10⁻³ and 10⁷ (an offset of 879.0 rpm), in
+/// exponent form outside (a runaway's 1.000e24).
+fn value(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 {
+        "0".to_owned()
+    } else if (1e-3..1e7).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.3e}")
+    }
 }
 
 /// A hold of the input lasts at least this share of the run (a step and its settling on a bench
@@ -104,6 +123,16 @@ fn range(x: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn values_read_plainly_in_the_engine_range_and_as_exponents_beyond() {
+        assert_eq!(value(879.0), "879.0");
+        assert_eq!(value(-0.01234567), "-0.01235");
+        assert_eq!(value(52_721.6), "52722");
+        assert_eq!(value(0.0), "0");
+        assert_eq!(value(-1e24), "-1.000e24");
+        assert_eq!(value(2e-5), "2.000e-5");
+    }
 
     fn steps() -> (Vec<f64>, Vec<f64>) {
         let u: Vec<f64> = (0..400).map(|k| if (k / 100) % 2 == 0 { 2.0 } else { 4.0 }).collect();

@@ -146,25 +146,6 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
         // The notes wrap at the table's width: wider, they would push the summary beside the
         // table out of the view.
         ui.set_max_width(grid.response.rect.width());
-        let failing: Vec<String> = comparison
-            .runs
-            .iter()
-            .flat_map(|run| {
-                run.models.iter().filter_map(move |m| {
-                    let failure = m.metrics.as_ref().ok()?.failure()?;
-                    let why = m.failure_reasons.join("; ");
-                    Some(format!("• {} on '{}': {failure}: {why}", m.model.label(), run_title(run)))
-                })
-            })
-            .collect();
-        if !failing.is_empty() {
-            ui.label(
-                RichText::new("Fails (explains less than half of the output's variation):").color(theme::WARNING),
-            );
-            for line in &failing {
-                ui.add(egui::Label::new(RichText::new(line).color(theme::WARNING)).wrap());
-            }
-        }
         if PaperOutput::of(&comparison.output).is_some() {
             crate::ui::widgets::model::hint(
                 ui,
@@ -175,7 +156,31 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
     });
 }
 
-/// The −3 dB cut-offs and the input noise the Monte Carlo study used.
+/// The models that fail on a run (fit below 50 %), one line each with why; nothing when none does.
+fn failures_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
+    let failing: Vec<String> = comparison
+        .runs
+        .iter()
+        .flat_map(|run| {
+            run.models.iter().filter_map(move |m| {
+                let failure = m.metrics.as_ref().ok()?.failure()?;
+                let why = m.failure_reasons.join("; ");
+                Some(format!("• {} on '{}': {failure}: {why}", m.model.label(), run_title(run)))
+            })
+        })
+        .collect();
+    if !failing.is_empty() {
+        ui.add_space(6.0);
+        ui.label(
+            RichText::new("Fails (explains less than half of the output's variation):").color(theme::WARNING),
+        );
+        for line in &failing {
+            ui.add(egui::Label::new(RichText::new(line).color(theme::WARNING)).wrap());
+        }
+    }
+}
+
+/// The models that fail, the −3 dB cut-offs and the input noise the Monte Carlo study used.
 pub fn summary_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
     if let Some(freq) = &comparison.frequency {
         ui.label(RichText::new(format!("−3 dB cut-off on '{}' [rad/s]", freq.run)).strong());
@@ -213,6 +218,7 @@ pub fn summary_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
             );
         }
     }
+    failures_ui(ui, comparison);
 }
 
 /// The paper's Monte Carlo standard deviation for `model` on `output`, when it has one.

@@ -143,6 +143,9 @@ fn changing_the_clusters_marks_the_result_stale_until_recomputed() {
         fewer.remove(drop);
         harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: Some(fewer) });
         harness.step();
+        // The committed model is polished on a worker thread: wait for it.
+        harness.state_mut().settle();
+        harness.step();
         let live = harness.state().cache.output(SPEED).unwrap().live.as_ref();
         live.is_ok_and(|l| l.model.wiener != before)
     });
@@ -264,6 +267,8 @@ fn with_an_effect_applied_the_gray_box_row_is_the_model_with_its_effect() {
     app.apply(Command::OpenProject(project));
     app.settle();
     app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "thermal_soak".into() });
+    // The effect is refitted on a worker thread: wait for the finished model.
+    app.settle();
     app.view.output = Some(SPEED.into());
     app.view.tab = Tab::Compare;
     let mut harness = Harness::builder()
@@ -288,8 +293,10 @@ fn with_an_effect_applied_the_gray_box_row_is_the_model_with_its_effect() {
         "Compare shows {shown}, the model {with_effect}"
     );
 
-    // Removing the effect makes the comparison stale.
+    // Removing the effect makes the comparison stale (once the model without it is finished).
     harness.state_mut().apply(Command::Undo);
+    harness.step();
+    harness.state_mut().settle();
     harness.step();
     let app = harness.state();
     assert_eq!(app.view.views.compare.result_is_current(SPEED, &app.session, &app.cache), Some(false));

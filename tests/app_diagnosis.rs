@@ -15,7 +15,7 @@ use jetid::ui::{App, Command, Role, Session, Tab};
 
 const SPEED: &str = "shaft_speed_rpm";
 
-use common::app::harness;
+use common::app::{harness, run_settled};
 use common::sample;
 
 /// The app on a sample project, opened through the app's own command, on the Diagnosis view.
@@ -70,7 +70,7 @@ fn hot_day_ambient_correction_is_found_applied_and_removed() {
     // The first Apply button is the best-ranked effect's.
     let apply = harness.get_all_by_role_and_label(A11yRole::Button, "Apply").next().expect("Apply buttons");
     apply.click();
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(effects_in_setup(app), vec!["ambient_correction".to_owned()]);
     let after = live_rmspe(app);
@@ -98,7 +98,7 @@ fn hot_day_ambient_correction_is_found_applied_and_removed() {
     // The diagnosis is now stale; Remove takes the effect out and the error returns.
     harness.get_by_label("Re-run diagnosis");
     harness.get_by_role_and_label(A11yRole::Button, "Remove").click();
-    harness.run();
+    run_settled(&mut harness);
     assert!(effects_in_setup(harness.state()).is_empty());
     let removed = live_rmspe(harness.state());
     assert!((removed - before).abs() < 1e-9 * before, "{before} vs {removed}");
@@ -107,12 +107,12 @@ fn hot_day_ambient_correction_is_found_applied_and_removed() {
 
     // Undo brings the effect back, undo again is the state before it was applied.
     harness.state_mut().apply(Command::Undo);
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(effects_in_setup(harness.state()), vec!["ambient_correction".to_owned()]);
     assert!((live_rmspe(harness.state()) - after).abs() < 1e-9 * after);
     harness.get_by_label("Re-run diagnosis");
     harness.state_mut().apply(Command::Undo);
-    harness.run();
+    run_settled(&mut harness);
     assert!(effects_in_setup(harness.state()).is_empty());
     assert!((live_rmspe(harness.state()) - before).abs() < 1e-9 * before);
     assert!(harness.query_by_label("Re-run diagnosis").is_none(), "no stale banner after the Undo");
@@ -169,7 +169,7 @@ fn a_run_without_the_channels_an_effect_needs_is_a_shown_error() {
 
     // An unknown effect id is an error shown, the setup stays as it was.
     harness.state_mut().apply(Command::ApplyEffect { output: SPEED.into(), effect: "warp_drive".into() });
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(effects_in_setup(harness.state()), vec!["ambient_correction".to_owned()]);
     assert!(harness.state().view.errors.iter().any(|e| e.contains("warp_drive")));
 }
@@ -178,7 +178,7 @@ fn a_run_without_the_channels_an_effect_needs_is_a_shown_error() {
 fn a_clicked_worst_stretch_shows_that_window_in_the_traces_view() {
     let mut harness = open_sample("soak/project.toml");
     harness.get_by_label("Where it fails").click();
-    harness.run();
+    run_settled(&mut harness);
     let (index, first) = {
         let state = &harness.state().view.views.diagnosis.residuals;
         let analyses = state.current().expect("the residuals are analysed");
@@ -188,14 +188,14 @@ fn a_clicked_worst_stretch_shows_that_window_in_the_traces_view() {
     };
     let label = format!("1. {:.1}–{:.1} s", first.start_secs, first.end_secs);
     harness.get_by_label(&label).click();
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(app.view.tab, Tab::Traces);
     let traces = &app.view.views.traces;
     assert_eq!(traces.run, Some(index));
     assert_eq!(traces.focus_window, Some((first.start_secs, first.end_secs)));
     harness.get_by_label("Reset zoom").click();
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(harness.state().view.views.traces.focus_window, None);
 }
 

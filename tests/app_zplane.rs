@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::app::run_settled;
 use egui::{Key, Modifiers, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -52,7 +53,7 @@ fn drag(harness: &mut Harness<'_, App>, from: Pos2, to: Pos2) {
         harness.step();
     }
     harness.drop_at(to);
-    harness.run();
+    run_settled(harness);
 }
 
 /// Equal up to the last bit or two (JSON floats are parsed to within an ulp).
@@ -115,7 +116,7 @@ fn dragging_a_rim_changes_the_radius_the_model_and_the_error_and_undo_redo_walk_
         assert_eq!(clusters_of(app, SPEED)[i], *p1, "nothing committed yet");
     }
     harness.drop_at(inside);
-    harness.run();
+    run_settled(&mut harness);
 
     let app = harness.state();
     assert!(app.cache.preview.is_none());
@@ -134,24 +135,24 @@ fn dragging_a_rim_changes_the_radius_the_model_and_the_error_and_undo_redo_walk_
 
     // Undo (Ctrl+Z) brings back the same model; redo (Ctrl+Shift+Z) the dragged one.
     harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
-    harness.run();
+    run_settled(&mut harness);
     let (poles, rmspe) = model_of(harness.state(), SPEED);
     assert!(same_roots(&poles, &poles_before));
     assert!((rmspe - rmspe_before).abs() < 1e-9);
     assert_eq!(clusters_of(harness.state(), SPEED), clusters);
 
     harness.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
-    harness.run();
+    run_settled(&mut harness);
     let (poles, rmspe) = model_of(harness.state(), SPEED);
     assert!(same_roots(&poles, &poles_after));
     assert!((rmspe - rmspe_after).abs() < 1e-9);
 
     // The buttons do the same.
     harness.get_by_label("Undo").click();
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(clusters_of(harness.state(), SPEED), clusters);
     harness.get_by_label("Redo").click();
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(clusters_of(harness.state(), SPEED), after);
 }
 
@@ -184,14 +185,14 @@ fn no_valid_pole_cluster_shows_an_error_instead_of_a_model() {
     let mut harness = sample_harness(Tab::ZPlane);
     let zero_only = vec![Cluster::new(RootKind::Zero, Complex64::new(0.5, 0.5), 0.01)];
     harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: Some(zero_only) });
-    harness.run();
+    run_settled(&mut harness);
     assert!(harness.state().cache.output(SPEED).unwrap().live.is_err());
     harness.get_by_label_contains("No model");
     harness.state_mut().view.tab = Tab::Traces;
     harness.run();
     harness.get_by_label_contains("No model for shaft_speed_rpm");
     harness.state_mut().apply(Command::Undo);
-    harness.run();
+    run_settled(&mut harness);
     assert!(harness.state().cache.output(SPEED).unwrap().live.is_ok());
 }
 
@@ -200,17 +201,17 @@ fn adding_and_deleting_clusters_and_accepting_the_proposal() {
     let mut harness = sample_harness(Tab::ZPlane);
     let auto = clusters_of(harness.state(), SPEED);
     harness.get_by_label("+ Zero cluster").click();
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(clusters_of(app, SPEED).len(), auto.len() + 1);
     assert_eq!(clusters_of(app, SPEED).last().unwrap().kind, RootKind::Zero);
     assert_eq!(app.view.views.zplane.selected, Some(auto.len()), "the new cluster is selected");
     harness.get_by_label("Delete").click();
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(clusters_of(harness.state(), SPEED), auto);
     assert!(harness.state().cache.output(SPEED).unwrap().setup.clusters.is_some(), "edited");
     harness.get_by_label("Accept automatic proposal").click();
-    harness.run();
+    run_settled(&mut harness);
     assert!(harness.state().cache.output(SPEED).unwrap().setup.clusters.is_none());
 }
 
@@ -224,7 +225,7 @@ fn a_broken_model_file_shows_an_error_and_keeps_the_clusters() {
     let revision = harness.state().session.revision;
 
     harness.state_mut().apply(Command::ImportModel(broken));
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(app.session.revision, revision);
     assert_eq!(clusters_of(app, SPEED), before);
@@ -232,7 +233,7 @@ fn a_broken_model_file_shows_an_error_and_keeps_the_clusters() {
     assert!(app.view.errors[0].contains("model.json"), "{}", app.view.errors[0]);
     harness.get_by_label("Error");
     harness.get_by_label("Dismiss").click();
-    harness.run();
+    run_settled(&mut harness);
     assert!(harness.state().view.errors.is_empty());
 }
 
@@ -255,7 +256,7 @@ fn exporting_then_importing_a_model_restores_the_clusters() {
     assert!(clusters_of(harness.state(), SPEED).is_empty());
 
     harness.state_mut().apply(Command::ImportModel(path));
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
     assert!(same_clusters(&clusters_of(app, SPEED), &speed));
@@ -277,7 +278,7 @@ fn a_broken_run_file_keeps_the_session_and_the_model() {
     let mut harness = sample_harness(Tab::ZPlane);
     let (poles, _) = model_of(harness.state(), SPEED);
     harness.state_mut().apply(Command::load(&broken, Role::Validation));
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(app.session.runs.len(), 4);
     assert_eq!(app.view.failures.len(), 1);
@@ -311,7 +312,7 @@ fn dragging_a_segment_boundary_refits_on_release_and_undoes() {
     assert_ne!(fits_after.segments, fits_before.segments, "the fits were redone");
 
     harness.state_mut().apply(Command::Undo);
-    harness.run();
+    run_settled(&mut harness);
     let ident = harness.state().cache.ident.as_ref().unwrap();
     assert_eq!(ident.segments.as_ref().unwrap(), &segments);
     assert!(ident.segments_are_automatic());
@@ -396,7 +397,7 @@ fn escape_cancels_a_cluster_drag() {
     harness.key_press(Key::Escape);
     harness.step();
     harness.drop_at(to);
-    harness.run();
+    run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(app.session.revision, revision);
     assert_eq!(clusters_of(app, SPEED), clusters);
@@ -406,7 +407,7 @@ fn escape_cancels_a_cluster_drag() {
 /// Step frames (sleeping between them) until no automatic proposal is being computed.
 fn wait_for_proposals(harness: &mut Harness<'_, App>) {
     for _ in 0..3000 {
-        if !harness.state().cache.ident.as_ref().is_some_and(|i| i.is_proposing()) {
+        if !harness.state().cache.ident.as_ref().is_some_and(|i| i.is_busy()) {
             harness.run();
             return;
         }
@@ -473,10 +474,10 @@ fn editing_the_proposed_clusters_keeps_the_proposals_dead_time_and_accepting_it_
     assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, None);
     let clusters = clusters_of(harness.state(), SPEED);
     harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: Some(clusters) });
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, Some(proposed));
     harness.state_mut().apply(Command::SetClusters { output: SPEED.into(), clusters: None });
-    harness.run();
+    run_settled(&mut harness);
     assert_eq!(harness.state().session.setup.output(SPEED).settings.dead_time_samples, None);
 }
 
@@ -547,4 +548,28 @@ fn an_invalid_clusters_status_fits_the_window_and_the_pointer_readout_is_under_t
         "the readout {:?} is below the plot {plot:?}",
         readout.rect()
     );
+}
+
+#[test]
+fn a_committed_change_shows_the_unpolished_model_at_once_and_the_polished_one_from_a_worker() {
+    let mut app = App::startup(None);
+    app.settle();
+    let clusters = clusters_of(&app, SPEED);
+    assert!(app.session.setup.output(SPEED).settings.refine, "the bundled setup polishes the centroids");
+    let mut moved = clusters.clone();
+    moved[0].radius *= 0.9;
+    app.apply(Command::SetClusters { output: SPEED.into(), clusters: Some(moved.clone()) });
+    app.refresh();
+    // The refresh only starts the polish: the model shown meanwhile is the unpolished one.
+    assert!(app.cache.ident.as_ref().unwrap().is_finishing(), "the polish ran on the calling thread");
+    let first = app.cache.output(SPEED).unwrap().live.as_ref().expect("a first model at once").clone();
+    assert!(first.finishing && first.model.refinement.is_none());
+    assert_eq!(clusters_of(&app, SPEED), moved);
+
+    app.settle();
+    let output = app.cache.output(SPEED).unwrap();
+    let finished = output.live.as_ref().expect("the finished model");
+    assert!(!finished.finishing && finished.polish_requested);
+    assert!(!app.cache.ident.as_ref().unwrap().is_busy());
+    assert_ne!(finished.id, first.id, "the finished model replaced the first look");
 }

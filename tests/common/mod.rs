@@ -36,6 +36,14 @@ pub mod app {
         harness_sized(app, [1400.0, 900.0])
     }
 
+    /// Run the frames a change asks for, wait for the background work it started (the committed
+    /// model is polished and its effects refitted on a worker thread), then draw the result.
+    pub fn run_settled(harness: &mut Harness<'_, App>) {
+        harness.run();
+        harness.state_mut().settle();
+        harness.run();
+    }
+
     /// The app on the bundled sample runs, every model built, showing `tab`; not yet stepped.
     pub fn sample_app(tab: Tab) -> Harness<'static, App> {
         let mut app = App::startup(None);

@@ -171,6 +171,9 @@ impl CompareViewState {
     }
 }
 
+/// Why a model cannot be compared yet.
+const FINISHING: &str = "the model is being finished (centroids polished, effects refitted)";
+
 /// The comparison's input for `output`'s committed model (not a drag preview).
 fn current_input(
     session: &Session,
@@ -181,6 +184,9 @@ fn current_input(
     let out = ident.output(output).ok_or_else(|| format!("{output} is not identified"))?;
     let fits = out.fits.as_ref().map_err(|e| format!("no segment fits: {e}"))?;
     let live = out.live.as_ref().map_err(|e| format!("no model: {e}"))?;
+    if live.finishing {
+        return Err(FINISHING.to_owned());
+    }
     let mut runs = Vec::new();
     let mut scored = Vec::new();
     for run in &live.runs {
@@ -222,7 +228,9 @@ pub fn compare_ui(
     if !model_ui::model_state_ui(ui, &view) {
         return;
     }
-    if state.status(output) == CompareStatus::NotStarted {
+    // A model still being finished is not compared: the comparison would be stale on arrival.
+    let finishing = view.live.as_ref().is_ok_and(|l| l.finishing);
+    if state.status(output) == CompareStatus::NotStarted && !finishing {
         state.start(output, session, cache, ui.ctx());
     }
     let current = current_input(session, cache, output).ok().map(|(key, _)| key);

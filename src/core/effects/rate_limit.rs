@@ -154,8 +154,16 @@ const MIN_PEAK_NOISE_SIGMAS: f64 = 10.0;
 /// slope is read across sizes the noise cannot blur.
 const MIN_PEAK_RATIO: f64 = 1.5;
 
-/// Fewest pairs of changes a direction's slope is read from.
-const MIN_PAIRS: usize = 3;
+/// Fewest changes a direction's slope is read from: one change spoiled by a dropout spoils n − 1 of
+/// the n(n − 1)/2 pairs, a share 2/n, and the median of the pairwise slopes survives that from five
+/// changes on (2/5 < 1/2). Since only pairs of clearly different size count, the rule is checked on
+/// the pairs themselves as well: no change may take part in half of them or more.
+const MIN_CHANGES: usize = 5;
+
+/// The measurement follows a change when its rate over the change exceeds this many standard
+/// deviations of the rate's noise: the largest of a hundred noise samples passes 5 σ with
+/// probability 100 · 2.9·10⁻⁷ ≈ 3·10⁻⁵.
+const MEASURED_MOVES_SIGMAS: f64 = 5.0;
 
 /// Measured peak rates growing as the model's to a power below this saturate: a linear engine (or
 /// one whose rise and fall time constants differ) scales every slope with the change, power 1; a
@@ -180,10 +188,23 @@ struct Change {
     measured_peak: f64,
 }
 
+/// A change of the model must keep at least this share of its travel for as long again as it took,
+/// and must not give back more than this share of a change the other way just before it (as long
+/// before as it takes): a schedule limits changes of level, and a model change that is undone (or
+/// undoes another) that fast is a blip (an input dropout the engine does not follow, and the
+/// recovery from it; a logger gap bridged by interpolation) or half an oscillation, whose peak rate
+/// says nothing about a schedule. A step response keeps all of its travel, and even a pair damped to
+/// 10 % overshoot keeps 90 %.
+const MIN_KEPT_SHARE: f64 = 0.5;
+
 /// The changes of one trace in one direction (`sign` +1 rises, −1 falls): maximal stretches where
-/// the model moves that way faster than the noise floor. The measured peak is read over the
-/// stretch widened by half its length on each side (a late or slowed response peaks later).
-fn changes(t: &ResidualTrace, sign: f64, floor: f64) -> Vec<Change> {
+/// the model moves that way faster than the noise floor and then holds its new level (see
+/// [`MIN_KEPT_SHARE`]). The measured peak is read over the stretch widened by half its length on
+/// each side (a late or slowed response peaks later); a change the measurement does not follow
+/// faster than the noise floor is left out too: a saturated slope is a rate the measurement shows,
+/// and a measurement that does not move at all is a dropout or a model fault, not a schedule.
+fn changes(t: &ResidualTrace, sign: f64, noise: f64) -> Vec<Change> {
+    let floor = MIN_PEAK_NOISE_SIGMAS * noise;
     let model = smoothed_rate(&t.y_hat, t.dt_secs);
     let measured = smoothed_rate(&t.y, t.dt_secs);
     let mut out = Vec::new();
@@ -201,10 +222,18 @@ fn changes(t: &ResidualTrace, sign: f64, floor: f64) -> Vec<Change> {
         let peak = |r: &[f64], a: usize, b: usize| {
             r.get(a..b.min(r.len())).map_or(0.0, |s| s.iter().map(|x| sign * x).fold(0.0, f64::max))
         };
-        out.push(Change {
+        let change = Change {
             model_peak: peak(&model, start, k),
             measured_peak: peak(&measured, start.saturating_sub(widen), k + widen),
-        });
+        };
+        let level = |i: usize| t.y_hat.get(i.min(t.y_hat.len().saturating_sub(1))).copied().unwrap_or(0.0);
+        let travel = sign * (level(k.saturating_sub(1)) - level(start));
+        let kept = sign * (level(k - 1 + (k - start)) - level(start));
+        let undone = sign * (level(start.saturating_sub(k - start)) - level(start));
+        let level_change = kept >= MIN_KEPT_SHARE * travel && undone < MIN_KEPT_SHARE * travel;
+        if level_change && change.measured_peak > MEASURED_MOVES_SIGMAS * noise {
+            out.push(change);
+        }
     }
     out
 }
@@ -224,16 +253,24 @@ struct Growth {
 fn growth(changes: &[Change], noise: f64) -> Option<Growth> {
     let ln = |x: f64| x.max(noise).max(f64::MIN_POSITIVE).ln();
     let mut slopes = Vec::new();
+    let mut part = vec![0usize; changes.len()];
     for (i, a) in changes.iter().enumerate() {
-        for b in changes.iter().skip(i + 1) {
+        for (j, b) in changes.iter().enumerate().skip(i + 1) {
             let dx = ln(b.model_peak) - ln(a.model_peak);
             if dx.abs() >= MIN_PEAK_RATIO.ln() {
                 slopes.push((ln(b.measured_peak) - ln(a.measured_peak)) / dx);
+                for k in [i, j] {
+                    if let Some(p) = part.get_mut(k) {
+                        *p += 1;
+                    }
+                }
             }
         }
     }
+    let in_pairs = part.iter().filter(|p| **p > 0).count();
+    let most = part.iter().copied().max().unwrap_or(0);
     let fastest = changes.iter().max_by(|a, b| a.model_peak.total_cmp(&b.model_peak))?;
-    (slopes.len() >= MIN_PAIRS).then(|| Growth {
+    (in_pairs >= MIN_CHANGES && 2 * most < slopes.len()).then(|| Growth {
         power: median(&slopes),
         changes: changes.len(),
         fastest_measured: fastest.measured_peak,
@@ -277,7 +314,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
         let noise = sigma * std::f64::consts::SQRT_2 / (2.0 * RATE_HALF_SPAN as f64 * t.dt_secs);
         noises.push(noise);
         for (slot, sign) in found.iter_mut().zip([1.0, -1.0]) {
-            slot.extend(changes(t, sign, MIN_PEAK_NOISE_SIGMAS * noise));
+            slot.extend(changes(t, sign, noise));
         }
     }
     let noise = median(&noises);
@@ -288,6 +325,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
         (true, true) => "both accelerations and decelerations saturate at a constant rate",
         (true, false) => "accelerations saturate at a constant rate",
         (false, true) => "decelerations saturate at a constant rate",
+        (false, false) if up.is_none() && down.is_none() => "no saturating slope to be seen",
         (false, false) => "the slopes scale with the size of the change, as a linear engine's do",
     };
     Evidence {
@@ -342,7 +380,7 @@ mod tests {
 
     /// Steps of several sizes through a first-order lag; the measurement rate-limited or not.
     fn steps(limit: Option<RateLimit>) -> ResidualTrace {
-        let levels = [0.0, 2.0, 0.0, 5.0, 1.0, 9.0, 3.0, 12.0, 0.0, 4.0, 0.0];
+        let levels = [0.0, 1.0, 0.0, 2.0, 0.0, 3.0, 0.0, 4.0, 0.0, 6.0, 0.0, 8.0, 0.0, 10.0, 0.0];
         let u: Vec<f64> = levels.iter().flat_map(|l| vec![*l; 80]).collect();
         let lag = super::super::stats::low_pass(&u, 0.1, 0.8);
         let noise: Vec<f64> = (0..u.len()).map(|k| 0.002 * ((k * 7919 % 101) as f64 - 50.0) / 50.0).collect();
@@ -357,7 +395,7 @@ mod tests {
     fn saturating_slopes_are_evidence_and_proportional_ones_are_not() {
         let linear = evidence(&[steps(None)]);
         assert!(!linear.supports, "{}", linear.sentence);
-        let limited = evidence(&[steps(Some(RateLimit { rise_per_s: 4.0, fall_per_s: 100.0 }))]);
+        let limited = evidence(&[steps(Some(RateLimit { rise_per_s: 2.0, fall_per_s: 100.0 }))]);
         assert!(
             limited.supports && limited.sentence.contains("accelerations saturate"),
             "{}",

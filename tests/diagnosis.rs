@@ -211,6 +211,26 @@ fn ambient_correction_is_found() {
 
 /// The pipeline's model without its dead time, as a user has it who built the model from the
 /// proposal's clusters alone: the diagnosis must then tell the missing dead time from a lag.
+/// The simulator's default schedule (4,000 rpm/s up, 1,500 rpm/s down) binds on rises and falls of
+/// the identification run, so both limits can be fitted there.
+#[test]
+fn rate_limit_is_found() {
+    for seed in [2, 3] {
+        assert_found("rate_limit", seed, speed_default, None, FRESH_RUN_RATIO);
+    }
+}
+
+/// A spool that decelerates slowly slows every fall in proportion to its size: no rate limit.
+#[test]
+fn slow_deceleration_is_not_read_as_a_rate_limit() {
+    for seed in [2, 3] {
+        let b = bench(&["asymmetric_dynamics"], seed);
+        let (_, report) = structure_first(&b, &speed_default(&b));
+        let entry = report.entries.iter().find(|d| d.effect == "rate_limit").unwrap();
+        assert!(!entry.significant, "seed {seed}: {}\n{}", entry.evidence, summary(&report));
+    }
+}
+
 fn speed_without_dead_time(b: &Bench) -> Current {
     let settings = OutputSettings::for_output(SPEED);
     let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();

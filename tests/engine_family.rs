@@ -264,6 +264,13 @@ fn ambient_correction_is_found_on_engines_of_the_family() {
     assert_found_on_two("ambient_correction", SPEED);
 }
 
+/// The ECU's acceleration schedule (4,000 rpm/s up, 1,500 rpm/s down: the simulator's defaults)
+/// caps the large steps of every engine of the family.
+#[test]
+fn rate_limit_is_found_on_engines_of_the_family() {
+    assert_found_on_two("rate_limit", SPEED);
+}
+
 /// The bleed valve opens at 78,000 rpm (corrected), inside the top of every engine's range.
 #[test]
 fn static_map_order_is_found_on_engines_of_the_family() {

@@ -210,6 +210,11 @@ fn scheduled_time_constant() {
 }
 
 #[test]
+fn rate_limit() {
+    exports_reproduce_predict(Some("rate_limit"), Some("shaft_speed_rpm"));
+}
+
+#[test]
 fn sensor_dynamics() {
     exports_reproduce_predict(Some("sensor_dynamics"), Some("thrust_n"));
 }

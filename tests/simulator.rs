@@ -131,6 +131,33 @@ fn transport_delay_shifts_the_response() {
     assert_eq!(base.truth.input, late.truth.input);
 }
 
+/// Fastest rise and fall of a signal over one sample, per second.
+fn peak_rates(values: &[f64]) -> (f64, f64) {
+    values.windows(2).fold((0.0f64, 0.0f64), |(up, down), w| {
+        let r = (w[1] - w[0]) / DT_SECS;
+        (up.max(r), down.max(-r))
+    })
+}
+
+#[test]
+fn rate_limit_caps_the_spool_slope_and_keeps_the_steady_states() {
+    let spec = "rate_limit:rise_rpm_s=4000,fall_rpm_s=1500";
+    let (base, limited) = (sim(TestKind::Ident, &[], 1), sim(TestKind::Ident, &[spec], 1));
+    let (s0, s1) = (truth(&base, columns::SPEED), truth(&limited, columns::SPEED));
+    let ((up0, down0), (up1, down1)) = (peak_rates(s0), peak_rates(s1));
+    // The free engine is faster than the limits on its large steps; the limited one never is (the
+    // RK4 step integrates a clamped rate, so a sample's slope is the limit at most).
+    assert!(up0 > 1.2 * 4000.0 && down0 > 1.2 * 1500.0, "free engine: {up0} / {down0} rpm/s");
+    assert!(up1 <= 4000.0 * 1.001 && down1 <= 1500.0 * 1.001, "limited: {up1} / {down1} rpm/s");
+    assert!(up1 > 0.95 * 4000.0 && down1 > 0.95 * 1500.0, "the limits bind: {up1} / {down1} rpm/s");
+    // Same steady states once each step has settled (step B ends at 150 s, the run at its end).
+    for t in [59.0, 149.0, (s0.len() - 1) as f64 * DT_SECS] {
+        assert!((at(s1, t) - at(s0, t)).abs() < 1.0, "at {t} s: {} vs {}", at(s1, t), at(s0, t));
+    }
+    // The recorded fuel is the command: the ECU's limit does not show in the input.
+    assert_eq!(base.truth.input, limited.truth.input);
+}
+
 #[test]
 fn thermal_soak_leaves_a_creeping_tail() {
     let (base, soak) = (sim(TestKind::Ident, &[], 1), sim(TestKind::Ident, &["thermal_soak"], 1));

@@ -22,13 +22,14 @@ const fn spec(name: &'static str, default: f64, min: f64, max: f64) -> ParamSpec
 }
 
 /// The effects the simulator can switch on: METHOD.md's catalog, keyed on the model's own ids.
-pub const EFFECT_IDS: [EffectId; 7] = [
+pub const EFFECT_IDS: [EffectId; 8] = [
     EffectId::TransportDelay,
     EffectId::ThermalSoak,
     EffectId::AmbientCorrection,
     EffectId::AsymmetricDynamics,
     EffectId::SensorDynamics,
     EffectId::StaticMapOrder,
+    EffectId::RateLimit,
     EffectId::CalibrationDrift,
 ];
 
@@ -52,6 +53,15 @@ const SENSOR_DYNAMICS: &[ParamSpec] = &[
 /// A fuel-meter zero shift of a test day, gal/h: a few percent of an idle flow of ~2 gal/h is what
 /// a recalibration or a swapped meter gives; ±2 gal/h is the most a meter would be trusted with.
 const CALIBRATION_DRIFT: &[ParamSpec] = &[spec("offset_gph", 0.2, -2.0, 2.0)];
+/// The ECU's acceleration and deceleration limits on the (corrected) shaft speed, rpm/s. An
+/// SR-30-class spool (τ ≈ 1.7 s) stepped across half its 45–87 krpm range would start at about
+/// 20,000/1.7 ≈ 12,000 rpm/s; its fuel system rounds that to 4,000–6,000 rpm/s on the
+/// identification design's rises and 2,000–3,000 rpm/s on its (smaller) falls. 4,000 rpm/s up (idle
+/// to full in ~10 s, a typical small-engine acceleration schedule) clips the large rises only;
+/// 1,500 rpm/s down is the gentler deceleration schedule small-engine ECUs keep for lean blow-out
+/// margin when the fuel is cut back, and clips every fall of the designs but the smallest.
+const RATE_LIMIT: &[ParamSpec] =
+    &[spec("rise_rpm_s", 4_000.0, 100.0, 1.0e6), spec("fall_rpm_s", 1_500.0, 100.0, 1.0e6)];
 const STATIC_MAP_ORDER: &[ParamSpec] =
     &[spec("bleed_rpm", 80_000.0, 50_000.0, 95_000.0), spec("gain", 2.0, 0.0, 20.0)];
 
@@ -78,6 +88,9 @@ pub enum Effect {
     /// log's input column is shifted (a calibration that differs between test days; simulate the
     /// runs of one day without it and another day's with it).
     CalibrationDrift { offset_gph: f64 },
+    /// The ECU's acceleration schedule: the shaft speed rises by at most `rise_rpm_s` and falls by
+    /// at most `fall_rpm_s` (the spool's own rate, clamped).
+    RateLimit { rise_rpm_s: f64, fall_rpm_s: f64 },
 }
 
 impl Effect {
@@ -91,6 +104,7 @@ impl Effect {
             Self::SensorDynamics { .. } => EffectId::SensorDynamics,
             Self::StaticMapOrder { .. } => EffectId::StaticMapOrder,
             Self::CalibrationDrift { .. } => EffectId::CalibrationDrift,
+            Self::RateLimit { .. } => EffectId::RateLimit,
         }
     }
 
@@ -105,6 +119,7 @@ impl Effect {
             EffectId::SensorDynamics => Ok(SENSOR_DYNAMICS),
             EffectId::StaticMapOrder => Ok(STATIC_MAP_ORDER),
             EffectId::CalibrationDrift => Ok(CALIBRATION_DRIFT),
+            EffectId::RateLimit => Ok(RATE_LIMIT),
             // Not simulated: the scheduled time constant is the engine's own behaviour (always on).
             EffectId::ScheduledTimeConstant => Err(unknown_effect(id.name())),
         }
@@ -137,6 +152,7 @@ impl Effect {
                 Self::SensorDynamics { freq_hz: at(0), zeta: at(1), lag_s: at(2), buffet_n: at(3) }
             }
             EffectId::CalibrationDrift => Self::CalibrationDrift { offset_gph: at(0) },
+            EffectId::RateLimit => Self::RateLimit { rise_rpm_s: at(0), fall_rpm_s: at(1) },
             EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant => {
                 Self::StaticMapOrder { bleed_rpm: at(0), gain: at(1) }
             }
@@ -219,6 +235,8 @@ pub struct ActiveEffects {
     pub bleed: Option<(f64, f64)>,
     /// What the fuel meter adds to the flow it logs, gal/h.
     pub meter_offset_gph: f64,
+    /// `(rise_rpm_s, fall_rpm_s)`: the ECU's limits on the speed's rate of change.
+    pub rate_limit: Option<(f64, f64)>,
 }
 
 /// Linear drift of the inlet conditions through a run, and the humidity at its start.
@@ -252,6 +270,7 @@ impl ActiveEffects {
             stand: None,
             bleed: None,
             meter_offset_gph: 0.0,
+            rate_limit: None,
         }
     }
 
@@ -278,6 +297,9 @@ impl ActiveEffects {
                 }
                 Effect::StaticMapOrder { bleed_rpm, gain } => active.bleed = Some((bleed_rpm, gain)),
                 Effect::CalibrationDrift { offset_gph } => active.meter_offset_gph = offset_gph,
+                Effect::RateLimit { rise_rpm_s, fall_rpm_s } => {
+                    active.rate_limit = Some((rise_rpm_s, fall_rpm_s))
+                }
             }
         }
         Ok(active)

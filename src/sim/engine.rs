@@ -12,7 +12,8 @@
 //!   effect): Ṅ_c = K (p − n^k (1 + k_b max(0, n − n_b))) / n,  K = N_ref / (k τ_ref),
 //!   so the linearised time constant is τ(N) = τ_ref · (N_ref / N)^a (the SR-30 calibration has
 //!   a = 1: compressor power ∝ N³, τ ∝ 1/N); Ṅ_c is divided by the deceleration (acceleration)
-//!   factor while negative (positive); physical N = √θ · N_c
+//!   factor while negative (positive), then clamped to the ECU's limits (rate-limit effect);
+//!   physical N = √θ · N_c
 //! - engine thrust F = δ (F_0 + F_1 n^p_F)
 //! - load cell: first-order lag τ_lc, then a second-order stand (f_s, ζ_s) driven by F (+ buffeting)
 //! - EGT: gas temperature T_amb + θ ΔT_ref (w_c / w_ref) / n^β seen through a thermocouple lag τ_egt
@@ -230,6 +231,9 @@ impl Engine {
         } else {
             speed_rate / self.effects.accel_factor
         };
+        if let Some((rise_rpm_s, fall_rpm_s)) = self.effects.rate_limit {
+            dx[SPEED] = dx[SPEED].clamp(-fall_rpm_s, rise_rpm_s);
+        }
 
         let thrust_n = self.engine_thrust_n(n, delta);
         let (freq_hz, zeta, lag_s) = self.stand();

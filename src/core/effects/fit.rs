@@ -11,7 +11,7 @@
 //! [`refine`] holds the Levenberg–Marquardt step, [`search`] the screening when one block is added.
 use num_complex::Complex64;
 
-use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output_stage};
+use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output_stage, rate_limit};
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{AsymmetricDynamics, EffectBlock, EffectError};
@@ -166,14 +166,31 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
         Some(f) => data.y.iter().zip(f).map(|(y, f)| y / f).collect(),
         None => data.y.clone(),
     };
-    let w_seen = match s.effects.iter().find_map(|e| match e {
+    let sensor = s.effects.iter().find_map(|e| match e {
         EffectBlock::SensorDynamics(sd) => Some(sd),
         _ => None,
-    }) {
-        Some(sensor) => sensor.apply(&w, dt),
-        None => w.clone(),
+    });
+    let seen = |w: &[f64]| match sensor {
+        Some(sensor) => sensor.apply(w, dt),
+        None => w.to_vec(),
     };
-    let (gain, offset) = fit_gain_offset(&w_seen, &y_c)?;
+    let (mut gain, mut offset) = fit_gain_offset(&seen(&w), &y_c)?;
+    let mut structure = s.clone();
+    let mut w = w;
+    if let Some(limit) = rate_limit(&s.effects) {
+        // The limits are in output units, the unit-gain response is not: limit `w` at the limits
+        // the unlimited fit's gain gives, refit gain and offset, and record the limits `gain·w`
+        // then has (what the model simulates), as the kink's slope is recorded below.
+        let limited = limit.for_unit_gain(gain)?.apply(&w, dt);
+        let (g, o) = fit_gain_offset(&seen(&limited), &y_c)?;
+        let recorded = limit.for_unit_gain(gain)?.of_scaled(g)?;
+        for e in &mut structure.effects {
+            if let EffectBlock::RateLimit(r) = e {
+                *r = recorded.clone();
+            }
+        }
+        (gain, offset, w) = (g, o, limited);
+    }
     let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
     let (vs, ys): (Vec<f64>, Vec<f64>) = data
         .steady_windows
@@ -185,7 +202,6 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
         _ => None,
     });
     let (map, slope_change) = fit_map_with_knot(&vs, &ys, s.map_order, knot)?;
-    let mut structure = s.clone();
     for e in &mut structure.effects {
         if let EffectBlock::StaticMapOrder(k) = e {
             k.slope_change = slope_change;

@@ -15,31 +15,34 @@ pub enum EffectId {
     AmbientCorrection,
     AsymmetricDynamics,
     ScheduledTimeConstant,
+    RateLimit,
     SensorDynamics,
     StaticMapOrder,
 }
 
 impl EffectId {
     /// Every block, in signal-path order.
-    pub const ALL: [Self; 8] = [
+    pub const ALL: [Self; 9] = [
         Self::CalibrationDrift,
         Self::TransportDelay,
         Self::ThermalSoak,
         Self::AmbientCorrection,
         Self::AsymmetricDynamics,
         Self::ScheduledTimeConstant,
+        Self::RateLimit,
         Self::SensorDynamics,
         Self::StaticMapOrder,
     ];
 
     /// The physics the diagnosis tries, in the order of METHOD.md's catalog.
-    pub const CATALOG: [Self; 7] = [
+    pub const CATALOG: [Self; 8] = [
         Self::TransportDelay,
         Self::ThermalSoak,
         Self::AmbientCorrection,
         Self::AsymmetricDynamics,
         Self::SensorDynamics,
         Self::StaticMapOrder,
+        Self::RateLimit,
         Self::CalibrationDrift,
     ];
 
@@ -52,6 +55,7 @@ impl EffectId {
             Self::AmbientCorrection => "ambient_correction",
             Self::AsymmetricDynamics => "asymmetric_dynamics",
             Self::ScheduledTimeConstant => "scheduled_time_constant",
+            Self::RateLimit => "rate_limit",
             Self::SensorDynamics => "sensor_dynamics",
             Self::StaticMapOrder => "static_map_order",
         }

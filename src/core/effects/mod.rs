@@ -7,7 +7,7 @@
 //! ```text
 //! u ─ambient: u/(δ√θ)─▶ transport delay z⁻ᵈ ─▶ G(z) (asymmetric: rise/fall time constants;
 //!   scheduled: the spool time constant follows the operating point)
-//!   ─▶ thermal soak branch ─▶ v ─▶ f(v) (+ static-map kink) ─ambient: ·√θ or ·δ─▶ sensor ─▶ y
+//!   ─▶ thermal soak branch ─▶ rate limit ─▶ v ─▶ f(v) (+ static-map kink) ─ambient: ·√θ or ·δ─▶ sensor ─▶ y
 //! ```
 //!
 //! Every block has a stable serialisable form, [`EffectRecord`] `{ id, params }`, with
@@ -49,6 +49,7 @@ mod calibration_drift;
 mod fit;
 mod id;
 mod model;
+mod rate_limit;
 mod scheduled_time_constant;
 mod sensor_dynamics;
 mod static_map_order;
@@ -64,6 +65,7 @@ pub use calibration_drift::{CalibrationDrift, evidence as steady_state_agreement
 pub use fit::{FitData, apply_effect, refit, refit_static};
 pub use id::EffectId;
 pub use model::ExtendedModel;
+pub use rate_limit::RateLimit;
 pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
 pub use static_map_order::StaticMapOrder;
@@ -193,6 +195,7 @@ impl EffectId {
             Self::AmbientCorrection => BlockInfo::of::<AmbientCorrection>(),
             Self::AsymmetricDynamics => BlockInfo::of::<AsymmetricDynamics>(),
             Self::ScheduledTimeConstant => BlockInfo::of::<ScheduledTimeConstant>(),
+            Self::RateLimit => BlockInfo::of::<RateLimit>(),
             Self::SensorDynamics => BlockInfo::of::<SensorDynamics>(),
             Self::StaticMapOrder => BlockInfo::of::<StaticMapOrder>(),
         }
@@ -234,6 +237,8 @@ pub enum EffectBlock {
     StaticMapOrder(StaticMapOrder),
     /// See [`ScheduledTimeConstant`].
     ScheduledTimeConstant(ScheduledTimeConstant),
+    /// See [`RateLimit`].
+    RateLimit(RateLimit),
 }
 
 /// What the current model's residuals say about an effect: one sentence, and whether it shows the
@@ -300,6 +305,7 @@ impl EffectBlock {
             Self::AmbientCorrection(b) => b,
             Self::AsymmetricDynamics(b) => b,
             Self::ScheduledTimeConstant(b) => b,
+            Self::RateLimit(b) => b,
             Self::SensorDynamics(b) => b,
             Self::StaticMapOrder(b) => b,
         }
@@ -331,6 +337,7 @@ impl EffectBlock {
             EffectId::AmbientCorrection => Self::AmbientCorrection(Block::from_values(&v)),
             EffectId::AsymmetricDynamics => Self::AsymmetricDynamics(Block::from_values(&v)),
             EffectId::ScheduledTimeConstant => Self::ScheduledTimeConstant(Block::from_values(&v)),
+            EffectId::RateLimit => Self::RateLimit(Block::from_values(&v)),
             EffectId::SensorDynamics => Self::SensorDynamics(Block::from_values(&v)),
             EffectId::StaticMapOrder => Self::StaticMapOrder(Block::from_values(&v)),
         })
@@ -363,6 +370,7 @@ impl EffectBlock {
             Self::SensorDynamics(b) => b.free_params(),
             Self::StaticMapOrder(b) => b.free_params(),
             Self::ScheduledTimeConstant(b) => b.free_params(),
+            Self::RateLimit(b) => b.free_params(),
             Self::AmbientCorrection(_) | Self::CalibrationDrift(_) => Vec::new(),
         }
     }
@@ -376,6 +384,7 @@ impl EffectBlock {
             Self::SensorDynamics(b) => Self::SensorDynamics(b.with_free_params(theta, dt_secs)?),
             Self::StaticMapOrder(b) => Self::StaticMapOrder(b.with_free_params(theta)?),
             Self::ScheduledTimeConstant(b) => Self::ScheduledTimeConstant(b.with_free_params(theta)?),
+            Self::RateLimit(b) => Self::RateLimit(b.with_free_params(theta)?),
             Self::AmbientCorrection(_) | Self::CalibrationDrift(_) => self.clone(),
         })
     }
@@ -398,6 +407,7 @@ mod tests {
             EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.8 }),
             EffectBlock::SensorDynamics(SensorDynamics { freq_hz: 1.4, zeta: 0.06, lag_s: 0.3 }),
             EffectBlock::StaticMapOrder(StaticMapOrder { knot_v: 80_000.0, slope_change: -0.5 }),
+            EffectBlock::RateLimit(RateLimit { rise_per_s: 6000.0, fall_per_s: 9000.0 }),
             EffectBlock::CalibrationDrift(CalibrationDrift { hold_s: 4.0 }),
         ];
         for (block, id) in blocks.iter().zip(EffectId::CATALOG) {

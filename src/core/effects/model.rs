@@ -4,8 +4,8 @@ use num_complex::Complex64;
 use super::ambient_correction::Conditions;
 use super::asymmetric_dynamics::SplitShape;
 use super::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, SensorDynamics,
-    TransportDelay,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, RateLimit,
+    SensorDynamics, TransportDelay,
 };
 use crate::core::identification::initial_state::{InitialState, fit_free_response};
 use crate::core::identification::pipeline::GrayBoxModel;
@@ -146,6 +146,10 @@ impl ExtendedModel {
             None
         };
         let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, run.dt_secs)?;
+        let v = match rate_limit(&self.effects) {
+            Some(limit) => limit.apply(&v, run.dt_secs),
+            None => v,
+        };
         let y = output_stage(&self.effects, &self.wiener.map, &v, conditions.as_ref(), run.dt_secs);
         Ok((v, y))
     }
@@ -245,6 +249,15 @@ pub(super) fn linear_stage(
         *x += linear.offset;
     }
     Ok(v)
+}
+
+/// The rate limit among the blocks, if any. It acts on `v` in output units, so it is applied after
+/// [`linear_stage`] (which the fit also runs on the unit-gain block) once the gain is known.
+pub(super) fn rate_limit(effects: &[EffectBlock]) -> Option<&RateLimit> {
+    effects.iter().find_map(|e| match e {
+        EffectBlock::RateLimit(r) => Some(r),
+        _ => None,
+    })
 }
 
 /// `y`: the static map (with its kink), back to physical units, through the sensor.

@@ -112,6 +112,13 @@ fn output(o: &OutputPlan) -> String {
     if let Some(s) = &o.soak {
         fields.push(format!(".has_soak = 1, .soak_gain = {}, .soak_tau_s = {}", num(s.gain), num(s.tau_s)));
     }
+    if let Some(r) = &o.rate_limit {
+        fields.push(format!(
+            ".has_rate_limit = 1, .rise_per_s = {}, .fall_per_s = {}",
+            num(r.rise_per_s),
+            num(r.fall_per_s)
+        ));
+    }
     let steps: Vec<String> = o
         .output_steps
         .iter()

@@ -115,6 +115,10 @@ fn output(o: &OutputPlan) -> String {
         Some(s) => format!("o.soak = [{}, {}];\n", num(s.gain), num(s.tau_s)),
         None => "o.soak = [];\n".to_owned(),
     });
+    t.push_str(&match &o.rate_limit {
+        Some(r) => format!("o.rate_limit = [{}, {}];\n", num(r.rise_per_s), num(r.fall_per_s)),
+        None => "o.rate_limit = [];\n".to_owned(),
+    });
     let steps: Vec<String> = o
         .output_steps
         .iter()
@@ -268,6 +272,15 @@ if ~isempty(o.soak)
     end
 end
 v = v + o.offset;
+if ~isempty(o.rate_limit)
+    up = o.rate_limit(1) * dt;
+    down = o.rate_limit(2) * dt;
+    held = v(1);
+    for k = 1:numel(v)
+        held = held + min(max(v(k) - held, -down), up);
+        v(k) = held;
+    end
+end
 end
 
 function out = spool(sp, u)

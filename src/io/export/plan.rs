@@ -5,8 +5,8 @@ use num_complex::Complex64;
 
 use super::ExportError;
 use crate::core::effects::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, ExtendedModel, ScheduledTimeConstant, SensorDynamics,
-    StaticMapOrder, ThermalSoak,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, ExtendedModel, RateLimit, ScheduledTimeConstant,
+    SensorDynamics, StaticMapOrder, ThermalSoak,
 };
 use crate::core::identification::static_map::StaticMap;
 use crate::core::numerics::tf::DiscreteTf;
@@ -133,6 +133,8 @@ pub struct OutputPlan {
     pub input_steps: Vec<InputStep>,
     pub linear: Linear,
     pub soak: Option<ThermalSoak>,
+    /// The slew-rate limit on `v` (output units per second), after the soak.
+    pub rate_limit: Option<RateLimit>,
     pub output_steps: Vec<OutputStep>,
     /// The effects' linear dynamics every local model shares (dead time, soak, sensor; unit steady
     /// gain), as `core::control::effect_dynamics` builds them.
@@ -283,6 +285,7 @@ fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
         input_steps: Vec::new(),
         linear: Linear::Direct(Filter::of(tf)),
         soak: None,
+        rate_limit: None,
         output_steps: Vec::new(),
         effect_dynamics: {
             let (num_zinv, den_zinv) = crate::core::control::effect_dynamics(&model);
@@ -302,6 +305,7 @@ fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
                     .push(InputStep::Delay(Delay { whole: whole as usize, frac: d.delay_samples - whole }));
             }
             EffectBlock::ThermalSoak(s) => plan.soak = Some(s.clone()),
+            EffectBlock::RateLimit(r) => plan.rate_limit = Some(r.clone()),
             EffectBlock::AmbientCorrection(AmbientCorrection { output_theta_exp, output_delta_exp }) => {
                 plan.input_steps.push(InputStep::AmbientInput);
                 plan.output_steps.push(OutputStep::AmbientOutput {

@@ -106,6 +106,10 @@ fn output(o: &OutputPlan) -> String {
         ("input_steps", format!("[{}]", input_steps.join(", "))),
         ("split", option(split)),
         ("soak", option(o.soak.as_ref().map(|s| format!("({}, {})", num(s.gain), num(s.tau_s))))),
+        (
+            "rate_limit",
+            option(o.rate_limit.as_ref().map(|r| format!("({}, {})", num(r.rise_per_s), num(r.fall_per_s)))),
+        ),
         ("output_steps", format!("[{}]", output_steps.join(", "))),
         ("effect_dynamics", filter(&o.effect_dynamics)),
     ];

@@ -6,7 +6,7 @@ use super::{Assembled, FitData, REFINED_STARTS, Structure, assemble, check_chann
 use crate::core::effects::model::ExtendedModel;
 use crate::core::effects::stats::mean;
 use crate::core::effects::{
-    AmbientCorrection, AsymmetricDynamics, CalibrationDrift, EffectBlock, EffectError, EffectId,
+    AmbientCorrection, AsymmetricDynamics, CalibrationDrift, EffectBlock, EffectError, EffectId, RateLimit,
     ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
 };
 
@@ -40,7 +40,7 @@ pub fn apply_effect(
     }
     let search = Search { id, guesses: &guesses, data };
     let mut starts: Vec<Structure> = search.screen(&base, &[]);
-    starts.extend(neutral_block(id, data).map(|b| base.with(b)));
+    starts.extend(neutral_block(id, &current.model, data).map(|b| base.with(b)));
     if id == EffectId::TransportDelay {
         // Poles may stand in for a dead time (an ARX model cannot hold a long delay, so the segment
         // models put fast roots where it is): the delay is also tried with the fastest one or two pole
@@ -54,8 +54,26 @@ pub fn apply_effect(
     }
     let discrete = matches!(id, EffectId::TransportDelay | EffectId::StaticMapOrder);
     let rounds = if discrete { MAX_SCREENING_ROUNDS } else { 1 };
-    let best = search.improve(None, starts, rounds);
-    best.map(|b| b.model).ok_or_else(|| failed("no admissible starting point"))
+    let best = search.improve(None, starts, rounds).ok_or_else(|| failed("no admissible starting point"))?;
+    if id == EffectId::RateLimit {
+        return lift_unreached_limits(best, data);
+    }
+    Ok(best.model)
+}
+
+/// A fitted rate limit with the limits the identification data never reach lifted (see
+/// [`RateLimit::lifted_where_unreached`]), gain, offset and map refitted for it.
+fn lift_unreached_limits(best: Assembled, data: &FitData) -> Result<ExtendedModel, EffectError> {
+    let Some(EffectBlock::RateLimit(limit)) = best.model.effect(EffectId::RateLimit).cloned() else {
+        return Ok(best.model);
+    };
+    let (v_free, _) = best.model.without_effect(EffectId::RateLimit)?.simulate_with_v(&data.run)?;
+    let lifted = limit.lifted_where_unreached(&v_free, data.dt_secs);
+    if lifted == limit {
+        return Ok(best.model);
+    }
+    let structure = best.structure.with(EffectBlock::RateLimit(lifted));
+    Ok(assemble(&structure, data).map_or(best.model, |a| a.model))
 }
 
 /// The structure without its fastest pole group (a real pole or a pair, the one of smallest
@@ -134,8 +152,12 @@ impl Search<'_> {
 }
 
 /// The block's setting that leaves the model unchanged, where there is one.
-fn neutral_block(id: EffectId, data: &FitData) -> Option<EffectBlock> {
+fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Option<EffectBlock> {
     match id {
+        EffectId::RateLimit => {
+            let (v, _) = current.simulate_with_v(&data.run).ok()?;
+            RateLimit::neutral(&v, data.dt_secs).map(EffectBlock::RateLimit)
+        }
         EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.0, tau_s: 20.0 })),
         EffectId::AsymmetricDynamics => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
@@ -191,6 +213,10 @@ fn starting_points(
             let y_hat = current.simulate(&data.run)?;
             let e: Vec<f64> = data.y.iter().zip(&y_hat).map(|(y, yh)| y - yh).collect();
             SensorDynamics::guesses(&e, data.dt_secs).into_iter().map(EffectBlock::SensorDynamics).collect()
+        }
+        EffectId::RateLimit => {
+            let (v, _) = current.simulate_with_v(&data.run)?;
+            RateLimit::guesses(&v, data.dt_secs).into_iter().map(EffectBlock::RateLimit).collect()
         }
         EffectId::StaticMapOrder => {
             let (v, _) = current.simulate_with_v(&data.run)?;

@@ -53,6 +53,8 @@ typedef struct {
     double log_ratio, state_log_ratio, ref_input, input_span;
     int has_soak;
     double soak_gain, soak_tau_s;
+    int has_rate_limit;
+    double rise_per_s, fall_per_s;
     int n_output_steps;
     jetid_output_step output_steps[2];
 } jetid_params;
@@ -82,6 +84,7 @@ typedef struct {
     jetid_delay_state dead;
     double x, x_old, prev, prev_old; /* the spool: output now and before, its input before */
     double soak_a, soak_s;
+    double rate_v; /* the rate-limited v of the previous sample */
     jetid_sensor_state sensor[2];
 } jetid_state;
 
@@ -248,6 +251,15 @@ static double jetid_step(jetid_state *s, double u, double temp_c, double pressur
         v = v + p->soak_gain * (s->soak_s - v);
     }
     v += p->offset;
+    if (p->has_rate_limit) {
+        double change, up = p->rise_per_s * s->dt, down = p->fall_per_s * s->dt;
+        if (first) s->rate_v = v;
+        change = v - s->rate_v;
+        if (change > up) change = up;
+        if (change < -down) change = -down;
+        s->rate_v += change;
+        v = s->rate_v;
+    }
     y = jetid_static_map(p, v);
     for (i = 0; i < p->n_output_steps; i++) {
         const jetid_output_step *st = &p->output_steps[i];

@@ -96,6 +96,20 @@ class _Soak:
         return v + self.gain * (self.s - v)
 
 
+class _RateLimit:
+    """Slew-rate limit on v: it rises by at most rise*dt and falls by at most fall*dt a sample."""
+
+    def __init__(self, rise_per_s, fall_per_s, dt):
+        self.up, self.down = rise_per_s * dt, fall_per_s * dt
+        self.v = None
+
+    def step(self, v):
+        if self.v is None:
+            self.v = v
+        self.v += min(max(v - self.v, -self.down), self.up)
+        return self.v
+
+
 class _Sensor:
     """Sensor lag (exact for an input linear between samples) and resonance (RK4)."""
 
@@ -188,6 +202,8 @@ class Model:
         self.input_steps = [_Delay(s[1], s[2]) if s[0] == "delay" else None for s in p["input_steps"]]
         self.linear = _Spool(p["split"]) if p["split"] is not None else _Filter(p["tf"])
         self.soak = _Soak(p["soak"][0], p["soak"][1], dt) if p["soak"] is not None else None
+        limit = p.get("rate_limit")
+        self.rate_limit = _RateLimit(limit[0], limit[1], dt) if limit is not None else None
         self.output_steps = [_Sensor(s[1], s[2], s[3], dt) if s[0] == "sensor" else None for s in p["output_steps"]]
 
     def input_stage(self, u, temp_c=None, pressure_kpa=None):
@@ -207,6 +223,8 @@ class Model:
         if self.soak is not None:
             v = self.soak.step(v)
         v += self.p["offset"]
+        if self.rate_limit is not None:
+            v = self.rate_limit.step(v)
         y = static_map(self.output, v)
         for spec, sensor in zip(self.p["output_steps"], self.output_steps):
             if sensor is not None:

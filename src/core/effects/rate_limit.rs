@@ -289,7 +289,7 @@ fn shown(x: f64) -> String {
     if x.abs() >= 100.0 { format!("{x:.0}") } else { format!("{x:.3}") }
 }
 
-/// "grow as the model's to the power 0.21 (12 changes; fastest 5.4e3 against the model's 9.1e3 per s)".
+/// "grow as the model's to the power 0.21 (12 changes; fastest 5400 against the model's 9100 per s)".
 fn growth_clause(g: Option<&Growth>) -> String {
     match g {
         Some(g) => format!(

@@ -106,16 +106,7 @@ pub fn bode_panel<'a>(
 /// stretch from its name.
 pub fn line_key_ui(ui: &mut egui::Ui, colour: egui::Color32, width: f32, dashed: bool, name: &str) {
     const STRETCH: f32 = 24.0;
-    const GAP: f32 = 4.0;
-    let galley = egui::WidgetText::from(egui::RichText::new(name).color(colour)).into_galley(
-        ui,
-        Some(egui::TextWrapMode::Extend),
-        f32::INFINITY,
-        egui::TextStyle::Body,
-    );
-    let size = egui::vec2(STRETCH + GAP + galley.size().x, galley.size().y);
-    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
-    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, name));
+    let rect = key_ui(ui, colour, name, STRETCH);
     let y = rect.center().y;
     let points = [egui::pos2(rect.left(), y), egui::pos2(rect.left() + STRETCH, y)];
     let stroke = egui::Stroke::new(width, colour);
@@ -124,23 +115,13 @@ pub fn line_key_ui(ui: &mut egui::Ui, colour: egui::Color32, width: f32, dashed:
     } else {
         ui.painter().line_segment(points, stroke);
     }
-    ui.painter().galley(egui::pos2(rect.left() + STRETCH + GAP, rect.top()), galley, colour);
 }
 
 /// One key of a legend drawn outside a plot for points drawn as diamonds (egui_plot's own legend
 /// draws every item as a dot, whatever its marker): a filled diamond, then its name.
 pub fn diamond_key_ui(ui: &mut egui::Ui, colour: egui::Color32, name: &str) {
     const HALF: f32 = 5.0;
-    const GAP: f32 = 4.0;
-    let galley = egui::WidgetText::from(egui::RichText::new(name).color(colour)).into_galley(
-        ui,
-        Some(egui::TextWrapMode::Extend),
-        f32::INFINITY,
-        egui::TextStyle::Body,
-    );
-    let size = egui::vec2(2.0 * HALF + GAP + galley.size().x, galley.size().y);
-    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
-    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, name));
+    let rect = key_ui(ui, colour, name, 2.0 * HALF);
     let c = egui::pos2(rect.left() + HALF, rect.center().y);
     let corners = vec![
         c + egui::vec2(0.0, -HALF),
@@ -149,7 +130,23 @@ pub fn diamond_key_ui(ui: &mut egui::Ui, colour: egui::Color32, name: &str) {
         c + egui::vec2(-HALF, 0.0),
     ];
     ui.painter().add(egui::Shape::convex_polygon(corners, colour, egui::Stroke::NONE));
-    ui.painter().galley(egui::pos2(rect.left() + 2.0 * HALF + GAP, rect.top()), galley, colour);
+}
+
+/// A legend key's widget: room for a mark `mark_width` wide, then `name` in `colour` (drawn here);
+/// returns the whole key's rectangle, the mark to be drawn at its left.
+fn key_ui(ui: &mut egui::Ui, colour: egui::Color32, name: &str, mark_width: f32) -> egui::Rect {
+    const GAP: f32 = 4.0;
+    let galley = egui::WidgetText::from(egui::RichText::new(name).color(colour)).into_galley(
+        ui,
+        Some(egui::TextWrapMode::Extend),
+        f32::INFINITY,
+        egui::TextStyle::Body,
+    );
+    let size = egui::vec2(mark_width + GAP + galley.size().x, galley.size().y);
+    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, name));
+    ui.painter().galley(egui::pos2(rect.left() + mark_width + GAP, rect.top()), galley, colour);
+    rect
 }
 
 #[cfg(test)]

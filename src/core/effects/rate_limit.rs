@@ -42,30 +42,24 @@ impl RateLimit {
     /// The same limiter for a signal `w` with `v = gain·w`: the limits in units of `w` (rise and fall
     /// swap when the gain is negative). `None` for a zero or non-finite gain.
     pub(super) fn for_unit_gain(&self, gain: f64) -> Option<Self> {
-        if !gain.is_finite() || gain.abs() <= f64::MIN_POSITIVE {
-            return None;
-        }
-        let g = gain.abs();
-        Some(if gain > 0.0 {
-            Self { rise_per_s: self.rise_per_s / g, fall_per_s: self.fall_per_s / g }
-        } else {
-            Self { rise_per_s: self.fall_per_s / g, fall_per_s: self.rise_per_s / g }
-        })
+        self.rescaled(gain, |x, g| x / g)
     }
 
     /// The limits of `gain·w` when `w` is limited by `self` (the inverse of [`Self::for_unit_gain`]).
     pub(super) fn of_scaled(&self, gain: f64) -> Option<Self> {
+        self.rescaled(gain, |x, g| (x * g).min(MAX_LIMIT_PER_S)).filter(Self::admissible)
+    }
+
+    /// Both limits through `scale(limit, |gain|)`, rise and fall swapped for a negative gain; `None`
+    /// for a zero or non-finite gain.
+    fn rescaled(&self, gain: f64, scale: impl Fn(f64, f64) -> f64) -> Option<Self> {
         if !gain.is_finite() || gain.abs() <= f64::MIN_POSITIVE {
             return None;
         }
         let g = gain.abs();
-        let scaled = |x: f64| (x * g).min(MAX_LIMIT_PER_S);
-        let out = if gain > 0.0 {
-            Self { rise_per_s: scaled(self.rise_per_s), fall_per_s: scaled(self.fall_per_s) }
-        } else {
-            Self { rise_per_s: scaled(self.fall_per_s), fall_per_s: scaled(self.rise_per_s) }
-        };
-        out.admissible().then_some(out)
+        let (rise, fall) =
+            if gain > 0.0 { (self.rise_per_s, self.fall_per_s) } else { (self.fall_per_s, self.rise_per_s) };
+        Some(Self { rise_per_s: scale(rise, g), fall_per_s: scale(fall, g) })
     }
 
     fn admissible(&self) -> bool {

@@ -6,6 +6,7 @@ pub mod empirical_bode;
 mod ident_runs;
 pub mod jobs;
 pub mod live_model;
+mod model_build;
 pub mod model_cache;
 pub mod residuals;
 use std::sync::Arc;

@@ -7,27 +7,23 @@
 //! than a frame, so it runs on a worker thread ([`Proposed`]); the model views say so meanwhile,
 //! and the model follows it when it arrives. Edited clusters do not wait for it.
 //!
-//! While a cluster is dragged, [`Preview`] runs the live path on the dragged clusters every frame
-//! without polishing the centroids (`refine = false`); the committed clusters are polished.
-//!
-//! The committed model then gets the output's effects (see
-//! [`diagnosis_model`](super::diagnosis_model)); a preview shows it without them.
+//! How one output's model is built from these — the committed one on a worker thread, a drag's
+//! preview every frame — is in [`model_build`](super::model_build).
 use std::sync::Arc;
 
-use crate::core::identification::cluster::{self, Cluster, ClusterEval};
-use crate::core::identification::pipeline::{
-    self, LiveResult, OutputSettings, SegmentFits, fit_segments_for, live_update, live_update_proposed,
-};
+use crate::core::identification::cluster::{Cluster, ClusterEval};
+use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits, fit_segments_for};
 use crate::core::identification::segment::Segment;
 use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::{BodePoint, log_space};
 use crate::core::run::Run;
 
-use crate::core::effects::EffectId;
-use crate::ui::derived::diagnosis_model::{self, DiagnosisInput, EffectsOutcome};
+use crate::ui::derived::diagnosis_model::DiagnosisInput;
 use crate::ui::derived::ident_runs::{ScoredSource, detect_or_check, join_identification, scored_runs};
 use crate::ui::derived::jobs::{Job, JobResult};
 pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
+pub use crate::ui::derived::model_build::Preview;
+use crate::ui::derived::model_build::{Built, ModelInputs, ModelSource};
 use crate::ui::state::session::{Role, Session, SessionRun};
 use crate::ui::state::setup::OutputSetup;
 
@@ -242,7 +238,7 @@ pub struct OutputCache {
     source: Option<Arc<Run>>,
     fits_key: Option<FitsKey>,
     pub fits: Result<Arc<SegmentFits>, String>,
-    pub omegas_rad_s: Vec<f64>,
+    pub omegas_rad_s: Arc<[f64]>,
     /// Bode of every segment's ARX model at `omegas_rad_s`, in segment order.
     pub segment_bode: Vec<Vec<BodePoint>>,
     /// The automatic proposal for the current fits.
@@ -271,7 +267,7 @@ impl OutputCache {
             source: None,
             fits_key: None,
             fits: Err("not computed yet".into()),
-            omegas_rad_s: Vec::new(),
+            omegas_rad_s: Arc::from([]),
             segment_bode: Vec::new(),
             proposal: Proposed::Failed("not computed yet".into()),
             clusters: Vec::new(),
@@ -309,7 +305,7 @@ impl OutputCache {
                 Err(err) => Err(format!("no segments: {err}")),
             };
             self.omegas_rad_s =
-                log_space(LOWEST_OMEGA_RAD_S, std::f64::consts::PI / run.dt_secs, BODE_POINTS);
+                log_space(LOWEST_OMEGA_RAD_S, std::f64::consts::PI / run.dt_secs, BODE_POINTS).into();
             self.segment_bode = match &self.fits {
                 Ok(fits) => fits.models.iter().map(|m| m.bode_response(&self.omegas_rad_s)).collect(),
                 Err(_) => Vec::new(),
@@ -402,12 +398,12 @@ impl OutputCache {
     }
 
     /// What building this output's model needs, owned (for a worker thread).
-    fn inputs(&self, run: &Arc<Run>) -> ModelInputs {
+    pub(super) fn inputs(&self, run: &Arc<Run>) -> ModelInputs {
         ModelInputs {
             run: Arc::clone(run),
             fits: self.fits.clone(),
             scored: self.scored.clone(),
-            omegas_rad_s: self.omegas_rad_s.clone(),
+            omegas_rad_s: Arc::clone(&self.omegas_rad_s),
             effects: self.setup.effects.clone(),
         }
     }
@@ -440,7 +436,7 @@ impl OutputCache {
 
     /// The settings a drag of the clusters in use is previewed with: while the clusters follow the
     /// proposal, with its dead time (committing the edit carries it into the settings).
-    fn preview_settings(&self) -> OutputSettings {
+    pub(super) fn preview_settings(&self) -> OutputSettings {
         let carried = match self.setup.clusters {
             None => self.setup.settings.dead_time_samples.or_else(|| self.proposal.dead_time_samples()),
             Some(_) => self.setup.settings.dead_time_samples,
@@ -474,141 +470,5 @@ impl OutputCache {
             validation,
             settings: self.setup.settings.clone(),
         })
-    }
-}
-
-/// The model a cache builds: the user's clusters, or the automatic proposal's model.
-enum ModelSource {
-    Clusters(Vec<Cluster>),
-    Proposal(Arc<Proposal>),
-}
-
-impl ModelSource {
-    fn clusters(&self) -> Vec<Cluster> {
-        match self {
-            Self::Clusters(clusters) => clusters.clone(),
-            Self::Proposal(proposal) => proposal.clusters.clone(),
-        }
-    }
-}
-
-/// Cluster evaluations and the model, as a cache keeps them.
-type Built = (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>);
-
-/// What building one output's model needs, owned so that a worker thread can do it.
-struct ModelInputs {
-    run: Arc<Run>,
-    fits: Result<Arc<SegmentFits>, String>,
-    scored: Vec<ScoredSource>,
-    omegas_rad_s: Vec<f64>,
-    effects: Vec<EffectId>,
-}
-
-impl ModelInputs {
-    /// The model of `source` with `settings`, without its effects.
-    fn build(&self, source: &ModelSource, settings: &OutputSettings) -> Built {
-        match source {
-            ModelSource::Clusters(clusters) => self.evaluate(clusters, settings),
-            ModelSource::Proposal(proposal) => self.evaluate_proposal(proposal, settings),
-        }
-    }
-
-    /// [`Self::build`], then the effects added and refitted.
-    fn finish(&self, source: &ModelSource, settings: &OutputSettings) -> Built {
-        let (evals, mut live) = self.build(source, settings);
-        if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
-            let runs: Vec<Arc<Run>> = self.scored.iter().map(|s| Arc::clone(&s.run)).collect();
-            diagnosis_model::apply_effects(live, &self.effects, &self.run, fits, settings, &runs);
-        }
-        (evals, live)
-    }
-
-    /// Cluster evaluations and the live path for `clusters` with `settings`: one core call, which
-    /// evaluates the clusters once; only when it gives no model are the clusters evaluated alone, so
-    /// that the z-plane still says which cluster fails.
-    fn evaluate(&self, clusters: &[Cluster], settings: &OutputSettings) -> Built {
-        let fits = match &self.fits {
-            Ok(fits) => fits,
-            Err(err) => return (Err(err.clone()), Err(err.clone())),
-        };
-        if clusters.is_empty() {
-            let why = "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned();
-            return (Ok(Vec::new()), Err(why));
-        }
-        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        match live_update(fits, &self.run, clusters, settings, &runs, &self.omegas_rad_s) {
-            Ok(result) => self.split_result(result, settings),
-            Err(err) => {
-                let evals =
-                    cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
-                        .map_err(|e| e.to_string());
-                (evals, Err(err.to_string()))
-            }
-        }
-    }
-
-    /// The model of the automatic proposal (its clusters with its dead time, or its direct fit).
-    fn evaluate_proposal(&self, proposal: &Proposal, settings: &OutputSettings) -> Built {
-        let fits = match &self.fits {
-            Ok(fits) => fits,
-            Err(err) => return (Err(err.clone()), Err(err.clone())),
-        };
-        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        match live_update_proposed(fits, &self.run, proposal, settings, &runs, &self.omegas_rad_s) {
-            Ok(result) => self.split_result(result, settings),
-            Err(err) => (Ok(Vec::new()), Err(err.to_string())),
-        }
-    }
-
-    /// The core's live result as the cache keeps it: the evaluations apart, the model with its runs.
-    fn split_result(&self, mut result: LiveResult, settings: &OutputSettings) -> Built {
-        let evals = std::mem::take(&mut result.evals);
-        (Ok(evals), Ok(self.live_model(result, settings)))
-    }
-
-    fn live_model(&self, result: LiveResult, settings: &OutputSettings) -> LiveModel {
-        let scored = self
-            .scored
-            .iter()
-            .zip(result.predictions.into_iter().zip(result.linear))
-            .map(|(source, (gray_box, linear))| ScoredRun {
-                index: source.index,
-                name: source.run.name.clone(),
-                role: source.role,
-                linear: Ok(linear),
-                gray_box,
-                without_effects: None,
-                effects_error: None,
-            })
-            .collect();
-        LiveModel {
-            id: diagnosis_model::next_model_id(),
-            effects: EffectsOutcome { requested: self.effects.clone(), ..EffectsOutcome::default() },
-            model: result.model,
-            bode: result.bode,
-            runs: scored,
-            polish_requested: settings.refine,
-            finishing: false,
-        }
-    }
-}
-
-/// The live path on clusters being dragged (not yet committed).
-pub struct Preview {
-    pub output: String,
-    pub clusters: Vec<Cluster>,
-    pub evals: Result<Vec<ClusterEval>, String>,
-    pub live: Result<LiveModel, String>,
-}
-
-impl Preview {
-    /// The live path on `clusters` for `output`, without polishing (fast enough for every frame).
-    pub fn compute(ident: &IdentCache, output: &str, clusters: Vec<Cluster>) -> Option<Self> {
-        let cache = ident.output(output)?;
-        let (evals, mut live) = cache.inputs(&ident.run).evaluate(&clusters, &cache.preview_settings());
-        if let Ok(live) = &mut live {
-            live.effects.left_out_for_preview = !live.effects.requested.is_empty();
-        }
-        Some(Self { output: output.to_owned(), clusters, evals, live })
     }
 }

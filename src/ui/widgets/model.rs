@@ -39,28 +39,26 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
             error_ui(ui, &format!("No model for {}: {err}", view.output.name));
             false
         }
-        Ok(live) if view.is_preview => {
-            let mut text = "Preview while a cluster is dragged (centroids not polished".to_owned();
-            if live.effects.left_out_for_preview {
-                text += &format!(
-                    "; without the effects {}, fitted again on release",
-                    EffectId::names(&live.effects.requested).join(", ")
-                );
-            }
-            ui.label(RichText::new(text + ")").color(theme::WARNING));
-            true
-        }
-        Ok(live) if live.finishing => {
-            let mut text = "Polishing the centroids".to_owned();
-            if live.effects.left_out_for_preview {
-                text += &format!(
-                    " and refitting the effects {}",
-                    EffectId::names(&live.effects.requested).join(", ")
-                );
-            }
-            ui.label(
-                RichText::new(text + "…; meanwhile the model without them is shown").color(theme::WARNING),
-            );
+        Ok(live) if view.is_preview || live.finishing => {
+            // The effects a drag preview or a model being finished leaves out, when it does.
+            let effects = live
+                .effects
+                .left_out_for_preview
+                .then(|| EffectId::names(&live.effects.requested).join(", "));
+            let text = if view.is_preview {
+                let left_out = effects.map(|e| format!("; without the effects {e}, fitted again on release"));
+                format!(
+                    "Preview while a cluster is dragged (centroids not polished{})",
+                    left_out.unwrap_or_default()
+                )
+            } else {
+                let refit = effects.map(|e| format!(" and refitting the effects {e}"));
+                format!(
+                    "Polishing the centroids{}…; meanwhile the model without them is shown",
+                    refit.unwrap_or_default()
+                )
+            };
+            ui.label(RichText::new(text).color(theme::WARNING));
             true
         }
         Ok(live) => {

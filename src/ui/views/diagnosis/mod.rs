@@ -194,7 +194,7 @@ fn which_effect_ui(
         });
     });
     ui.separator();
-    job_status_ui(ui, output, state, cache, &live.key(), is_preview);
+    job_status_ui(ui, output, state, cache, &live.key(), is_preview, live.finishing);
     let applied = &live.effects.requested;
     let Some(finished) = state.result(output) else { return commands };
     let report = match &finished.outcome {
@@ -243,6 +243,7 @@ fn job_status_ui(
     cache: &crate::ui::derived::model_cache::OutputCache,
     model: &ModelKey,
     is_preview: bool,
+    finishing: bool,
 ) {
     let start = |state: &mut DiagnosisViewState, ui: &egui::Ui| match cache.diagnosis_input() {
         Ok(input) => {
@@ -271,6 +272,13 @@ fn job_status_ui(
     }
     if is_preview {
         hint(ui, "A cluster is being dragged; the diagnosis waits for the committed model.");
+        return;
+    }
+    if finishing {
+        hint(
+            ui,
+            "The model is being finished (centroids polished, effects refitted); the diagnosis waits for it.",
+        );
         return;
     }
     let finished = state.result(output).map(|f| (&f.model != model, f.duration, f.outcome.is_ok()));

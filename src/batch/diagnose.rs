@@ -30,6 +30,7 @@ pub fn diagnose_output(
         .skipped
         .iter()
         .map(|s| format!("diagnosis of '{output}': {} not tried: {}", s.effect, s.reason))
+        .chain(std::iter::once(format!("diagnosis of '{output}': {}", report.held_out_words())))
         .chain(report.structure_note.iter().map(|n| format!("diagnosis of '{output}': {n}")))
         .collect();
     let entries = report
@@ -43,6 +44,8 @@ pub fn diagnose_output(
             rmspe_after_pct: d.rmspe_after_pct,
             evidence: d.evidence.clone(),
             p_value: Some(d.test.p_value),
+            held_out_rmspe_pct: d.test.held_out.map(|h| h.rmspe_after_pct),
+            significance: d.test.words(),
         })
         .collect();
     Ok((entries, skipped))

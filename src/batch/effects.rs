@@ -45,8 +45,13 @@ pub fn apply_effects(
         }
         for round in &rounds {
             notes.push(format!(
-                "'{output}': the loop added {} ({}): {:.3} % → {:.3} %; {}",
-                round.added, round.kind, round.rmspe_before_pct, round.rmspe_after_pct, round.evidence
+                "'{output}': the loop added {} ({}): {:.3} % → {:.3} %; {}; {}",
+                round.added,
+                round.kind,
+                round.rmspe_before_pct,
+                round.rmspe_after_pct,
+                round.evidence,
+                round.significance
             ));
         }
     }

@@ -76,6 +76,9 @@ pub struct AutoRound {
     pub rmspe_after_pct: f64,
     /// The evidence sentence the diagnosis gave for it.
     pub evidence: String,
+    /// What made it significant: the witnesses' tests, in words (see [`super::Comparison::words`]).
+    #[serde(default)]
+    pub significance: String,
 }
 
 /// The missing-physics loop run on `sequence`'s model for up to `rounds` rounds: diagnose, add the
@@ -107,6 +110,7 @@ pub fn auto_effects(
             rmspe_before_pct: top.rmspe_before_pct,
             rmspe_after_pct: top.rmspe_after_pct,
             evidence: top.evidence.clone(),
+            significance: top.test.words(),
         });
         sequence.model = top.model.clone();
         sequence.record(&format!("+{} (auto)", top.effect), validation, settings);

@@ -42,17 +42,22 @@
 //! measured responses show the whole response shifted, a dead time that fits the validation runs
 //! better than the best structural refinement (and is significant against the current model) is
 //! credited even when the refinement comes within 10 % of it.
-use crate::core::effects::stats::{DmTest, ResidualTrace, diebold_mariano};
+use crate::core::effects::stats::ResidualTrace;
 use crate::core::effects::{
-    AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FitData, StructuralChange,
-    apply_effect, refine_structure, refit,
+    AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FOLDS, FitData, MIN_HELD_OUT_SEGMENTS,
+    StructuralChange, apply_effect, refine_structure, refit,
 };
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
+mod held_out;
 mod history;
+mod witness;
+use held_out::HeldOut;
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
+use witness::Scores;
+pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
 
 /// Largest one-sided p-value of a significant effect.
 pub const SIGNIFICANCE_LEVEL: f64 = 0.01;
@@ -111,10 +116,9 @@ pub struct StructureRival {
     pub id: String,
     /// Its validation error, %.
     pub rmspe_pct: f64,
-    /// Diebold–Mariano test of "the effect is no better than this refinement".
-    pub test: DmTest,
-    /// Share of the refinement's validation RMSPE the effect removes.
-    pub reduction: f64,
+    /// The test of "the effect is no better than this refinement", with the share of the
+    /// refinement's error the effect removes.
+    pub test: Comparison,
 }
 
 /// One trial: the fitted extension, its validation score and the evidence.
@@ -132,8 +136,9 @@ pub struct Diagnosis {
     pub rmspe_before_pct: f64,
     /// Validation error with the effect added and refitted, %.
     pub rmspe_after_pct: f64,
-    /// Diebold–Mariano test of "the extension is no better than the refitted current model".
-    pub test: DmTest,
+    /// The test of "the extension is no better than the refitted current model", on the validation
+    /// runs and the held-out identification data.
+    pub test: Comparison,
     /// One sentence from the current model's residuals, in an engine engineer's words.
     pub evidence: String,
     /// The current model with the effect added and refitted on the identification data.
@@ -167,6 +172,12 @@ pub struct DiagnosisReport {
     pub rmspe_current_pct: f64,
     /// Validation error of the current model refitted without a new block (the test's yardstick), %.
     pub rmspe_refit_pct: f64,
+    /// Error of that refit on the identification data held out by the cross-validation, %, when
+    /// the data have enough segments for one.
+    pub held_out_refit_pct: Option<f64>,
+    /// Segments the cross-validation holds out (0: none, the trials are judged on the validation
+    /// runs alone).
+    pub held_out_segments: usize,
     /// The effects tried, lowest validation error first.
     pub entries: Vec<Diagnosis>,
     /// The effects not tried, with the reason.
@@ -177,6 +188,28 @@ pub struct DiagnosisReport {
 }
 
 impl DiagnosisReport {
+    /// What the trials were judged on besides the validation runs, in one sentence.
+    pub fn held_out_words(&self) -> String {
+        match self.held_out_refit_pct {
+            Some(refit) => format!(
+                "the trials were also judged on {} segment responses of the identification data, each held \
+                 out by one of {FOLDS} cross-validation folds (the refitted current model's error there: \
+                 {refit:.3} %)",
+                self.held_out_segments
+            ),
+            None if self.held_out_segments > 0 => format!(
+                "the current model could not be refitted on the cross-validation folds of its {} segment \
+                 responses: the trials were judged on the validation runs alone",
+                self.held_out_segments
+            ),
+            None => format!(
+                "the identification data have fewer than {} segments, too few for a cross-validation: the \
+                 trials were judged on the validation runs alone",
+                FOLDS * MIN_HELD_OUT_SEGMENTS
+            ),
+        }
+    }
+
     /// The best-ranked effect, if any was tried.
     pub fn best(&self) -> Option<&Diagnosis> {
         self.entries.first()
@@ -184,7 +217,7 @@ impl DiagnosisReport {
 }
 
 /// Percentage errors of a model on each run.
-fn pct_errors(
+pub(crate) fn pct_errors(
     model: &ExtendedModel,
     runs: &[&Run],
     initial: InitialState,
@@ -217,9 +250,10 @@ fn measured<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], DiagnoseError> 
 
 /// The validation error: the RMSPE of each run, averaged over the runs, % (every test counts the
 /// same, as the paper reports its time-domain validation and its chirp side by side).
-fn mean_rmspe(errors: &[Vec<f64>]) -> f64 {
+pub(crate) fn mean_rmspe<E: AsRef<[f64]>>(errors: &[E]) -> f64 {
     let per_run: Vec<f64> = errors
         .iter()
+        .map(AsRef::as_ref)
         .map(|e| (e.iter().map(|p| p * p).sum::<f64>() / e.len().max(1) as f64).sqrt())
         .collect();
     per_run.iter().sum::<f64>() / per_run.len().max(1) as f64
@@ -323,17 +357,18 @@ pub fn diagnose_with_progress(
     let before = pct_errors(current, validation, settings.initial_state)?;
     let rmspe_before_pct = mean_rmspe(&before);
     let reference = refit(current, &data)?;
-    let yardstick = pct_errors(&reference, validation, settings.initial_state)?;
-    let rmspe_refit_pct = mean_rmspe(&yardstick);
+    let folds = HeldOut::of(&data);
+    let yardstick = Scores::of(&reference, validation, settings.initial_state, folds.as_ref())?;
+    let rmspe_refit_pct = mean_rmspe(&yardstick.validation);
     let traces = residual_traces(current, &data, validation, settings.initial_state)?;
     let lateness = crate::core::effects::transport_delay::lateness(&traces);
     let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
-    let judge = Judge { yardstick: &yardstick, rmspe_before_pct, rmspe_refit_pct };
+    let judge = Judge { yardstick: &yardstick, rmspe_before_pct };
     let mut entries = Vec::new();
     let mut skipped = Vec::new();
     let mut done = 0.0;
     // Structure first: what the model's own linear block and map can still do.
-    let mut rival: Option<(StructureRival, Vec<Vec<f64>>)> = None;
+    let mut rival: Option<(StructureRival, Scores)> = None;
     for change in StructuralChange::ALL {
         done += 1.0;
         if !progress(done / steps) {
@@ -341,7 +376,7 @@ pub fn diagnose_with_progress(
         }
         let trial = refine_structure(&reference, change, &data).map_err(DiagnoseError::from).and_then(
             |(model, words)| {
-                let after = pct_errors(&model, validation, settings.initial_state)?;
+                let after = Scores::of(&model, validation, settings.initial_state, folds.as_ref())?;
                 Ok((model, words, after))
             },
         );
@@ -352,17 +387,12 @@ pub fn diagnose_with_progress(
                 continue;
             }
         };
-        let (test, rmspe_after_pct, significant) = judge.verdict(&after);
+        let Verdict { test, rmspe_after_pct, significant } = judge.verdict(&after);
         let evidence = format!(
             "{words}: with it the validation error goes from {rmspe_before_pct:.3} % to {rmspe_after_pct:.3} %"
         );
         if rival.as_ref().is_none_or(|(r, _)| rmspe_after_pct < r.rmspe_pct) {
-            let r = StructureRival {
-                id: change.id().to_owned(),
-                rmspe_pct: rmspe_after_pct,
-                test,
-                reduction: 0.0,
-            };
+            let r = StructureRival { id: change.id().to_owned(), rmspe_pct: rmspe_after_pct, test };
             rival = Some((r, after.clone()));
         }
         entries.push(Diagnosis {
@@ -388,7 +418,7 @@ pub fn diagnose_with_progress(
             continue;
         }
         let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
-            let after = pct_errors(&model, validation, settings.initial_state)?;
+            let after = Scores::of(&model, validation, settings.initial_state, folds.as_ref())?;
             Ok((model, after))
         });
         let (model, after) = match trial {
@@ -398,23 +428,21 @@ pub fn diagnose_with_progress(
                 continue;
             }
         };
-        let (test, rmspe_after_pct, beats_current) = judge.verdict(&after);
+        let Verdict { test, rmspe_after_pct, significant: beats_current } = judge.verdict(&after);
         let evidence = id.evidence(&traces);
         // A physical effect must also beat the best structural refinement, by the same rule.
-        let held = rival.as_ref().map(|(r, errors)| {
-            let vs = diebold_mariano(&loss_differences(errors, &after));
-            let reduction = 1.0 - rmspe_after_pct / r.rmspe_pct.max(f64::MIN_POSITIVE);
-            StructureRival { test: vs, reduction, ..r.clone() }
+        let held = rival.as_ref().map(|(r, errors)| StructureRival {
+            test: Comparison::of(errors, &after, &yardstick),
+            ..r.clone()
         });
         // The ranking follows the evidence where a lag and a dead time compete: when the whole
         // response is shifted late (not only its later part), a dead time that fits better than the
         // best structural refinement is credited even if the refinement comes close: a pole placed
         // to mimic a dead time is no evidence against one.
         let evidence_says_dead_time = id == EffectId::TransportDelay && lateness.whole_response_late();
-        let beats_structure = held.as_ref().is_none_or(|r| {
-            (r.test.p_value < SIGNIFICANCE_LEVEL && r.reduction >= MIN_RELATIVE_REDUCTION)
-                || (evidence_says_dead_time && r.reduction > 0.0)
-        });
+        let beats_structure = held
+            .as_ref()
+            .is_none_or(|r| r.test.passes() || (evidence_says_dead_time && r.test.reduction > 0.0));
         entries.push(Diagnosis {
             effect: id.name().to_owned(),
             kind: DiagnosisKind::Physics,
@@ -438,34 +466,37 @@ pub fn diagnose_with_progress(
         output: current.output.clone(),
         rmspe_current_pct: rmspe_before_pct,
         rmspe_refit_pct,
+        held_out_refit_pct: yardstick.held_out_rmspe(),
+        held_out_segments: folds.as_ref().map_or(0, HeldOut::segments),
         entries,
         skipped,
         structure_note,
     })
 }
 
-/// Per-sample loss differences `|p_a| − |p_b|` of two models' percentage errors, run by run.
-fn loss_differences(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    a.iter().zip(b).map(|(ra, rb)| ra.iter().zip(rb).map(|(pa, pb)| pa.abs() - pb.abs()).collect()).collect()
-}
-
 /// The significance rule of the module documentation, against the refitted current model.
 struct Judge<'a> {
-    yardstick: &'a [Vec<f64>],
+    yardstick: &'a Scores,
     rmspe_before_pct: f64,
-    rmspe_refit_pct: f64,
+}
+
+/// A trial judged against the refitted current model.
+struct Verdict {
+    test: Comparison,
+    /// The trial's validation RMSPE, %.
+    rmspe_after_pct: f64,
+    significant: bool,
 }
 
 impl Judge<'_> {
-    /// The test, the trial's validation RMSPE and whether it is significant.
-    fn verdict(&self, after: &[Vec<f64>]) -> (DmTest, f64, bool) {
-        let test = diebold_mariano(&loss_differences(self.yardstick, after));
-        let rmspe_after_pct = mean_rmspe(after);
-        let reduction = 1.0 - rmspe_after_pct / self.rmspe_refit_pct.max(f64::MIN_POSITIVE);
-        let significant = test.p_value < SIGNIFICANCE_LEVEL
-            && reduction >= MIN_RELATIVE_REDUCTION
-            && rmspe_after_pct < self.rmspe_before_pct;
-        (test, rmspe_after_pct, significant)
+    /// The comparison over the validation runs and the held-out identification data, the trial's
+    /// validation RMSPE, and whether it is significant: the comparison passes and the validation
+    /// runs' own error falls below the current model's.
+    fn verdict(&self, after: &Scores) -> Verdict {
+        let test = Comparison::of(self.yardstick, after, self.yardstick);
+        let rmspe_after_pct = mean_rmspe(&after.validation);
+        let significant = test.passes() && rmspe_after_pct < self.rmspe_before_pct;
+        Verdict { test, rmspe_after_pct, significant }
     }
 }
 

@@ -47,6 +47,11 @@ pub struct FitData {
     pub longest_segment_secs: f64,
     /// Highest static-map order the settings allow.
     pub max_static_order: usize,
+    /// Each segment's response `(step, end)` in `run`: the stretches a cross-validation holds out.
+    pub responses: Vec<(usize, usize)>,
+    /// Samples `(start, end)` of `run` left out of the fit (see [`FitData::folds`]): their error is
+    /// not in the cost, and the steady windows they touch are not in the static map.
+    pub held_out: Vec<(usize, usize)>,
 }
 
 impl FitData {
@@ -76,6 +81,12 @@ impl FitData {
             steady_windows.push((a.saturating_sub(start), b.saturating_sub(start).min(y.len())));
         }
         steady_windows.retain(|(a, b)| a < b);
+        let responses = fits
+            .segments
+            .iter()
+            .map(|s| (s.step_at.saturating_sub(start), s.end.saturating_sub(start).min(y.len())))
+            .filter(|(a, b)| a < b)
+            .collect();
         let longest_segment_secs =
             fits.segments.iter().map(|s| s.end.saturating_sub(s.step_at)).max().unwrap_or(0) as f64
                 * ident.dt_secs;
@@ -87,9 +98,49 @@ impl FitData {
             steady_windows,
             longest_segment_secs,
             max_static_order: settings.max_static_order,
+            responses,
+            held_out: Vec::new(),
         })
     }
+
+    /// The data with the samples of `ranges` left out of the fit; the steady windows they touch
+    /// go too.
+    pub fn holding_out(&self, ranges: Vec<(usize, usize)>) -> Self {
+        let touches = |&(a, b): &(usize, usize)| ranges.iter().any(|&(s, e)| s < b && a < e);
+        let steady_windows = self.steady_windows.iter().copied().filter(|w| !touches(w)).collect();
+        Self { steady_windows, held_out: ranges, ..self.clone() }
+    }
+
+    /// Whether sample `k` of `run` is in the fit.
+    pub fn is_fitted(&self, k: usize) -> bool {
+        !self.held_out.iter().any(|&(a, b)| a <= k && k < b)
+    }
+
+    /// The [`FOLDS`] folds of a cross-validation over the segments: fold `i` holds out the
+    /// responses of segments `i`, `i + FOLDS`, `i + 2·FOLDS`, …, so each fold is fitted on two
+    /// thirds of the steps, spread over the whole operating range, and judged on the third it never
+    /// saw. Interleaving rather than cutting in time keeps every fold's static map an interpolation;
+    /// three folds rather than two keep both directions of an up-down staircase in every fold's
+    /// fit (two folds would fit one on the rises alone). `None` with fewer than
+    /// [`MIN_HELD_OUT_SEGMENTS`] segments per fold.
+    pub fn folds(&self) -> Option<[Self; FOLDS]> {
+        if self.responses.len() < FOLDS * MIN_HELD_OUT_SEGMENTS {
+            return None;
+        }
+        Some(std::array::from_fn(|fold| {
+            let out = self.responses.iter().enumerate().filter(|(i, _)| i % FOLDS == fold).map(|(_, r)| *r);
+            self.holding_out(out.collect())
+        }))
+    }
 }
+
+/// Folds of the cross-validation over the segments (see [`FitData::folds`]).
+pub const FOLDS: usize = 3;
+
+/// Fewest segments a fold holds out: six segments in all, whose signed-rank test can reach
+/// p = 1/64 alone; with fewer the held-out data cannot tell a structure from noise, and every fold's
+/// fit keeps at least four segments (five steady points with the baseline) for its static map.
+pub const MIN_HELD_OUT_SEGMENTS: usize = 2;
 
 fn slice_run(run: &Run, start: usize, end: usize) -> Run {
     let cut = |c: &Channel| Channel {
@@ -174,6 +225,7 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
         Some(sensor) => sensor.apply(w, dt),
         None => w.to_vec(),
     };
+    let fit_gain_offset = |w: &[f64], y: &[f64]| data.fit_gain_offset(w, y);
     let (mut gain, mut offset) = fit_gain_offset(&seen(&w), &y_c)?;
     let mut structure = s.clone();
     let mut w = w;
@@ -210,7 +262,11 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
     let num = unit.num_zinv.iter().map(|b| b * gain).collect();
     let tf = DiscreteTf::new(num, unit.den_zinv.clone(), dt).ok()?;
     let y_hat = output_stage(&structure.effects, &map, &v, conditions.as_ref(), dt);
-    let residual: Vec<f64> = y_hat.iter().zip(&data.y).map(|(a, b)| a - b).collect();
+    let mut residual: Vec<f64> = y_hat.iter().zip(&data.y).map(|(a, b)| a - b).collect();
+    let n = residual.len();
+    for &(a, b) in &data.held_out {
+        residual.get_mut(a.min(n)..b.min(n)).into_iter().flatten().for_each(|r| *r = 0.0);
+    }
     let cost: f64 = residual.iter().map(|r| r * r).sum();
     if !cost.is_finite() {
         return None;
@@ -221,6 +277,23 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
         effects: structure.effects.clone(),
     };
     Some(Assembled { model, structure, residual, cost })
+}
+
+impl FitData {
+    /// [`fit_gain_offset`] over the fitted samples only.
+    fn fit_gain_offset(&self, w: &[f64], y: &[f64]) -> Option<(f64, f64)> {
+        if self.held_out.is_empty() {
+            return fit_gain_offset(w, y);
+        }
+        let (w, y): (Vec<f64>, Vec<f64>) = w
+            .iter()
+            .zip(y)
+            .enumerate()
+            .filter(|(k, _)| self.is_fitted(*k))
+            .map(|(_, (a, b))| (*a, *b))
+            .unzip();
+        fit_gain_offset(&w, &y)
+    }
 }
 
 /// Least squares of `y ≈ gain·w + offset`: one Gram–Schmidt step of the QR factorisation of

@@ -217,6 +217,86 @@ pub fn diebold_mariano(d_runs: &[Vec<f64>]) -> DmTest {
     }
 }
 
+/// Wilcoxon's signed-rank test of paired differences, one-sided: how consistently `d > 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SignedRankTest {
+    /// Differences counted (zeros are left out).
+    pub n: usize,
+    /// Of them, how many are positive.
+    pub wins: usize,
+    /// Exact one-sided p-value of "the differences are symmetric about zero" against "they lean
+    /// positive".
+    pub p_value: f64,
+}
+
+/// Wilcoxon signed-rank test of `d` against zero, one-sided, with the exact null distribution:
+/// each difference's sign is a fair coin, its rank (of |d|, ties sharing their mean rank) fixed.
+/// Distribution-free, so a few large differences cannot carry it and nothing is assumed about
+/// their spread: the right test for a handful of independent units such as held-out step
+/// responses. Zero differences say nothing either way and are dropped.
+pub fn signed_rank_test(d: &[f64]) -> SignedRankTest {
+    let mut nonzero: Vec<f64> = d.iter().copied().filter(|x| *x != 0.0 && x.is_finite()).collect();
+    nonzero.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+    let n = nonzero.len();
+    // Doubled ranks (integers even when ties share a half rank).
+    let mut ranks = vec![0usize; n];
+    let mut i = 0;
+    while i < n {
+        let mut j = i;
+        // Exact ties only (equal magnitudes), as the rank definition has them.
+        while j + 1 < n && nonzero[j + 1].abs().total_cmp(&nonzero[i].abs()).is_eq() {
+            j += 1;
+        }
+        // Ranks i+1..=j+1 share their mean (i + j + 2)/2; doubled: i + j + 2.
+        ranks[i..=j].fill(i + j + 2);
+        i = j + 1;
+    }
+    let w_plus: usize = nonzero.iter().zip(&ranks).filter(|(x, _)| **x > 0.0).map(|(_, r)| r).sum();
+    let total: usize = ranks.iter().sum();
+    // Null distribution of the doubled positive rank sum, by adding one coin at a time.
+    let mut dist = vec![0.0; total + 1];
+    dist[0] = 1.0;
+    for &r in &ranks {
+        for s in (0..=total).rev() {
+            let with = if s >= r { dist[s - r] } else { 0.0 };
+            dist[s] = 0.5 * dist[s] + 0.5 * with;
+        }
+    }
+    SignedRankTest {
+        n,
+        wins: nonzero.iter().filter(|x| **x > 0.0).count(),
+        p_value: if n == 0 { 1.0 } else { dist[w_plus..].iter().sum::<f64>().min(1.0) },
+    }
+}
+
+/// Stouffer's combination of independent one-sided p-values, equally weighted: each becomes the
+/// standard normal score `zᵢ = Φ⁻¹(1 − pᵢ)`, and `Σ zᵢ / √k` is standard normal when every null
+/// holds. Unlike Fisher's `−2 Σ ln pᵢ`, which one tiny p carries alone, a witness that points the
+/// other way (`pᵢ` near 1, `zᵢ` negative) counts against the rest, and one that has nothing to say
+/// (`pᵢ` near ½, `zᵢ` near 0) only dilutes them.
+pub fn stouffer_combined(p_values: &[f64]) -> f64 {
+    if p_values.is_empty() {
+        return 1.0;
+    }
+    let z: f64 = p_values.iter().map(|p| normal_quantile(1.0 - p)).sum();
+    1.0 - normal_cdf(z / (p_values.len() as f64).sqrt())
+}
+
+/// Φ⁻¹(q) by bisection on [`normal_cdf`], clamped to ±8 (q within 10⁻¹⁵ of 0 or 1); as accurate as
+/// `normal_cdf` itself.
+pub fn normal_quantile(q: f64) -> f64 {
+    let (mut lo, mut hi) = (-8.0_f64, 8.0_f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if normal_cdf(mid) < q {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// Standard normal cumulative distribution.
 pub fn normal_cdf(x: f64) -> f64 {
     if x.is_infinite() {
@@ -274,6 +354,38 @@ mod tests {
             }
         }
         assert!(rejections <= 5, "{rejections} of 100 rejections at the 1 % level");
+    }
+
+    #[test]
+    fn signed_rank_test_matches_its_exact_distribution() {
+        // All of n positive: p = 2⁻ⁿ; one negative at the smallest rank: the two largest sums.
+        assert!((signed_rank_test(&[1.0, 2.0, 3.0, 4.0, 5.0]).p_value - 1.0 / 32.0).abs() < 1e-12);
+        let t = signed_rank_test(&[-1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert_eq!((t.n, t.wins), (5, 4));
+        assert!((t.p_value - 2.0 / 32.0).abs() < 1e-12, "{t:?}");
+        // Symmetric about zero: about one half; zeros are dropped; ties share a rank.
+        assert!((signed_rank_test(&[-1.0, 1.0]).p_value - 0.75).abs() < 1e-12);
+        assert!((signed_rank_test(&[0.0, 0.0]).p_value - 1.0).abs() < 1e-15);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let normal = Normal::new(0.0, 1.0).unwrap();
+        let rejections = (0..400)
+            .filter(|_| {
+                let d: Vec<f64> = (0..10).map(|_| normal.sample(&mut rng)).collect();
+                signed_rank_test(&d).p_value < 0.05
+            })
+            .count();
+        assert!(rejections <= 30, "{rejections} of 400 at the 5 % level");
+    }
+
+    #[test]
+    fn stouffer_combination_adds_normal_scores() {
+        assert!((normal_quantile(0.975) - 1.959_964).abs() < 1e-5);
+        assert!((stouffer_combined(&[0.05]) - 0.05).abs() < 1e-6);
+        // Two witnesses at p = 0.05: z = 1.645 each, (1.645 + 1.645)/√2 = 2.326, p = 0.01.
+        assert!((stouffer_combined(&[0.05, 0.05]) - 0.01).abs() < 1e-4);
+        // A witness with nothing to say dilutes; one against cancels.
+        assert!((stouffer_combined(&[0.05, 0.5]) - (1.0 - normal_cdf(1.644_854 / 2f64.sqrt()))).abs() < 1e-5);
+        assert!((stouffer_combined(&[0.05, 0.95]) - 0.5).abs() < 1e-6);
     }
 
     #[test]

@@ -29,9 +29,16 @@ pub struct DiagnosisEntry {
     pub rmspe_before_pct: f64,
     pub rmspe_after_pct: f64,
     pub evidence: String,
-    /// Diebold–Mariano p-value of "the effect does not reduce the validation error".
+    /// One-sided p-value of "the effect does not reduce the error": the Diebold–Mariano test on the
+    /// validation runs, combined with the held-out identification responses when they witness.
     #[serde(default)]
     pub p_value: Option<f64>,
+    /// Error of the extension on the identification responses held out by the cross-validation, %.
+    #[serde(default)]
+    pub held_out_rmspe_pct: Option<f64>,
+    /// What the witnesses say, in words (validation runs, held-out identification responses).
+    #[serde(default)]
+    pub significance: String,
 }
 
 fn physics_kind() -> String {
@@ -458,14 +465,25 @@ pub fn render_markdown(report: &Report) -> String {
             let _ = writeln!(
                 out,
                 "\n### Diagnosis\n\nStructural refinements of the model are tried before physics: an effect counts \
-                 only when it beats the current model and the best refinement.\n\n\
-                 | effect | kind | significant | RMSPE before % | after % | evidence |\n|---|---|---|---|---|---|"
+                 only when it beats the current model and the best refinement. Each trial is judged on the \
+                 validation runs and, where the identification data have enough segments, on the segment \
+                 responses a cross-validation held out (the 'held-out' column).\n\n\
+                 | effect | kind | significant | RMSPE before % | after % | held-out after % | p | evidence | witnesses |\n\
+                 |---|---|---|---|---|---|---|---|---|"
             );
             for d in &o.diagnosis {
+                let held_out = d.held_out_rmspe_pct.map_or_else(|| "–".to_owned(), |h| format!("{h:.4}"));
+                let p = d.p_value.map_or_else(|| "–".to_owned(), crate::core::diagnose::p_text);
                 let _ = writeln!(
                     out,
-                    "| {} | {} | {} | {:.4} | {:.4} | {} |",
-                    d.effect, d.kind, d.significant, d.rmspe_before_pct, d.rmspe_after_pct, d.evidence
+                    "| {} | {} | {} | {:.4} | {:.4} | {held_out} | {p} | {} | {} |",
+                    d.effect,
+                    d.kind,
+                    d.significant,
+                    d.rmspe_before_pct,
+                    d.rmspe_after_pct,
+                    d.evidence,
+                    d.significance
                 );
             }
         }

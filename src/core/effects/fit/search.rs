@@ -211,7 +211,13 @@ fn starting_points(
         }
         EffectId::SensorDynamics => {
             let y_hat = current.simulate(&data.run)?;
-            let e: Vec<f64> = data.y.iter().zip(&y_hat).map(|(y, yh)| y - yh).collect();
+            let e: Vec<f64> = data
+                .y
+                .iter()
+                .zip(&y_hat)
+                .enumerate()
+                .map(|(k, (y, yh))| if data.is_fitted(k) { y - yh } else { 0.0 })
+                .collect();
             SensorDynamics::guesses(&e, data.dt_secs).into_iter().map(EffectBlock::SensorDynamics).collect()
         }
         EffectId::RateLimit => {

@@ -205,6 +205,7 @@ fn which_effect_ui(
         }
     };
     let physics_found = report.entries.iter().any(|e| e.significant && e.kind == DiagnosisKind::Physics);
+    hint(ui, &format!("Judged on the validation runs; {}.", report.held_out_words()));
     if let Some(note) = report.structure_note.as_ref().filter(|_| physics_found) {
         hint(ui, &format!("The structure may also improve: {note}."));
     } else if let Some(note) = &report.structure_note {
@@ -303,11 +304,14 @@ fn job_status_ui(
                 &format!(
                     "Each effect is added to the current model, refitted on the identification run and \
                      scored on the validation runs. Significant: a one-sided Diebold–Mariano test on \
-                     |% error| against the refitted current model gives p < {} and the validation RMSPE \
-                     falls by at least {:.0} %. Structural refinements (one more pole, pole pair or zero, \
+                     |% error| against the refitted current model, combined (Stouffer) with a signed-rank \
+                     test over the identification steps a cross-validation held out when at least {} of \
+                     them are changed by the effect, gives p < {} and the validation RMSPE falls by at \
+                     least {:.0} %. Structural refinements (one more pole, pole pair or zero, \
                      the map's order, a scheduled time constant) are tried too; a physical effect counts \
                      only when it also beats the best of them by the same rule and its own evidence shows \
                      its signature.",
+                    diagnose::MIN_WITNESS_RESPONSES,
                     diagnose::SIGNIFICANCE_LEVEL,
                     100.0 * diagnose::MIN_RELATIVE_REDUCTION
                 ),
@@ -339,7 +343,7 @@ fn entry_ui(
                 ))
                 .monospace(),
             );
-            ui.label(RichText::new(format!("p = {}", p_text(entry.test.p_value))).monospace());
+            ui.label(RichText::new(format!("p = {}", diagnose::p_text(entry.test.p_value))).monospace());
             match (entry.significant, entry.kind) {
                 (true, DiagnosisKind::Physics) => {
                     ui.label(RichText::new("significant").color(theme::OK).strong());
@@ -373,22 +377,20 @@ fn entry_ui(
         });
         ui.label(RichText::new(&entry.physics).italics());
         hint(ui, &entry.evidence);
+        hint(ui, &entry.test.words());
         if let Some(rival) = &entry.rival {
             let versus = format!("the best structural refinement, {} ({:.3} %)", rival.id, rival.rmspe_pct);
-            let p = p_text(rival.test.p_value);
-            let text = if rival.reduction > 0.0 {
-                format!("beats {versus} by {:.1} % (p = {p})", 100.0 * rival.reduction)
+            let p = diagnose::p_text(rival.test.p_value);
+            let reduction = rival.test.reduction;
+            let text = if reduction > 0.0 {
+                format!("beats {versus} by {:.1} % (p = {p})", 100.0 * reduction)
             } else {
-                format!("loses to {versus}: its error is {:.1} % higher (p = {p})", -100.0 * rival.reduction)
+                format!("loses to {versus}: its error is {:.1} % higher (p = {p})", -100.0 * reduction)
             };
             hint(ui, &text);
         }
     });
     command
-}
-
-fn p_text(p: f64) -> String {
-    if p < 1e-4 { format!("{p:.1e}") } else { format!("{p:.4}") }
 }
 
 /// Bars of the validation RMSPE after each step, each labelled with its value.

@@ -1,0 +1,103 @@
+//! The identification data as a second witness: a cross-validation over its segments.
+//!
+//! A validation run can be short (the JetCat's run F is 59 s with four set-point changes) while the
+//! identification data hold many more steps. Scored in-sample those steps say nothing about a
+//! trial (every extra parameter lowers an in-sample error), but held out they do: each fold is the
+//! model refitted without a third of the segments' responses (see [`FitData::folds`]) and then
+//! simulated through the responses it never saw. Every response is held out by exactly one fold,
+//! so each has one out-of-sample error per model: a second witness beside the validation runs,
+//! compared response by response (see `Comparison`). It tests the *structure* (what the trial
+//! adds), while its *parameters* are fitted afresh on each fold.
+//!
+//! Each fold starts its fit from the model fitted on all the identification data (as the segment
+//! cross-validation of the identification does): the fold then moves every parameter on its own
+//! two thirds; only the basin the fit starts in was chosen with the held-out samples in view.
+use crate::core::effects::{EffectId, ExtendedModel, FOLDS, FitData, refit};
+use crate::core::numerics::stats::sigma_from_first_differences;
+
+/// The folds of the identification data.
+pub(super) struct HeldOut {
+    folds: [FitData; FOLDS],
+    /// The measurement noise over each held-out response as a percentage error (RMS of
+    /// `100 σ / y`), in time order.
+    noise_pct: Vec<f64>,
+}
+
+impl HeldOut {
+    /// The folds of `data`, when it has enough segments for them (see [`FitData::folds`]).
+    pub(super) fn of(data: &FitData) -> Option<Self> {
+        let folds = data.folds()?;
+        let sigma = sigma_from_first_differences(&data.y);
+        let mut responses: Vec<(usize, usize)> =
+            folds.iter().flat_map(|f| f.held_out.iter().copied()).collect();
+        responses.sort_unstable();
+        let noise_pct = responses
+            .iter()
+            .map(|&(a, b)| {
+                let pct: Vec<f64> = data
+                    .y
+                    .get(a..b)
+                    .unwrap_or_default()
+                    .iter()
+                    .filter(|y| y.abs() > f64::MIN_POSITIVE)
+                    .map(|y| 100.0 * sigma / y)
+                    .collect();
+                (pct.iter().map(|p| p * p).sum::<f64>() / pct.len().max(1) as f64).sqrt()
+            })
+            .collect();
+        Some(Self { folds, noise_pct })
+    }
+
+    /// Noise of each held-out response, % (see the field).
+    pub(super) fn noise_pct(&self) -> &[f64] {
+        &self.noise_pct
+    }
+
+    /// Segments the cross-validation holds out, over both folds.
+    pub(super) fn segments(&self) -> usize {
+        self.folds.iter().map(|f| f.held_out.len()).sum()
+    }
+
+    /// Percentage errors of `model` refitted on each fold, on each segment response that fold held
+    /// out, in time order (samples where the measurement is zero are left out, for every model
+    /// alike). `None` when a fold cannot be fitted or simulated: the trial is then judged on the
+    /// validation runs alone. The folds are fitted on threads of their own.
+    ///
+    /// A model with a [`calibration_drift`](EffectId::CalibrationDrift) block has none either: the
+    /// block takes each run's calibration from the run's own measured holds, so on the
+    /// identification run it would read the held-out responses' answer, and a drift between test
+    /// days is not something one day's steps can witness.
+    pub(super) fn errors(&self, model: &ExtendedModel) -> Option<Vec<Vec<f64>>> {
+        if model.effect(EffectId::CalibrationDrift).is_some() {
+            return None;
+        }
+        let per_fold: Vec<Option<Vec<Response>>> = std::thread::scope(|scope| {
+            let jobs: Vec<_> =
+                self.folds.iter().map(|fold| scope.spawn(move || fold_errors(model, fold))).collect();
+            jobs.into_iter().map(|j| j.join().ok().flatten()).collect()
+        });
+        let mut segments: Vec<Response> = Vec::new();
+        for fold in per_fold {
+            segments.extend(fold?);
+        }
+        segments.sort_by_key(|(start, _)| *start);
+        Some(segments.into_iter().map(|(_, e)| e).collect())
+    }
+}
+
+/// A held-out response: its first sample and the percentage errors over it.
+type Response = (usize, Vec<f64>);
+
+/// The responses `fold` held out, with the errors of `model` refitted on it.
+fn fold_errors(model: &ExtendedModel, fold: &FitData) -> Option<Vec<Response>> {
+    let fitted = refit(model, fold).ok()?;
+    let y_hat = fitted.simulate(&fold.run).ok()?;
+    let segment = |&(a, b): &(usize, usize)| {
+        let errors: Vec<f64> = (a..b.min(y_hat.len()).min(fold.y.len()))
+            .filter(|&k| fold.y[k].abs() > f64::MIN_POSITIVE)
+            .map(|k| 100.0 * (fold.y[k] - y_hat[k]) / fold.y[k])
+            .collect();
+        errors.iter().all(|e| e.is_finite()).then_some((a, errors))
+    };
+    fold.held_out.iter().map(segment).collect()
+}

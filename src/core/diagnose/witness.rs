@@ -1,0 +1,174 @@
+//! Two witnesses of a trial: the validation runs, and the identification data's segment responses
+//! held out by the cross-validation (see `held_out`), combined into one test.
+use super::held_out::HeldOut;
+use super::{DiagnoseError, MIN_RELATIVE_REDUCTION, SIGNIFICANCE_LEVEL, mean_rmspe, pct_errors};
+use crate::core::effects::ExtendedModel;
+use crate::core::effects::stats::{
+    DmTest, SignedRankTest, diebold_mariano, signed_rank_test, stouffer_combined,
+};
+use crate::core::identification::initial_state::InitialState;
+use crate::core::run::Run;
+
+/// A model's percentage errors on the evidence: each validation run, and each segment response
+/// of the identification data held out by the cross-validation when there is one.
+#[derive(Clone, Debug)]
+pub(super) struct Scores {
+    pub(super) validation: Vec<Vec<f64>>,
+    held_out: Option<Vec<Vec<f64>>>,
+    /// The measurement noise over each held-out response, % (see [`HeldOut::noise_pct`]).
+    noise_pct: Vec<f64>,
+}
+
+impl Scores {
+    pub(super) fn of(
+        model: &ExtendedModel,
+        validation: &[&Run],
+        initial: InitialState,
+        folds: Option<&HeldOut>,
+    ) -> Result<Self, DiagnoseError> {
+        Ok(Self {
+            validation: pct_errors(model, validation, initial)?,
+            held_out: folds.and_then(|f| f.errors(model)),
+            noise_pct: folds.map(|f| f.noise_pct().to_vec()).unwrap_or_default(),
+        })
+    }
+
+    /// RMSPE over every held-out sample, %.
+    pub(super) fn held_out_rmspe(&self) -> Option<f64> {
+        self.held_out.as_ref().map(|segments| {
+            let all: Vec<f64> = segments.iter().flatten().copied().collect();
+            mean_rmspe(&[all])
+        })
+    }
+}
+
+/// The held-out responses as a witness: which of them can tell the two models apart, and what they
+/// say.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldOutWitness {
+    /// Held-out RMSPE of the first and of the second model over every held-out response, %.
+    pub rmspe_before_pct: f64,
+    pub rmspe_after_pct: f64,
+    /// Responses held out in all.
+    pub responses: usize,
+    /// Signed-rank test over the responses that exercise what the second model adds: those on
+    /// which its predictions differ from the current model's by more than the measurement noise
+    /// (RMSPE first − second, one value per response).
+    pub test: SignedRankTest,
+    /// Whether it took part in the p-value: at least [`MIN_WITNESS_RESPONSES`] responses exercise
+    /// the second model's addition.
+    pub counted: bool,
+}
+
+/// Fewest held-out responses that must tell two models apart for them to witness: six, whose
+/// signed-rank test can reach p = 1/64 alone. With fewer the identification data do not exercise
+/// what the trial adds (a rate limit the identification steps never reach, a drift between test
+/// days, conditions the identification day did not have), and counting them would only dilute the
+/// validation runs' verdict with a witness that saw nothing.
+pub const MIN_WITNESS_RESPONSES: usize = 6;
+
+/// Two models compared on the evidence (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Comparison {
+    /// Diebold–Mariano test on the validation runs.
+    pub validation: DmTest,
+    /// The held-out identification responses, when both models could be cross-validated.
+    pub held_out: Option<HeldOutWitness>,
+    /// One-sided p-value of "the second model is no better": Stouffer's combination of the two
+    /// tests, equally weighted (see [`stouffer_combined`]), when the held-out responses witness;
+    /// otherwise the validation test's alone.
+    pub p_value: f64,
+    /// Share of the first model's validation RMSPE the second removes.
+    pub reduction: f64,
+}
+
+impl Comparison {
+    /// `after` against `before`; `current` is the refitted current model both extend (or is
+    /// `before` itself): the held-out responses that exercise `after`'s addition are those where
+    /// `after` moves away from it. A physical effect held against a structural refinement is so
+    /// judged on the responses the effect changes, not on those only the refinement changes: that
+    /// the identification steps never reach a rate limit says nothing about the limit.
+    pub(super) fn of(before: &Scores, after: &Scores, current: &Scores) -> Self {
+        let loss = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(pa, pb)| pa.abs() - pb.abs()).collect();
+        let d_runs: Vec<Vec<f64>> =
+            before.validation.iter().zip(&after.validation).map(|(a, b)| loss(a, b)).collect();
+        let validation = diebold_mariano(&d_runs);
+        let held_out = match (&before.held_out, &after.held_out, &current.held_out) {
+            (Some(a), Some(b), Some(c)) if a.len() == b.len() && c.len() == b.len() => {
+                Some(witness(a, b, c, &current.noise_pct))
+            }
+            _ => None,
+        };
+        let p_value = match held_out.filter(|h| h.counted) {
+            Some(h) => stouffer_combined(&[validation.p_value, h.test.p_value]),
+            None => validation.p_value,
+        };
+        let reduction =
+            1.0 - mean_rmspe(&after.validation) / mean_rmspe(&before.validation).max(f64::MIN_POSITIVE);
+        Self { validation, held_out, p_value, reduction }
+    }
+
+    /// Beyond noise and large enough to matter: `p < SIGNIFICANCE_LEVEL` and at least
+    /// `MIN_RELATIVE_REDUCTION` of the validation error removed.
+    pub fn passes(&self) -> bool {
+        self.p_value < SIGNIFICANCE_LEVEL && self.reduction >= MIN_RELATIVE_REDUCTION
+    }
+
+    /// What the witnesses say, in words: "validation runs p = 0.0204; held-out identification
+    /// responses 2.982 % → 1.423 %, better on 7 of 10 (p = 0.0137); together p = 0.0013".
+    pub fn words(&self) -> String {
+        let validation = format!("validation runs p = {}", p_text(self.validation.p_value));
+        match self.held_out {
+            Some(h) if h.counted => format!(
+                "{validation}; held-out identification responses {:.3} % → {:.3} %, better on {} of {} \
+                 (p = {}); together p = {}",
+                h.rmspe_before_pct,
+                h.rmspe_after_pct,
+                h.test.wins,
+                h.test.n,
+                p_text(h.test.p_value),
+                p_text(self.p_value)
+            ),
+            Some(h) => format!(
+                "{validation}; the held-out identification responses do not witness: the addition moves \
+                 only {} of {} by more than the measurement noise",
+                h.test.n, h.responses
+            ),
+            None => validation,
+        }
+    }
+}
+
+/// The held-out witness of `b` against `a` (errors per response), counting the responses on
+/// which `b`'s predictions differ from the current model's (`c`) by more than the noise: `c − b`
+/// is `100 (ŷ_b − ŷ_c)/y`, so its RMS is the change of prediction, which must exceed the noise
+/// `noise_pct` to be seen at all.
+fn witness(a: &[Vec<f64>], b: &[Vec<f64>], c: &[Vec<f64>], noise_pct: &[f64]) -> HeldOutWitness {
+    let rms = |x: &[f64]| mean_rmspe(&[x]);
+    let noise = noise_pct.iter().chain(std::iter::repeat(&0.0));
+    let d: Vec<f64> = a
+        .iter()
+        .zip(b)
+        .zip(c)
+        .zip(noise)
+        .filter(|(((_, y), z), noise)| {
+            let change: Vec<f64> = z.iter().zip(y.iter()).map(|(p, q)| p - q).collect();
+            rms(&change) > **noise
+        })
+        .map(|(((x, y), _), _)| rms(x) - rms(y))
+        .collect();
+    let test = signed_rank_test(&d);
+    let all = |s: &[Vec<f64>]| rms(&s.iter().flatten().copied().collect::<Vec<f64>>());
+    HeldOutWitness {
+        rmspe_before_pct: all(a),
+        rmspe_after_pct: all(b),
+        responses: a.len(),
+        counted: test.n >= MIN_WITNESS_RESPONSES,
+        test,
+    }
+}
+
+/// A p-value to four places, or in scientific notation below 10⁻⁴.
+pub fn p_text(p: f64) -> String {
+    if p < 1e-4 { format!("{p:.1e}") } else { format!("{p:.4}") }
+}

@@ -23,6 +23,21 @@
 //! trials per diagnosis) and against the small structural gains any extra parameter buys on an
 //! engine that is not exactly a Wiener system.
 //!
+//! **Two witnesses.** A validation run can be short (a minute, a handful of steps) while the
+//! identification data hold many more. Where they have at least six segments, a three-fold
+//! cross-validation over them (see `held_out` and [`FitData::folds`]) refits the current model and
+//! each trial without a third of the segment responses and simulates them through the responses it
+//! never saw. The held-out RMSPE of each response, before minus after, goes into a one-sided
+//! Wilcoxon signed-rank test (responses are the independent units; ranks let no single transient
+//! carry it). It counts only over the responses the trial actually moves (its prediction differs
+//! from the current model's by more than the measurement noise), and only when at least
+//! [`MIN_WITNESS_RESPONSES`] do: a rate limit the identification steps never reach, or a drift
+//! between test days, cannot be witnessed by them. The two one-sided p-values are then combined by
+//! Stouffer's method (equal weights), under which a witness against the trial counts against it.
+//! The p-value of the rule above is that combination; the 10 % reduction stays on the validation
+//! runs, the error a user sees. A structural refinement is a property of the engine and shows on
+//! every step, so this is where the second witness matters most.
+//!
 //! **Structure before physics.** Before any effect is credited, the model's own structure is
 //! refined the same way (one more real pole, pole pair or zero, one more static-map order; see
 //! [`StructuralChange`]), judged by the same rule. A physical effect is significant only when it

@@ -82,7 +82,7 @@ fn main() -> Result<()> {
                         " vs {} p={:.1e} {:+.0}%",
                         r.id,
                         r.test.p_value,
-                        -100.0 * r.reduction
+                        -100.0 * r.test.reduction
                     )),
                     d.evidence
                 );

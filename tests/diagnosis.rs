@@ -463,3 +463,36 @@ fn misuse_is_a_typed_error_and_effects_can_be_removed() {
 fn id(name: &str) -> EffectId {
     name.parse().unwrap()
 }
+
+/// The cross-validation's held-out responses are out of sample: a fold's fit does not move when the
+/// measurements it holds out are replaced by nonsense, and every response is held out by exactly
+/// one fold.
+#[test]
+fn a_cross_validation_fold_never_sees_the_responses_it_holds_out() {
+    let b = bench(&[], 1);
+    let c = speed_default(&b);
+    let data = FitData::new(&b.ident, &c.fits, &c.settings).unwrap();
+    let Some(folds) = data.folds() else {
+        panic!("the identification run has {} segment responses, too few for folds", data.responses.len())
+    };
+    let mut held: Vec<(usize, usize)> = folds.iter().flat_map(|f| f.held_out.iter().copied()).collect();
+    held.sort_unstable();
+    assert_eq!(held, data.responses, "every response is held out by exactly one fold");
+    for fold in &folds {
+        assert!(fold.steady_windows.len() < data.steady_windows.len());
+        let mut corrupted = fold.clone();
+        for &(a, b) in &fold.held_out {
+            for k in a..b {
+                corrupted.y[k] += 1e4 * (1.0 + (k % 7) as f64);
+                if let Some(y) = corrupted.run.outputs.iter_mut().find(|c| c.name == SPEED) {
+                    y.values[k] = corrupted.y[k];
+                }
+            }
+        }
+        let clean = refit(&c.model, fold).unwrap();
+        let dirty = refit(&c.model, &corrupted).unwrap();
+        let (sc, sd) = (clean.simulate(&fold.run).unwrap(), dirty.simulate(&corrupted.run).unwrap());
+        let worst = sc.iter().zip(&sd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-6, "the held-out measurements moved the fold's fit by {worst}");
+    }
+}

@@ -373,7 +373,8 @@ pub fn diagnose_with_progress(
     let rmspe_before_pct = mean_rmspe(&before);
     let reference = refit(current, &data)?;
     let folds = HeldOut::of(&data);
-    let yardstick = Scores::of(&reference, validation, settings.initial_state, folds.as_ref())?;
+    let mut yardstick = Scores::of(&reference, validation, settings.initial_state)?;
+    yardstick.cross_validate(&reference, folds.as_ref());
     let rmspe_refit_pct = mean_rmspe(&yardstick.validation);
     let traces = residual_traces(current, &data, validation, settings.initial_state)?;
     let lateness = crate::core::effects::transport_delay::lateness(&traces);
@@ -383,7 +384,7 @@ pub fn diagnose_with_progress(
     let mut skipped = Vec::new();
     let mut done = 0.0;
     // Structure first: what the model's own linear block and map can still do.
-    let mut rival: Option<(StructureRival, Scores)> = None;
+    let mut rival: Option<(StructureRival, Scores, ExtendedModel)> = None;
     for change in StructuralChange::ALL {
         done += 1.0;
         if !progress(done / steps) {
@@ -391,7 +392,8 @@ pub fn diagnose_with_progress(
         }
         let trial = refine_structure(&reference, change, &data).map_err(DiagnoseError::from).and_then(
             |(model, words)| {
-                let after = Scores::of(&model, validation, settings.initial_state, folds.as_ref())?;
+                let mut after = Scores::of(&model, validation, settings.initial_state)?;
+                judge.consult(&mut after, &model, folds.as_ref());
                 Ok((model, words, after))
             },
         );
@@ -406,9 +408,9 @@ pub fn diagnose_with_progress(
         let evidence = format!(
             "{words}: with it the validation error goes from {rmspe_before_pct:.3} % to {rmspe_after_pct:.3} %"
         );
-        if rival.as_ref().is_none_or(|(r, _)| rmspe_after_pct < r.rmspe_pct) {
+        if rival.as_ref().is_none_or(|(r, ..)| rmspe_after_pct < r.rmspe_pct) {
             let r = StructureRival { id: change.id().to_owned(), rmspe_pct: rmspe_after_pct, test };
-            rival = Some((r, after.clone()));
+            rival = Some((r, after.clone(), model.clone()));
         }
         entries.push(Diagnosis {
             effect: change.id().to_owned(),
@@ -433,7 +435,8 @@ pub fn diagnose_with_progress(
             continue;
         }
         let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
-            let after = Scores::of(&model, validation, settings.initial_state, folds.as_ref())?;
+            let mut after = Scores::of(&model, validation, settings.initial_state)?;
+            judge.consult(&mut after, &model, folds.as_ref());
             Ok((model, after))
         });
         let (model, after) = match trial {
@@ -445,8 +448,14 @@ pub fn diagnose_with_progress(
         };
         let Verdict { test, rmspe_after_pct, significant: beats_current } = judge.verdict(&after);
         let evidence = id.evidence(&traces);
-        // A physical effect must also beat the best structural refinement, by the same rule.
-        let held = rival.as_ref().map(|(r, errors)| StructureRival {
+        // A physical effect must also beat the best structural refinement, by the same rule; the
+        // refinement's held-out errors are computed when an effect that could count needs them.
+        if beats_current && evidence.supports {
+            if let Some((_, errors, rival_model)) = rival.as_mut() {
+                errors.cross_validate(rival_model, folds.as_ref());
+            }
+        }
+        let held = rival.as_ref().map(|(r, errors, _)| StructureRival {
             test: Comparison::of(errors, &after, &yardstick),
             ..r.clone()
         });
@@ -504,6 +513,19 @@ struct Verdict {
 }
 
 impl Judge<'_> {
+    /// Cross-validate the trial `model` when that can matter: its validation error falls below the
+    /// current model's and by at least [`MIN_RELATIVE_REDUCTION`] of the refitted one's. Otherwise
+    /// no held-out evidence can make it significant, and the refits are spared.
+    fn consult(&self, after: &mut Scores, model: &ExtendedModel, folds: Option<&HeldOut>) {
+        let rmspe = mean_rmspe(&after.validation);
+        let reduction = 1.0 - rmspe / mean_rmspe(&self.yardstick.validation).max(f64::MIN_POSITIVE);
+        if reduction >= MIN_RELATIVE_REDUCTION && rmspe < self.rmspe_before_pct {
+            after.cross_validate(model, folds);
+        } else {
+            after.skip_cross_validation(folds, witness::NOT_CONSULTED);
+        }
+    }
+
     /// The comparison over the validation runs and the held-out identification data, the trial's
     /// validation RMSPE, and whether it is significant: the comparison passes and the validation
     /// runs' own error falls below the current model's.

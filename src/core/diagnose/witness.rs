@@ -15,22 +15,54 @@ use crate::core::run::Run;
 pub(super) struct Scores {
     pub(super) validation: Vec<Vec<f64>>,
     held_out: Option<Vec<Vec<f64>>>,
+    /// Why there are no held-out errors although there is a cross-validation.
+    held_out_note: Option<&'static str>,
     /// The measurement noise over each held-out response, % (see [`HeldOut::noise_pct`]).
     noise_pct: Vec<f64>,
+    /// Whether the cross-validation was run on the model (see [`Scores::cross_validate`]).
+    tried: bool,
 }
 
+/// Why a trial's held-out errors were not computed: its validation error does not fall enough for
+/// any p-value to make it significant, so the dear refits would change nothing.
+pub(super) const NOT_CONSULTED: &str =
+    "not consulted: the validation error does not fall by the 10 % a significant change needs";
+
+/// Why a model has no held-out errors although the data have a cross-validation.
+const NOT_REFITTED: &str = "not available: the model could not be refitted on every fold (or it \
+    carries a calibration drift, which reads each run's own holds)";
+
 impl Scores {
+    /// The model's errors on the validation runs; the held-out errors come later, when they can
+    /// matter (see [`Scores::cross_validate`]).
     pub(super) fn of(
         model: &ExtendedModel,
         validation: &[&Run],
         initial: InitialState,
-        folds: Option<&HeldOut>,
     ) -> Result<Self, DiagnoseError> {
         Ok(Self {
             validation: pct_errors(model, validation, initial)?,
-            held_out: folds.and_then(|f| f.errors(model)),
-            noise_pct: folds.map(|f| f.noise_pct().to_vec()).unwrap_or_default(),
+            held_out: None,
+            held_out_note: None,
+            noise_pct: Vec::new(),
+            tried: false,
         })
+    }
+
+    /// Add the held-out errors of `model` (whose validation errors these are), once.
+    pub(super) fn cross_validate(&mut self, model: &ExtendedModel, folds: Option<&HeldOut>) {
+        let Some(folds) = folds.filter(|_| !self.tried) else { return };
+        self.tried = true;
+        self.held_out = folds.errors(model);
+        self.noise_pct = folds.noise_pct().to_vec();
+        self.held_out_note = if self.held_out.is_some() { None } else { Some(NOT_REFITTED) };
+    }
+
+    /// Mark the held-out errors as not needed, with the reason.
+    pub(super) fn skip_cross_validation(&mut self, folds: Option<&HeldOut>, reason: &'static str) {
+        if folds.is_some() && !self.tried {
+            self.held_out_note = Some(reason);
+        }
     }
 
     /// RMSPE over every held-out sample, %.
@@ -72,8 +104,10 @@ pub const MIN_WITNESS_RESPONSES: usize = 6;
 pub struct Comparison {
     /// Diebold–Mariano test on the validation runs.
     pub validation: DmTest,
-    /// The held-out identification responses, when both models could be cross-validated.
+    /// The held-out identification responses, when both models were cross-validated.
     pub held_out: Option<HeldOutWitness>,
+    /// Why there is no held-out witness although the data have a cross-validation.
+    pub held_out_note: Option<&'static str>,
     /// One-sided p-value of "the second model is no better": Stouffer's combination of the two
     /// tests, equally weighted (see [`stouffer_combined`]), when the held-out responses witness;
     /// otherwise the validation test's alone.
@@ -105,7 +139,11 @@ impl Comparison {
         };
         let reduction =
             1.0 - mean_rmspe(&after.validation) / mean_rmspe(&before.validation).max(f64::MIN_POSITIVE);
-        Self { validation, held_out, p_value, reduction }
+        let held_out_note = match held_out {
+            Some(_) => None,
+            None => after.held_out_note.or(before.held_out_note),
+        };
+        Self { validation, held_out, held_out_note, p_value, reduction }
     }
 
     /// Beyond noise and large enough to matter: `p < SIGNIFICANCE_LEVEL` and at least
@@ -134,7 +172,10 @@ impl Comparison {
                  only {} of {} by more than the measurement noise",
                 h.test.n, h.responses
             ),
-            None => validation,
+            None => match self.held_out_note {
+                Some(note) => format!("{validation}; held-out identification responses {note}"),
+                None => validation,
+            },
         }
     }
 }

@@ -399,7 +399,7 @@ fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
         hint(ui, "No validation run: give a run the role validation to see the error.");
         return;
     }
-    let names: Vec<String> = history.iter().map(|s| s.step.clone()).collect();
+    let steps = history.len();
     let top = history.iter().map(|s| s.rmspe_pct).fold(0.0, f64::max);
     let bars: Vec<Bar> = history
         .iter()
@@ -419,12 +419,14 @@ fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
         .include_x(history.len() as f64 - 0.4)
         .y_axis_label("RMSPE [%]")
         .show_grid([false, true])
+        // The steps are numbered on the axis and named below the chart: egui_plot drops tick labels
+        // that would overlap, and step names ("+scheduled_time_constant (auto)") are long.
         .x_axis_formatter(move |mark, _| {
             let i = mark.value.round();
-            if (mark.value - i).abs() > 1e-6 || i < 0.0 {
+            if (mark.value - i).abs() > 1e-6 || i < 0.0 || i as usize >= steps {
                 return String::new();
             }
-            names.get(i as usize).cloned().unwrap_or_default()
+            format!("{}", i as usize + 1)
         })
         .show(ui, |plot_ui| {
             plot_ui.bar_chart(BarChart::new("validation RMSPE", bars).color(theme::MODEL));
@@ -439,4 +441,7 @@ fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
                 plot_ui.text(label);
             }
         });
+    let names: Vec<String> =
+        history.iter().enumerate().map(|(i, s)| format!("{} {}", i + 1, s.step)).collect();
+    hint(ui, &names.join("    "));
 }

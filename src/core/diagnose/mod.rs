@@ -450,10 +450,9 @@ pub fn diagnose_with_progress(
         let evidence = id.evidence(&traces);
         // A physical effect must also beat the best structural refinement, by the same rule; the
         // refinement's held-out errors are computed when an effect that could count needs them.
-        if beats_current && evidence.supports {
-            if let Some((_, errors, rival_model)) = rival.as_mut() {
-                errors.cross_validate(rival_model, folds.as_ref());
-            }
+        if let Some((_, errors, rival_model)) = rival.as_mut().filter(|_| beats_current && evidence.supports)
+        {
+            errors.cross_validate(rival_model, folds.as_ref());
         }
         let held = rival.as_ref().map(|(r, errors, _)| StructureRival {
             test: Comparison::of(errors, &after, &yardstick),

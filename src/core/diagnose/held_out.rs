@@ -9,24 +9,46 @@
 //! compared response by response (see `Comparison`). It tests the *structure* (what the trial
 //! adds), while its *parameters* are fitted afresh on each fold.
 //!
-//! Each fold starts its fit from the model fitted on all the identification data (as the segment
-//! cross-validation of the identification does): the fold then moves every parameter on its own
-//! two thirds; only the basin the fit starts in was chosen with the held-out samples in view.
-use crate::core::effects::{EffectId, ExtendedModel, FOLDS, FitData, refit};
+//! Every fold repeats the whole fit on its own two thirds, as the diagnosis does on all the data:
+//! the current model refitted on the fold, then the trial's block or refinement added to that and
+//! searched from its own starting points ([`Recipe`]). Nothing a fold fits was chosen with its
+//! held-out samples in view.
+use crate::core::effects::{
+    EffectId, ExtendedModel, FOLDS, FitData, StructuralChange, apply_effect, refine_structure, refit,
+};
 use crate::core::numerics::stats::sigma_from_first_differences;
+
+/// What a model is, as a fit to repeat on every fold.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Recipe {
+    /// The current model, refitted.
+    Current,
+    /// The current model refitted, with a refinement of its structure.
+    Structure(StructuralChange),
+    /// The current model refitted, with an effect block added.
+    Effect(EffectId),
+}
 
 /// The folds of the identification data.
 pub(super) struct HeldOut {
     folds: [FitData; FOLDS],
+    /// The current model refitted on each fold (`None` where that fails).
+    references: Vec<Option<ExtendedModel>>,
     /// The measurement noise over each held-out response as a percentage error (RMS of
     /// `100 σ / y`), in time order.
     noise_pct: Vec<f64>,
 }
 
 impl HeldOut {
-    /// The folds of `data`, when it has enough segments for them (see [`FitData::folds`]).
-    pub(super) fn of(data: &FitData) -> Option<Self> {
+    /// The folds of `data`, when it has enough segments for them (see [`FitData::folds`]), with
+    /// `current` refitted on each.
+    pub(super) fn of(data: &FitData, current: &ExtendedModel) -> Option<Self> {
         let folds = data.folds()?;
+        let references = std::thread::scope(|scope| {
+            let jobs: Vec<_> =
+                folds.iter().map(|fold| scope.spawn(move || refit(current, fold).ok())).collect();
+            jobs.into_iter().map(|j| j.join().ok().flatten()).collect()
+        });
         let sigma = sigma_from_first_differences(&data.y);
         let mut responses: Vec<(usize, usize)> =
             folds.iter().flat_map(|f| f.held_out.iter().copied()).collect();
@@ -45,7 +67,7 @@ impl HeldOut {
                 (pct.iter().map(|p| p * p).sum::<f64>() / pct.len().max(1) as f64).sqrt()
             })
             .collect();
-        Some(Self { folds, noise_pct })
+        Some(Self { folds, references, noise_pct })
     }
 
     /// Noise of each held-out response, % (see the field).
@@ -58,22 +80,30 @@ impl HeldOut {
         self.folds.iter().map(|f| f.held_out.len()).sum()
     }
 
-    /// Percentage errors of `model` refitted on each fold, on each segment response that fold held
-    /// out, in time order (samples where the measurement is zero are left out, for every model
-    /// alike). `None` when a fold cannot be fitted or simulated: the trial is then judged on the
-    /// validation runs alone. The folds are fitted on threads of their own.
+    /// Percentage errors of the model `recipe` makes, fitted on each fold, on each segment response
+    /// that fold held out, in time order (samples where the measurement is zero are left out, for
+    /// every model alike). `None` when a fold cannot be fitted or simulated: the trial is then
+    /// judged on the validation runs alone. The folds are fitted on threads of their own.
     ///
     /// A model with a [`calibration_drift`](EffectId::CalibrationDrift) block has none either: the
     /// block takes each run's calibration from the run's own measured holds, so on the
     /// identification run it would read the held-out responses' answer, and a drift between test
     /// days is not something one day's steps can witness.
-    pub(super) fn errors(&self, model: &ExtendedModel) -> Option<Vec<Vec<f64>>> {
-        if model.effect(EffectId::CalibrationDrift).is_some() {
+    pub(super) fn errors(&self, recipe: Recipe) -> Option<Vec<Vec<f64>>> {
+        let drift = |m: &ExtendedModel| m.effect(EffectId::CalibrationDrift).is_some();
+        if recipe == Recipe::Effect(EffectId::CalibrationDrift) || self.references.iter().flatten().any(drift)
+        {
             return None;
         }
         let per_fold: Vec<Option<Vec<Response>>> = std::thread::scope(|scope| {
-            let jobs: Vec<_> =
-                self.folds.iter().map(|fold| scope.spawn(move || fold_errors(model, fold))).collect();
+            let jobs: Vec<_> = self
+                .folds
+                .iter()
+                .zip(&self.references)
+                .map(|(fold, reference)| {
+                    scope.spawn(move || fold_errors(&fit(recipe, reference.as_ref()?, fold)?, fold))
+                })
+                .collect();
             jobs.into_iter().map(|j| j.join().ok().flatten()).collect()
         });
         let mut segments: Vec<Response> = Vec::new();
@@ -88,9 +118,17 @@ impl HeldOut {
 /// A held-out response: its first sample and the percentage errors over it.
 type Response = (usize, Vec<f64>);
 
-/// The responses `fold` held out, with the errors of `model` refitted on it.
-fn fold_errors(model: &ExtendedModel, fold: &FitData) -> Option<Vec<Response>> {
-    let fitted = refit(model, fold).ok()?;
+/// The model `recipe` makes on `fold`, from the current model refitted there.
+fn fit(recipe: Recipe, reference: &ExtendedModel, fold: &FitData) -> Option<ExtendedModel> {
+    match recipe {
+        Recipe::Current => Some(reference.clone()),
+        Recipe::Structure(change) => refine_structure(reference, change, fold).ok().map(|(m, _)| m),
+        Recipe::Effect(id) => apply_effect(reference, id, fold).ok(),
+    }
+}
+
+/// The responses `fold` held out, with the errors of `fitted` (fitted on it).
+fn fold_errors(fitted: &ExtendedModel, fold: &FitData) -> Option<Vec<Response>> {
     let y_hat = fitted.simulate(&fold.run).ok()?;
     let segment = |&(a, b): &(usize, usize)| {
         let errors: Vec<f64> = (a..b.min(y_hat.len()).min(fold.y.len()))

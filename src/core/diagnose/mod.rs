@@ -69,7 +69,7 @@ use crate::core::run::Run;
 mod held_out;
 mod history;
 mod witness;
-use held_out::HeldOut;
+use held_out::{HeldOut, Recipe};
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
 use witness::Scores;
 pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
@@ -372,9 +372,9 @@ pub fn diagnose_with_progress(
     let before = pct_errors(current, validation, settings.initial_state)?;
     let rmspe_before_pct = mean_rmspe(&before);
     let reference = refit(current, &data)?;
-    let folds = HeldOut::of(&data);
+    let folds = HeldOut::of(&data, current);
     let mut yardstick = Scores::of(&reference, validation, settings.initial_state)?;
-    yardstick.cross_validate(&reference, folds.as_ref());
+    yardstick.cross_validate(Recipe::Current, folds.as_ref());
     let rmspe_refit_pct = mean_rmspe(&yardstick.validation);
     let traces = residual_traces(current, &data, validation, settings.initial_state)?;
     let lateness = crate::core::effects::transport_delay::lateness(&traces);
@@ -384,7 +384,7 @@ pub fn diagnose_with_progress(
     let mut skipped = Vec::new();
     let mut done = 0.0;
     // Structure first: what the model's own linear block and map can still do.
-    let mut rival: Option<(StructureRival, Scores, ExtendedModel)> = None;
+    let mut rival: Option<(StructureRival, Scores, Recipe)> = None;
     for change in StructuralChange::ALL {
         done += 1.0;
         if !progress(done / steps) {
@@ -393,7 +393,7 @@ pub fn diagnose_with_progress(
         let trial = refine_structure(&reference, change, &data).map_err(DiagnoseError::from).and_then(
             |(model, words)| {
                 let mut after = Scores::of(&model, validation, settings.initial_state)?;
-                judge.consult(&mut after, &model, folds.as_ref());
+                judge.consult(&mut after, Recipe::Structure(change), folds.as_ref());
                 Ok((model, words, after))
             },
         );
@@ -410,7 +410,7 @@ pub fn diagnose_with_progress(
         );
         if rival.as_ref().is_none_or(|(r, ..)| rmspe_after_pct < r.rmspe_pct) {
             let r = StructureRival { id: change.id().to_owned(), rmspe_pct: rmspe_after_pct, test };
-            rival = Some((r, after.clone(), model.clone()));
+            rival = Some((r, after.clone(), Recipe::Structure(change)));
         }
         entries.push(Diagnosis {
             effect: change.id().to_owned(),
@@ -436,7 +436,7 @@ pub fn diagnose_with_progress(
         }
         let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
             let mut after = Scores::of(&model, validation, settings.initial_state)?;
-            judge.consult(&mut after, &model, folds.as_ref());
+            judge.consult(&mut after, Recipe::Effect(id), folds.as_ref());
             Ok((model, after))
         });
         let (model, after) = match trial {
@@ -450,9 +450,8 @@ pub fn diagnose_with_progress(
         let evidence = id.evidence(&traces);
         // A physical effect must also beat the best structural refinement, by the same rule; the
         // refinement's held-out errors are computed when an effect that could count needs them.
-        if let Some((_, errors, rival_model)) = rival.as_mut().filter(|_| beats_current && evidence.supports)
-        {
-            errors.cross_validate(rival_model, folds.as_ref());
+        if let Some((_, errors, recipe)) = rival.as_mut().filter(|_| beats_current && evidence.supports) {
+            errors.cross_validate(*recipe, folds.as_ref());
         }
         let held = rival.as_ref().map(|(r, errors, _)| StructureRival {
             test: Comparison::of(errors, &after, &yardstick),
@@ -515,11 +514,11 @@ impl Judge<'_> {
     /// Cross-validate the trial `model` when that can matter: its validation error falls below the
     /// current model's and by at least [`MIN_RELATIVE_REDUCTION`] of the refitted one's. Otherwise
     /// no held-out evidence can make it significant, and the refits are spared.
-    fn consult(&self, after: &mut Scores, model: &ExtendedModel, folds: Option<&HeldOut>) {
+    fn consult(&self, after: &mut Scores, recipe: Recipe, folds: Option<&HeldOut>) {
         let rmspe = mean_rmspe(&after.validation);
         let reduction = 1.0 - rmspe / mean_rmspe(&self.yardstick.validation).max(f64::MIN_POSITIVE);
         if reduction >= MIN_RELATIVE_REDUCTION && rmspe < self.rmspe_before_pct {
-            after.cross_validate(model, folds);
+            after.cross_validate(recipe, folds);
         } else {
             after.skip_cross_validation(folds, witness::NOT_CONSULTED);
         }

@@ -1,6 +1,6 @@
 //! Two witnesses of a trial: the validation runs, and the identification data's segment responses
 //! held out by the cross-validation (see `held_out`), combined into one test.
-use super::held_out::HeldOut;
+use super::held_out::{HeldOut, Recipe};
 use super::{DiagnoseError, MIN_RELATIVE_REDUCTION, SIGNIFICANCE_LEVEL, mean_rmspe, pct_errors};
 use crate::core::effects::ExtendedModel;
 use crate::core::effects::stats::{
@@ -49,11 +49,11 @@ impl Scores {
         })
     }
 
-    /// Add the held-out errors of `model` (whose validation errors these are), once.
-    pub(super) fn cross_validate(&mut self, model: &ExtendedModel, folds: Option<&HeldOut>) {
+    /// Add the held-out errors of the model `recipe` makes (whose validation errors these are), once.
+    pub(super) fn cross_validate(&mut self, recipe: Recipe, folds: Option<&HeldOut>) {
         let Some(folds) = folds.filter(|_| !self.tried) else { return };
         self.tried = true;
-        self.held_out = folds.errors(model);
+        self.held_out = folds.errors(recipe);
         self.noise_pct = folds.noise_pct().to_vec();
         self.held_out_note = if self.held_out.is_some() { None } else { Some(NOT_REFITTED) };
     }

@@ -13,6 +13,7 @@
 //! the current model refitted on the fold, then the trial's block or refinement added to that and
 //! searched from its own starting points ([`Recipe`]). Nothing a fold fits was chosen with its
 //! held-out samples in view.
+use super::mean_rmspe;
 use crate::core::effects::{
     EffectId, ExtendedModel, FOLDS, FitData, StructuralChange, apply_effect, refine_structure, refit,
 };
@@ -64,7 +65,7 @@ impl HeldOut {
                     .filter(|y| y.abs() > f64::MIN_POSITIVE)
                     .map(|y| 100.0 * sigma / y)
                     .collect();
-                (pct.iter().map(|p| p * p).sum::<f64>() / pct.len().max(1) as f64).sqrt()
+                mean_rmspe(&[pct])
             })
             .collect();
         Some(Self { folds, references, noise_pct })

@@ -66,13 +66,17 @@ use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
+mod edit;
 mod held_out;
 mod history;
+mod report;
 mod witness;
+pub use edit::{apply, remove};
 use held_out::{HeldOut, Recipe};
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
-use witness::Scores;
+pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, StructureRival};
 pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
+use witness::{Judge, Scores, Verdict};
 
 /// Largest one-sided p-value of a significant effect.
 pub const SIGNIFICANCE_LEVEL: f64 = 0.01;
@@ -102,133 +106,6 @@ pub enum DiagnoseError {
     /// An effect could not be built, applied, removed or fitted.
     #[error(transparent)]
     Effect(#[from] EffectError),
-}
-
-/// Whether a trial adds physics (an effect of the catalog) or refines the model's own structure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DiagnosisKind {
-    /// An effect of the catalog.
-    Physics,
-    /// One more real pole, pole pair or zero, or a higher static-map order (see
-    /// [`StructuralChange`]).
-    Structure,
-}
-
-impl DiagnosisKind {
-    /// "physics" or "structure".
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::Physics => "physics",
-            Self::Structure => "structure",
-        }
-    }
-}
-
-/// The best structural refinement a physical effect was held against.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StructureRival {
-    /// Id of the structural refinement (see [`StructuralChange::id`]).
-    pub id: String,
-    /// Its validation error, %.
-    pub rmspe_pct: f64,
-    /// The test of "the effect is no better than this refinement", with the share of the
-    /// refinement's error the effect removes.
-    pub test: Comparison,
-}
-
-/// One trial: the fitted extension, its validation score and the evidence.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Diagnosis {
-    /// Catalog id of the effect, or the id of the structural refinement.
-    pub effect: String,
-    /// Physics or structure.
-    pub kind: DiagnosisKind,
-    /// What the effect means physically.
-    pub physics: String,
-    /// Beyond what noise gives and large enough to matter (see the module documentation).
-    pub significant: bool,
-    /// Validation error of the current model (RMSPE averaged over the validation runs), %.
-    pub rmspe_before_pct: f64,
-    /// Validation error with the effect added and refitted, %.
-    pub rmspe_after_pct: f64,
-    /// The test of "the extension is no better than the refitted current model", on the validation
-    /// runs and the held-out identification data.
-    pub test: Comparison,
-    /// One sentence from the current model's residuals, in an engine engineer's words.
-    pub evidence: String,
-    /// The current model with the effect added and refitted on the identification data.
-    pub model: ExtendedModel,
-    /// For a physical effect: the best structural refinement it had to beat as well.
-    pub rival: Option<StructureRival>,
-}
-
-impl Diagnosis {
-    /// Share of the validation RMSPE the effect removes (negative when it makes things worse).
-    pub fn relative_reduction(&self) -> f64 {
-        1.0 - self.rmspe_after_pct / self.rmspe_before_pct.max(f64::MIN_POSITIVE)
-    }
-}
-
-/// An effect that was not tried, and why.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SkippedEffect {
-    /// Catalog id of the effect.
-    pub effect: String,
-    /// Why it was not tried, in words.
-    pub reason: String,
-}
-
-/// The diagnosis of one output: tried effects best first, and the ones that were skipped.
-#[derive(Clone, Debug, PartialEq)]
-pub struct DiagnosisReport {
-    /// The output diagnosed.
-    pub output: String,
-    /// Validation error of the current model (RMSPE averaged over the runs), %.
-    pub rmspe_current_pct: f64,
-    /// Validation error of the current model refitted without a new block (the test's yardstick), %.
-    pub rmspe_refit_pct: f64,
-    /// Error of that refit on the identification data held out by the cross-validation, %, when
-    /// the data have enough segments for one.
-    pub held_out_refit_pct: Option<f64>,
-    /// Segments the cross-validation holds out (0: none, the trials are judged on the validation
-    /// runs alone).
-    pub held_out_segments: usize,
-    /// The effects tried, lowest validation error first.
-    pub entries: Vec<Diagnosis>,
-    /// The effects not tried, with the reason.
-    pub skipped: Vec<SkippedEffect>,
-    /// When a structural refinement is significant: what the linear block or the map needs, in
-    /// words ("the linear block needs a pole pair near 2.31 rad/s (ζ 0.60)").
-    pub structure_note: Option<String>,
-}
-
-impl DiagnosisReport {
-    /// What the trials were judged on besides the validation runs, in one sentence.
-    pub fn held_out_words(&self) -> String {
-        match self.held_out_refit_pct {
-            Some(refit) => format!(
-                "the trials were also judged on {} segment responses of the identification data, each held \
-                 out by one of {FOLDS} cross-validation folds (the refitted current model's error there: \
-                 {refit:.3} %)",
-                self.held_out_segments
-            ),
-            None if self.held_out_segments > 0 => format!(
-                "the current model could not be refitted on the cross-validation folds of its {} segment \
-                 responses: the trials were judged on the validation runs alone",
-                self.held_out_segments
-            ),
-            None => format!(
-                "the identification data have fewer than {} segments, too few for a cross-validation: the \
-                 trials were judged on the validation runs alone",
-                FOLDS * MIN_HELD_OUT_SEGMENTS
-            ),
-        }
-    }
-
-    /// The best-ranked effect, if any was tried.
-    pub fn best(&self) -> Option<&Diagnosis> {
-        self.entries.first()
-    }
 }
 
 /// Percentage errors of a model on each run.
@@ -494,82 +371,4 @@ pub fn diagnose_with_progress(
         skipped,
         structure_note,
     })
-}
-
-/// The significance rule of the module documentation, against the refitted current model.
-struct Judge<'a> {
-    yardstick: &'a Scores,
-    rmspe_before_pct: f64,
-}
-
-/// A trial judged against the refitted current model.
-struct Verdict {
-    test: Comparison,
-    /// The trial's validation RMSPE, %.
-    rmspe_after_pct: f64,
-    significant: bool,
-}
-
-impl Judge<'_> {
-    /// Cross-validate the trial `model` when that can matter: its validation error falls below the
-    /// current model's and by at least [`MIN_RELATIVE_REDUCTION`] of the refitted one's. Otherwise
-    /// no held-out evidence can make it significant, and the refits are spared.
-    fn consult(&self, after: &mut Scores, recipe: Recipe, folds: Option<&HeldOut>) {
-        let rmspe = mean_rmspe(&after.validation);
-        let reduction = 1.0 - rmspe / mean_rmspe(&self.yardstick.validation).max(f64::MIN_POSITIVE);
-        if reduction >= MIN_RELATIVE_REDUCTION && rmspe < self.rmspe_before_pct {
-            after.cross_validate(recipe, folds);
-        } else {
-            after.skip_cross_validation(folds, witness::NOT_CONSULTED);
-        }
-    }
-
-    /// The comparison over the validation runs and the held-out identification data, the trial's
-    /// validation RMSPE, and whether it is significant: the comparison passes and the validation
-    /// runs' own error falls below the current model's.
-    fn verdict(&self, after: &Scores) -> Verdict {
-        let test = Comparison::of(self.yardstick, after, self.yardstick);
-        let rmspe_after_pct = mean_rmspe(&after.validation);
-        let significant = test.passes() && rmspe_after_pct < self.rmspe_before_pct;
-        Verdict { test, rmspe_after_pct, significant }
-    }
-}
-
-/// Add the effect `id` to `current` and refit on the identification data of `fits`.
-pub fn apply(
-    current: &ExtendedModel,
-    id: EffectId,
-    ident: &Run,
-    fits: &SegmentFits,
-    settings: &OutputSettings,
-) -> Result<ExtendedModel, DiagnoseError> {
-    let data = FitData::new(ident, fits, settings)?;
-    let from_current = apply_effect(current, id, &data)?;
-    // The diagnosis tries each effect from the current model refitted on the identification data;
-    // adding it keeps whichever of the two fits the identification data better, so an effect added
-    // by hand is never worse there than the one the diagnosis ranked.
-    let from_refit = refit(current, &data).and_then(|r| apply_effect(&r, id, &data));
-    Ok(match from_refit {
-        Ok(other) if ident_cost(&other, &data) < ident_cost(&from_current, &data) => other,
-        _ => from_current,
-    })
-}
-
-/// Sum of squared simulation errors on the identification data (infinite when it cannot be simulated).
-fn ident_cost(model: &ExtendedModel, data: &FitData) -> f64 {
-    model
-        .simulate(&data.run)
-        .map_or(f64::INFINITY, |y_hat| y_hat.iter().zip(&data.y).map(|(a, b)| (a - b).powi(2)).sum::<f64>())
-}
-
-/// Remove the effect `id` from `current` and refit what remains on the identification data.
-pub fn remove(
-    current: &ExtendedModel,
-    id: EffectId,
-    ident: &Run,
-    fits: &SegmentFits,
-    settings: &OutputSettings,
-) -> Result<ExtendedModel, DiagnoseError> {
-    let data = FitData::new(ident, fits, settings)?;
-    Ok(refit(&current.without_effect(id)?, &data)?)
 }

@@ -65,6 +65,11 @@ impl Scores {
         }
     }
 
+    /// Share of this model's validation RMSPE that `after` removes (negative when it adds error).
+    fn validation_reduction(&self, after: &Self) -> f64 {
+        1.0 - mean_rmspe(&after.validation) / mean_rmspe(&self.validation).max(f64::MIN_POSITIVE)
+    }
+
     /// RMSPE over every held-out sample, %.
     pub(super) fn held_out_rmspe(&self) -> Option<f64> {
         self.held_out.as_ref().map(|segments| {
@@ -137,8 +142,7 @@ impl Comparison {
             Some(h) => stouffer_combined(&[validation.p_value, h.test.p_value]),
             None => validation.p_value,
         };
-        let reduction =
-            1.0 - mean_rmspe(&after.validation) / mean_rmspe(&before.validation).max(f64::MIN_POSITIVE);
+        let reduction = before.validation_reduction(after);
         let held_out_note = match held_out {
             Some(_) => None,
             None => after.held_out_note.or(before.held_out_note),
@@ -212,4 +216,42 @@ fn witness(a: &[Vec<f64>], b: &[Vec<f64>], c: &[Vec<f64>], noise_pct: &[f64]) ->
 /// A p-value to four places, or in scientific notation below 10⁻⁴.
 pub fn p_text(p: f64) -> String {
     if p < 1e-4 { format!("{p:.1e}") } else { format!("{p:.4}") }
+}
+
+/// The significance rule of the module documentation, against the refitted current model.
+pub(super) struct Judge<'a> {
+    pub(super) yardstick: &'a Scores,
+    pub(super) rmspe_before_pct: f64,
+}
+
+/// A trial judged against the refitted current model.
+pub(super) struct Verdict {
+    pub(super) test: Comparison,
+    /// The trial's validation RMSPE, %.
+    pub(super) rmspe_after_pct: f64,
+    pub(super) significant: bool,
+}
+
+impl Judge<'_> {
+    /// Cross-validate the trial `model` when that can matter: its validation error falls below the
+    /// current model's and by at least [`MIN_RELATIVE_REDUCTION`] of the refitted one's. Otherwise
+    /// no held-out evidence can make it significant, and the refits are spared.
+    pub(super) fn consult(&self, after: &mut Scores, recipe: Recipe, folds: Option<&HeldOut>) {
+        let reduction = self.yardstick.validation_reduction(after);
+        if reduction >= MIN_RELATIVE_REDUCTION && mean_rmspe(&after.validation) < self.rmspe_before_pct {
+            after.cross_validate(recipe, folds);
+        } else {
+            after.skip_cross_validation(folds, NOT_CONSULTED);
+        }
+    }
+
+    /// The comparison over the validation runs and the held-out identification data, the trial's
+    /// validation RMSPE, and whether it is significant: the comparison passes and the validation
+    /// runs' own error falls below the current model's.
+    pub(super) fn verdict(&self, after: &Scores) -> Verdict {
+        let test = Comparison::of(self.yardstick, after, self.yardstick);
+        let rmspe_after_pct = mean_rmspe(&after.validation);
+        let significant = test.passes() && rmspe_after_pct < self.rmspe_before_pct;
+        Verdict { test, rmspe_after_pct, significant }
+    }
 }

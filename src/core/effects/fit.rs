@@ -225,8 +225,7 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
         Some(sensor) => sensor.apply(w, dt),
         None => w.to_vec(),
     };
-    let fit_gain_offset = |w: &[f64], y: &[f64]| data.fit_gain_offset(w, y);
-    let (mut gain, mut offset) = fit_gain_offset(&seen(&w), &y_c)?;
+    let (mut gain, mut offset) = data.fit_gain_offset(&seen(&w), &y_c)?;
     let mut structure = s.clone();
     let mut w = w;
     if let Some(limit) = rate_limit(&s.effects) {
@@ -234,7 +233,7 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
         // the unlimited fit's gain gives, refit gain and offset, and record the limits `gain·w`
         // then has (what the model simulates), as the kink's slope is recorded below.
         let limited = limit.for_unit_gain(gain)?.apply(&w, dt);
-        let (g, o) = fit_gain_offset(&seen(&limited), &y_c)?;
+        let (g, o) = data.fit_gain_offset(&seen(&limited), &y_c)?;
         let recorded = limit.for_unit_gain(gain)?.of_scaled(g)?;
         for e in &mut structure.effects {
             if let EffectBlock::RateLimit(r) = e {

@@ -1,0 +1,44 @@
+//! Effects added or removed by hand (the app's Apply and Remove, the batch's `--add-effect`).
+use super::DiagnoseError;
+use crate::core::effects::{EffectId, ExtendedModel, FitData, apply_effect, refit};
+use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::run::Run;
+
+/// Add the effect `id` to `current` and refit on the identification data of `fits`.
+pub fn apply(
+    current: &ExtendedModel,
+    id: EffectId,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+) -> Result<ExtendedModel, DiagnoseError> {
+    let data = FitData::new(ident, fits, settings)?;
+    let from_current = apply_effect(current, id, &data)?;
+    // The diagnosis tries each effect from the current model refitted on the identification data;
+    // adding it keeps whichever of the two fits the identification data better, so an effect added
+    // by hand is never worse there than the one the diagnosis ranked.
+    let from_refit = refit(current, &data).and_then(|r| apply_effect(&r, id, &data));
+    Ok(match from_refit {
+        Ok(other) if ident_cost(&other, &data) < ident_cost(&from_current, &data) => other,
+        _ => from_current,
+    })
+}
+
+/// Sum of squared simulation errors on the identification data (infinite when it cannot be simulated).
+fn ident_cost(model: &ExtendedModel, data: &FitData) -> f64 {
+    model
+        .simulate(&data.run)
+        .map_or(f64::INFINITY, |y_hat| y_hat.iter().zip(&data.y).map(|(a, b)| (a - b).powi(2)).sum::<f64>())
+}
+
+/// Remove the effect `id` from `current` and refit what remains on the identification data.
+pub fn remove(
+    current: &ExtendedModel,
+    id: EffectId,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+) -> Result<ExtendedModel, DiagnoseError> {
+    let data = FitData::new(ident, fits, settings)?;
+    Ok(refit(&current.without_effect(id)?, &data)?)
+}

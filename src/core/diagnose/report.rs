@@ -1,0 +1,131 @@
+//! What a diagnosis hands back: the trials, ranked, with their tests and evidence.
+use super::Comparison;
+use super::{FOLDS, MIN_HELD_OUT_SEGMENTS};
+use crate::core::effects::ExtendedModel;
+
+/// Whether a trial adds physics (an effect of the catalog) or refines the model's own structure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DiagnosisKind {
+    /// An effect of the catalog.
+    Physics,
+    /// One more real pole, pole pair or zero, or a higher static-map order (see
+    /// [`StructuralChange`](crate::core::effects::StructuralChange)).
+    Structure,
+}
+
+impl DiagnosisKind {
+    /// "physics" or "structure".
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Physics => "physics",
+            Self::Structure => "structure",
+        }
+    }
+}
+
+/// The best structural refinement a physical effect was held against.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StructureRival {
+    /// Id of the structural refinement (see [`StructuralChange::id`](crate::core::effects::StructuralChange::id)).
+    pub id: String,
+    /// Its validation error, %.
+    pub rmspe_pct: f64,
+    /// The test of "the effect is no better than this refinement", with the share of the
+    /// refinement's error the effect removes.
+    pub test: Comparison,
+}
+
+/// One trial: the fitted extension, its validation score and the evidence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diagnosis {
+    /// Catalog id of the effect, or the id of the structural refinement.
+    pub effect: String,
+    /// Physics or structure.
+    pub kind: DiagnosisKind,
+    /// What the effect means physically.
+    pub physics: String,
+    /// Beyond what noise gives and large enough to matter (see the module documentation).
+    pub significant: bool,
+    /// Validation error of the current model (RMSPE averaged over the validation runs), %.
+    pub rmspe_before_pct: f64,
+    /// Validation error with the effect added and refitted, %.
+    pub rmspe_after_pct: f64,
+    /// The test of "the extension is no better than the refitted current model", on the validation
+    /// runs and the held-out identification data.
+    pub test: Comparison,
+    /// One sentence from the current model's residuals, in an engine engineer's words.
+    pub evidence: String,
+    /// The current model with the effect added and refitted on the identification data.
+    pub model: ExtendedModel,
+    /// For a physical effect: the best structural refinement it had to beat as well.
+    pub rival: Option<StructureRival>,
+}
+
+impl Diagnosis {
+    /// Share of the validation RMSPE the effect removes (negative when it makes things worse).
+    pub fn relative_reduction(&self) -> f64 {
+        1.0 - self.rmspe_after_pct / self.rmspe_before_pct.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// An effect that was not tried, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedEffect {
+    /// Catalog id of the effect.
+    pub effect: String,
+    /// Why it was not tried, in words.
+    pub reason: String,
+}
+
+/// The diagnosis of one output: tried effects best first, and the ones that were skipped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagnosisReport {
+    /// The output diagnosed.
+    pub output: String,
+    /// Validation error of the current model (RMSPE averaged over the runs), %.
+    pub rmspe_current_pct: f64,
+    /// Validation error of the current model refitted without a new block (the test's yardstick), %.
+    pub rmspe_refit_pct: f64,
+    /// Error of that refit on the identification data held out by the cross-validation, %, when
+    /// the data have enough segments for one.
+    pub held_out_refit_pct: Option<f64>,
+    /// Segments the cross-validation holds out (0: none, the trials are judged on the validation
+    /// runs alone).
+    pub held_out_segments: usize,
+    /// The effects tried, lowest validation error first.
+    pub entries: Vec<Diagnosis>,
+    /// The effects not tried, with the reason.
+    pub skipped: Vec<SkippedEffect>,
+    /// When a structural refinement is significant: what the linear block or the map needs, in
+    /// words ("the linear block needs a pole pair near 2.31 rad/s (ζ 0.60)").
+    pub structure_note: Option<String>,
+}
+
+impl DiagnosisReport {
+    /// What the trials were judged on besides the validation runs, in one sentence.
+    pub fn held_out_words(&self) -> String {
+        match self.held_out_refit_pct {
+            Some(refit) => format!(
+                "the trials were also judged on {} segment responses of the identification data, each held \
+                 out by one of {FOLDS} cross-validation folds (the refitted current model's error there: \
+                 {refit:.3} %)",
+                self.held_out_segments
+            ),
+            None if self.held_out_segments > 0 => format!(
+                "the current model could not be refitted on the cross-validation folds of its {} segment \
+                 responses: the trials were judged on the validation runs alone",
+                self.held_out_segments
+            ),
+            None => format!(
+                "the identification data have fewer than {} segments, too few for a cross-validation: the \
+                 trials were judged on the validation runs alone",
+                FOLDS * MIN_HELD_OUT_SEGMENTS
+            ),
+        }
+    }
+
+    /// The best-ranked effect, if any was tried.
+    pub fn best(&self) -> Option<&Diagnosis> {
+        self.entries.first()
+    }
+}

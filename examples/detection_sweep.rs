@@ -136,8 +136,8 @@ fn detect(
     };
     let report = diagnose(&model, &ident, &fits, &[&validation, &chirp], &settings)?;
     let Some(best) = report.best() else { return Ok((false, "nothing tried".into())) };
-    let found = best.effect == effect.id().name() && best.significant;
-    let mine = report.entries.iter().position(|d| d.effect == effect.id().name());
+    let found = best.effect.name() == effect.id().name() && best.significant;
+    let mine = report.entries.iter().position(|d| d.effect.name() == effect.id().name());
     let note = match mine.and_then(|i| report.entries.get(i).map(|d| (i, d))) {
         Some((i, d)) => format!(
             "rank {} {:+.0}% p={:.0e}{}",

@@ -2,16 +2,15 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
 use egui::accesskit::Role as A11yRole;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+use jetid::core::run::RunRole;
 use jetid::io::csv_run::{ColumnMap, LoadOptions};
 use jetid::ui::state::session::{SavedSession, SessionRun};
-use jetid::ui::{App, Command, Role, Session, Tab};
+use jetid::ui::{App, Command, Session, Tab};
 
 /// A small valid run with canonical column names.
 fn write_good_run(dir: &Path, name: &str) -> PathBuf {
@@ -38,7 +37,7 @@ fn write_unmapped_run(dir: &Path) -> PathBuf {
     path
 }
 
-fn session_with(paths: &[(&Path, Role)]) -> Session {
+fn session_with(paths: &[(&Path, RunRole)]) -> Session {
     let mut session = Session::default();
     for (path, role) in paths {
         session.runs.push(SessionRun::load(path, *role, LoadOptions::default()).expect("test run loads"));
@@ -47,7 +46,7 @@ fn session_with(paths: &[(&Path, Role)]) -> Session {
 }
 
 fn harness(app: App) -> Harness<'static, App> {
-    common::app::harness_sized(app, [1200.0, 800.0])
+    crate::common::app::harness_sized(app, [1200.0, 800.0])
 }
 
 #[test]
@@ -57,11 +56,11 @@ fn a_broken_file_shows_the_error_and_keeps_the_session() {
     let broken = dir.path().join("broken.csv");
     std::fs::write(&broken, "time_s,fuel_flow_gph,shaft_speed_rpm\n0.0,1.0,oops\n0.1,1.0,2.0\n").unwrap();
 
-    let mut harness = harness(App::new(session_with(&[(&good, Role::Identification)])));
+    let mut harness = harness(App::new(session_with(&[(&good, RunRole::Identification)])));
     harness.run();
     let revision = harness.state().session.revision;
 
-    harness.state_mut().apply(Command::load(&broken, Role::Validation));
+    harness.state_mut().apply(Command::load(&broken, RunRole::Validation));
     harness.run();
 
     let app = harness.state();
@@ -84,7 +83,7 @@ fn a_broken_file_shows_the_error_and_keeps_the_session() {
 fn a_missing_file_is_an_error_too() {
     let dir = tempfile::tempdir().unwrap();
     let mut app = App::new(Session::default());
-    app.apply(Command::load(dir.path().join("nope.csv"), Role::Identification));
+    app.apply(Command::load(dir.path().join("nope.csv"), RunRole::Identification));
     assert!(app.session.runs.is_empty());
     assert_eq!(app.session.revision, 0);
     assert_eq!(app.view.failures.len(), 1);
@@ -94,7 +93,7 @@ fn a_missing_file_is_an_error_too() {
 fn a_role_change_goes_through_a_command_and_bumps_the_revision() {
     let dir = tempfile::tempdir().unwrap();
     let good = write_good_run(dir.path(), "good.csv");
-    let mut harness = harness(App::new(session_with(&[(&good, Role::Identification)])));
+    let mut harness = harness(App::new(session_with(&[(&good, RunRole::Identification)])));
     harness.run();
     let revision = harness.state().session.revision;
 
@@ -105,12 +104,12 @@ fn a_role_change_goes_through_a_command_and_bumps_the_revision() {
     harness.run();
 
     let app = harness.state();
-    assert_eq!(app.session.runs[0].role, Role::Validation);
+    assert_eq!(app.session.runs[0].role, RunRole::Validation);
     assert_eq!(app.session.revision, revision + 1);
 
     // Choosing the same role again changes nothing.
     let mut app = harness.into_state();
-    app.apply(Command::SetRole(0, Role::Validation));
+    app.apply(Command::SetRole(0, RunRole::Validation));
     assert_eq!(app.session.revision, revision + 1);
 }
 
@@ -121,7 +120,7 @@ fn a_column_mapping_retries_the_load() {
     let mut harness = harness(App::new(Session::default()));
     harness.run();
 
-    harness.state_mut().apply(Command::load(&unmapped, Role::Identification));
+    harness.state_mut().apply(Command::load(&unmapped, RunRole::Identification));
     harness.run();
     assert!(harness.state().session.runs.is_empty());
     assert!(harness.state().view.failures[0].column_problem, "{}", harness.state().view.failures[0].message);
@@ -165,7 +164,7 @@ fn removing_runs_keeps_the_selection_valid() {
     let dir = tempfile::tempdir().unwrap();
     let a = write_good_run(dir.path(), "a.csv");
     let b = write_good_run(dir.path(), "b.csv");
-    let mut app = App::new(session_with(&[(&a, Role::Identification), (&b, Role::Validation)]));
+    let mut app = App::new(session_with(&[(&a, RunRole::Identification), (&b, RunRole::Validation)]));
     app.apply(Command::SelectRun(1));
     app.apply(Command::RemoveRun(1));
     assert_eq!(app.view.selected_run, Some(0));
@@ -181,7 +180,7 @@ fn the_saved_session_restores_paths_roles_and_options() {
     let dir = tempfile::tempdir().unwrap();
     let a = write_good_run(dir.path(), "a.csv");
     let unmapped = write_unmapped_run(dir.path());
-    let mut app = App::new(session_with(&[(&a, Role::Chirp)]));
+    let mut app = App::new(session_with(&[(&a, RunRole::Chirp)]));
     let options = LoadOptions {
         map: ColumnMap {
             time: Some("t".into()),
@@ -191,7 +190,7 @@ fn the_saved_session_restores_paths_roles_and_options() {
         },
         ..LoadOptions::default()
     };
-    app.apply(Command::LoadRun { path: unmapped.clone(), role: Role::Steady, options: options.clone() });
+    app.apply(Command::LoadRun { path: unmapped.clone(), role: RunRole::Steady, options: options.clone() });
     assert_eq!(app.session.runs.len(), 2);
 
     let json = serde_json::to_string(&app.saved_session()).unwrap();
@@ -200,7 +199,7 @@ fn the_saved_session_restores_paths_roles_and_options() {
     assert!(restored.view.failures.is_empty());
     let runs: Vec<_> =
         restored.session.runs.iter().map(|r| (r.path.clone(), r.role, r.options.clone())).collect();
-    assert_eq!(runs, vec![(a, Role::Chirp, LoadOptions::default()), (unmapped, Role::Steady, options)]);
+    assert_eq!(runs, vec![(a, RunRole::Chirp, LoadOptions::default()), (unmapped, RunRole::Steady, options)]);
 }
 
 #[test]
@@ -208,8 +207,8 @@ fn a_saved_run_that_no_longer_loads_is_shown_and_still_saved() {
     let dir = tempfile::tempdir().unwrap();
     let a = write_good_run(dir.path(), "a.csv");
     let gone = write_good_run(dir.path(), "gone.csv");
-    let saved =
-        App::new(session_with(&[(&a, Role::Identification), (&gone, Role::Validation)])).saved_session();
+    let saved = App::new(session_with(&[(&a, RunRole::Identification), (&gone, RunRole::Validation)]))
+        .saved_session();
     std::fs::remove_file(&gone).unwrap();
 
     let app = App::startup(Some(&saved));
@@ -222,7 +221,7 @@ fn a_saved_run_that_no_longer_loads_is_shown_and_still_saved() {
 fn the_data_view_draws_every_channel() {
     let dir = tempfile::tempdir().unwrap();
     let good = write_good_run(dir.path(), "good.csv");
-    let mut harness = harness(App::new(session_with(&[(&good, Role::Identification)])));
+    let mut harness = harness(App::new(session_with(&[(&good, RunRole::Identification)])));
     harness.run();
     assert_eq!(harness.state().view.tab, Tab::Data);
     assert_eq!(harness.state().cache.runs[0].traces.len(), 4, "input, two outputs, one aux");
@@ -259,7 +258,7 @@ fn screenshots_are_written_as_png() {
 /// The app on one good run in `dir`, with no native file dialog (as on a bare X server).
 fn app_without_native_dialogs(dir: &Path) -> Harness<'static, App> {
     let good = write_good_run(dir, "good.csv");
-    let mut app = App::new(session_with(&[(&good, Role::Identification)]));
+    let mut app = App::new(session_with(&[(&good, RunRole::Identification)]));
     app.view.native_dialogs = false;
     let mut harness = harness(app);
     harness.run();
@@ -323,7 +322,7 @@ fn a_path_that_cannot_be_written_keeps_the_window_open_with_the_error() {
 fn a_restored_session_says_so_and_can_start_fresh() {
     let dir = tempfile::tempdir().unwrap();
     let a = write_good_run(dir.path(), "a.csv");
-    let saved = App::new(session_with(&[(&a, Role::Identification)])).saved_session();
+    let saved = App::new(session_with(&[(&a, RunRole::Identification)])).saved_session();
 
     let mut harness = harness(App::startup(Some(&saved)));
     harness.run();

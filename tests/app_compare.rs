@@ -4,18 +4,19 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::sync::Arc;
 use std::time::Duration;
 
 use jetid::core::compare::{Cancelled, CompareInput, ModelKind, compare_output, compare_stage};
+use jetid::core::diagnose::TrialId;
+use jetid::core::effects::EffectId;
 use jetid::core::numerics::metrics::metrics;
+use jetid::core::run::RunRole;
 use jetid::ui::views::compare::CompareStatus;
 use jetid::ui::views::compare::table::{MODELS, table1_columns};
-use jetid::ui::{App, Command, Role, Tab};
+use jetid::ui::{App, Command, Tab};
 
 const GRAY_BOX: ModelKind = ModelKind::GrayBox;
 const LINEAR: ModelKind = ModelKind::Linear;
@@ -27,7 +28,7 @@ const SPEED: &str = "shaft_speed_rpm";
 const MAX_FRAMES: usize = 12_000;
 
 fn sample_harness(tab: Tab) -> Harness<'static, App> {
-    let mut harness = common::app::sample_app(tab);
+    let mut harness = crate::common::app::sample_app(tab);
     harness.step();
     harness
 }
@@ -68,7 +69,7 @@ fn showing_compare_starts_a_job_with_progress_and_fills_table_1() {
 
     // The gray-box figure equals the metrics of the model view's own prediction of the run.
     let live = app.cache.output(SPEED).unwrap().live.as_ref().unwrap();
-    let scored = live.runs.iter().find(|r| r.role == Role::Validation).unwrap();
+    let scored = live.runs.iter().find(|r| r.role == RunRole::Validation).unwrap();
     let run = &app.session.runs[scored.index].run;
     let measured = &run.output(SPEED).unwrap().values;
     let expected = metrics(measured, &scored.gray_box.y_hat).unwrap();
@@ -165,7 +166,7 @@ fn changing_the_clusters_marks_the_result_stale_until_recomputed() {
 #[test]
 fn without_a_steady_run_monte_carlo_is_skipped_and_said_so() {
     let mut harness = sample_harness(Tab::Data);
-    let steady = harness.state().session.first_with_role(Role::Steady).unwrap();
+    let steady = harness.state().session.first_with_role(RunRole::Steady).unwrap();
     harness.state_mut().apply(Command::RemoveRun(steady));
     harness.state_mut().apply(Command::ShowTab(Tab::Compare));
     harness.step();
@@ -185,7 +186,7 @@ fn the_bode_view_has_the_chirps_measured_points() {
     harness.step();
     let app = harness.state();
     let output = app.cache.output(SPEED).unwrap();
-    let points = &output.empirical_bode;
+    let points = &output.empirical_bode.points;
     assert!(points.len() >= 20, "a few dozen points in the chirp band, got {}", points.len());
     assert!(points.iter().all(|p| (0.0..=1.0).contains(&p.3)), "coherence in [0, 1]");
     assert!(points.windows(2).all(|w| w[0].0 < w[1].0), "increasing frequency");
@@ -201,11 +202,11 @@ fn the_bode_view_has_the_chirps_measured_points() {
 #[test]
 fn removing_the_chirp_run_clears_the_measured_points() {
     let mut harness = sample_harness(Tab::Bode);
-    let chirp = harness.state().session.first_with_role(Role::Chirp).unwrap();
-    assert!(!harness.state().cache.output(SPEED).unwrap().empirical_bode.is_empty());
+    let chirp = harness.state().session.first_with_role(RunRole::Chirp).unwrap();
+    assert!(!harness.state().cache.output(SPEED).unwrap().empirical_bode.points.is_empty());
     harness.state_mut().apply(Command::RemoveRun(chirp));
     harness.step();
-    assert!(harness.state().cache.output(SPEED).unwrap().empirical_bode.is_empty());
+    assert!(harness.state().cache.output(SPEED).unwrap().empirical_bode.points.is_empty());
 }
 
 /// The comparison's input for the speed output of the bundled samples, built from the app's cache.
@@ -218,9 +219,9 @@ fn speed_input() -> CompareInput {
     let scored = live
         .runs
         .iter()
-        .map(|r| (Arc::clone(&app.session.runs[r.index].run), r.role == Role::Chirp))
+        .map(|r| (Arc::clone(&app.session.runs[r.index].run), r.role == RunRole::Chirp))
         .collect();
-    let steady = app.session.first_with_role(Role::Steady).map(|i| Arc::clone(&app.session.runs[i].run));
+    let steady = app.session.first_with_role(RunRole::Steady).map(|i| Arc::clone(&app.session.runs[i].run));
     CompareInput {
         output: SPEED.into(),
         ident: Arc::clone(&ident.run),
@@ -266,7 +267,7 @@ fn with_an_effect_applied_the_gray_box_row_is_the_model_with_its_effect() {
     let mut app = App::new(jetid::ui::Session::default());
     app.apply(Command::OpenProject(project));
     app.settle();
-    app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "thermal_soak".into() });
+    app.apply(Command::ApplyEffect { output: SPEED.into(), trial: TrialId::Effect(EffectId::ThermalSoak) });
     // The effect is refitted on a worker thread: wait for the finished model.
     app.settle();
     app.view.output = Some(SPEED.into());
@@ -280,7 +281,7 @@ fn with_an_effect_applied_the_gray_box_row_is_the_model_with_its_effect() {
 
     let app = harness.state();
     let live = app.cache.output(SPEED).unwrap().live.as_ref().unwrap();
-    let scored = live.runs.iter().find(|r| r.role == Role::Validation).unwrap();
+    let scored = live.runs.iter().find(|r| r.role == RunRole::Validation).unwrap();
     let with_effect = scored.gray_box.metrics.rmspe_pct;
     let without = scored.without_effects.as_ref().expect("the model has an effect").metrics.rmspe_pct;
     assert!(with_effect < without, "the soak lowers the error: {without} -> {with_effect}");

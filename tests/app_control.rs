@@ -3,10 +3,8 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::app::harness;
-use common::sample;
+use crate::common::app::harness;
+use crate::common::sample;
 use egui_kittest::kittest::Queryable;
 use jetid::core::control::PointSource;
 use jetid::ui::{App, Command, Session, Tab};

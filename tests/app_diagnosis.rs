@@ -4,19 +4,18 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use egui::accesskit::Role as A11yRole;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use jetid::core::diagnose::DiagnosisKind;
-use jetid::core::effects::EffectId;
-use jetid::ui::{App, Command, Role, Session, Tab};
+use jetid::core::diagnose::{DiagnosisKind, TrialId};
+use jetid::core::effects::{EffectId, StructuralChange};
+use jetid::core::run::RunRole;
+use jetid::ui::{App, Command, Session, Tab};
 
 const SPEED: &str = "shaft_speed_rpm";
 
-use common::app::{harness, run_settled};
-use common::sample;
+use crate::common::app::{harness, run_settled};
+use crate::common::sample;
 
 /// The app on a sample project, opened through the app's own command, on the Diagnosis view.
 fn open_sample(project: &str) -> Harness<'static, App> {
@@ -61,7 +60,7 @@ fn hot_day_ambient_correction_is_found_applied_and_removed() {
         let finished = state.result(SPEED).expect("the diagnosis ended");
         let report = finished.outcome.as_ref().expect("the diagnosis succeeded");
         let best = report.best().expect("effects were tried");
-        assert_eq!(best.effect, "ambient_correction");
+        assert_eq!(best.effect.name(), "ambient_correction");
         assert!(best.significant, "{best:?}");
         assert!((best.rmspe_before_pct - before).abs() < 1e-9 * before.max(1.0));
     }
@@ -137,7 +136,7 @@ fn the_bundled_sr30_runs_hide_no_effect() {
         .entries
         .iter()
         .filter(|d| d.significant && d.kind == DiagnosisKind::Physics)
-        .map(|d| d.effect.as_str())
+        .map(|d| d.effect.name())
         .collect();
     assert!(physics.is_empty(), "{physics:?}");
     assert!(harness.query_by_label("significant").is_none());
@@ -154,9 +153,12 @@ fn a_run_without_the_channels_an_effect_needs_is_a_shown_error() {
     std::fs::write(&bare, stripped).unwrap();
 
     let mut app = App::new(Session::default());
-    app.apply(Command::load(sample("hot_day/ident.csv"), Role::Identification));
-    app.apply(Command::load(&bare, Role::Validation));
-    app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "ambient_correction".into() });
+    app.apply(Command::load(sample("hot_day/ident.csv"), RunRole::Identification));
+    app.apply(Command::load(&bare, RunRole::Validation));
+    app.apply(Command::ApplyEffect {
+        output: SPEED.into(),
+        trial: TrialId::Effect(EffectId::AmbientCorrection),
+    });
     app.apply(Command::ShowTab(Tab::Traces));
     app.settle();
     let mut harness = harness(app);
@@ -167,11 +169,15 @@ fn a_run_without_the_channels_an_effect_needs_is_a_shown_error() {
     assert!(problem.contains("ambient_temp_c"), "{problem}");
     harness.get_by_label(&format!("Effects: {problem}"));
 
-    // An unknown effect id is an error shown, the setup stays as it was.
-    harness.state_mut().apply(Command::ApplyEffect { output: SPEED.into(), effect: "warp_drive".into() });
+    // A refinement of the linear block is no block to add: an error that says where to make it is
+    // shown, the setup stays as it was.
+    let pair = TrialId::Structure(StructuralChange::PolePair);
+    harness.state_mut().apply(Command::ApplyEffect { output: SPEED.into(), trial: pair });
     run_settled(&mut harness);
     assert_eq!(effects_in_setup(harness.state()), vec!["ambient_correction".to_owned()]);
-    assert!(harness.state().view.errors.iter().any(|e| e.contains("warp_drive")));
+    assert!(
+        harness.state().view.errors.iter().any(|e| e.contains("extra_pole_pair") && e.contains("z-plane"))
+    );
 }
 
 #[test]
@@ -204,7 +210,7 @@ fn soak_speed_ranks_thermal_soak_first_and_a_screenshot_app_can_apply_it() {
     let harness = open_sample("soak/project.toml");
     let report =
         harness.state().view.views.diagnosis.result(SPEED).unwrap().outcome.as_ref().unwrap().clone();
-    assert_eq!(report.best().unwrap().effect, "thermal_soak");
+    assert_eq!(report.best().unwrap().effect.name(), "thermal_soak");
     let before = live_rmspe(harness.state());
 
     // What `jetid --screenshot OUT --view diagnosis PROJECT --add-effect ID` shows.
@@ -227,10 +233,13 @@ fn soak_speed_ranks_thermal_soak_first_and_a_screenshot_app_can_apply_it() {
 fn effects_are_saved_in_the_project_file_and_opened_again() {
     let dir = tempfile::tempdir().unwrap();
     let mut app = App::new(Session::default());
-    app.apply(Command::load(sample("hot_day/ident.csv"), Role::Identification));
-    app.apply(Command::load(sample("hot_day/validation.csv"), Role::Validation));
+    app.apply(Command::load(sample("hot_day/ident.csv"), RunRole::Identification));
+    app.apply(Command::load(sample("hot_day/validation.csv"), RunRole::Validation));
     for output in [SPEED, "thrust_n"] {
-        app.apply(Command::ApplyEffect { output: output.into(), effect: "ambient_correction".into() });
+        app.apply(Command::ApplyEffect {
+            output: output.into(),
+            trial: TrialId::Effect(EffectId::AmbientCorrection),
+        });
     }
     let project = dir.path().join("hot.toml");
     app.apply(Command::SaveProject(project.clone()));
@@ -244,7 +253,7 @@ fn effects_are_saved_in_the_project_file_and_opened_again() {
     assert_eq!(effect_names(&reopened, "thrust_n"), vec!["ambient_correction".to_owned()]);
 
     // Effects that differ between the outputs cannot all be written: the status says which.
-    app.apply(Command::ApplyEffect { output: SPEED.into(), effect: "thermal_soak".into() });
+    app.apply(Command::ApplyEffect { output: SPEED.into(), trial: TrialId::Effect(EffectId::ThermalSoak) });
     app.apply(Command::SaveProject(dir.path().join("mixed.toml")));
     let status = app.view.status.clone().unwrap_or_default();
     assert!(status.contains("thermal_soak was not saved"), "{status}");

@@ -4,10 +4,9 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::sample;
-use jetid::ui::{App, Command, Role, Session};
+use crate::common::sample;
+use jetid::core::run::RunRole;
+use jetid::ui::{App, Command, Session};
 
 /// The sr30 validation run written with every time stamp 0.9 times its own: another sample time.
 fn faster_copy(dir: &std::path::Path) -> std::path::PathBuf {
@@ -44,18 +43,18 @@ fn held_out_runs_are_scored_saved_and_never_chosen_on() {
     app.apply(Command::OpenProject(project.clone()));
     assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
     app.settle();
-    let roles: Vec<Role> = app.session.runs.iter().map(|r| r.role).collect();
-    assert_eq!(roles, [Role::Identification, Role::Validation, Role::HeldOut, Role::HeldOut]);
+    let roles: Vec<RunRole> = app.session.runs.iter().map(|r| r.role).collect();
+    assert_eq!(roles, [RunRole::Identification, RunRole::Validation, RunRole::HeldOut, RunRole::HeldOut]);
     let view = app.cache.live_view("shaft_speed_rpm").expect("speed is identified");
     let live = view.live.as_ref().expect("a model");
-    let scored: Vec<(String, Role)> = live.runs.iter().map(|r| (r.name.clone(), r.role)).collect();
+    let scored: Vec<(String, RunRole)> = live.runs.iter().map(|r| (r.name.clone(), r.role)).collect();
     assert!(
-        scored.contains(&("validation_fast".to_owned(), Role::HeldOut)),
+        scored.contains(&("validation_fast".to_owned(), RunRole::HeldOut)),
         "re-gridded and scored: {scored:?}"
     );
-    assert!(scored.contains(&("chirp".to_owned(), Role::HeldOut)), "{scored:?}");
+    assert!(scored.contains(&("chirp".to_owned(), RunRole::HeldOut)), "{scored:?}");
     // The live error is the validation run's alone.
-    let validation = live.runs.iter().find(|r| r.role == Role::Validation).unwrap();
+    let validation = live.runs.iter().find(|r| r.role == RunRole::Validation).unwrap();
     assert_eq!(live.mean_validation_rmspe(), Some(validation.gray_box.metrics.rmspe_pct));
     // The diagnosis is scored on the validation run only.
     let input = app.cache.output("shaft_speed_rpm").unwrap().diagnosis_input().unwrap();
@@ -87,14 +86,15 @@ fn several_identification_runs_are_joined_as_the_batch_joins_them_and_saved() {
     assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
     app.settle();
     let lens: Vec<usize> =
-        app.session.runs.iter().filter(|r| r.role == Role::Identification).map(|r| r.run.len()).collect();
+        app.session.runs.iter().filter(|r| r.role == RunRole::Identification).map(|r| r.run.len()).collect();
     let ident = app.cache.ident.as_ref().expect("identified");
     assert_eq!(ident.run.len(), lens.iter().sum::<usize>(), "both runs, end to end");
     let segments = ident.segments.as_ref().unwrap();
     assert!(segments.iter().all(|s| s.end <= lens[0] || s.start >= lens[0]), "no segment crosses the join");
     // The Data view draws each run's own segments: the second run starts at the junction.
-    let ident_indices: Vec<usize> =
-        (0..app.session.runs.len()).filter(|&i| app.session.runs[i].role == Role::Identification).collect();
+    let ident_indices: Vec<usize> = (0..app.session.runs.len())
+        .filter(|&i| app.session.runs[i].role == RunRole::Identification)
+        .collect();
     assert_eq!(ident.part_start(ident_indices[0]), Some(0));
     assert_eq!(ident.part_start(ident_indices[1]), Some(lens[0]));
     let notes = &app.cache.output("shaft_speed_rpm").unwrap().notes;

@@ -3,22 +3,21 @@
 #![cfg(feature = "gui")]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::app::run_settled;
+use crate::common::app::run_settled;
 use egui::{Key, Modifiers, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use egui_plot::{PlotPoint, PlotTransform};
 use jetid::core::identification::cluster::{Cluster, RootKind};
-use jetid::ui::{App, Command, Role, Tab};
+use jetid::core::run::RunRole;
+use jetid::ui::{App, Command, Tab};
 use num_complex::Complex64;
 
 const SPEED: &str = "shaft_speed_rpm";
 const THRUST: &str = "thrust_n";
 
 fn sample_harness(tab: Tab) -> Harness<'static, App> {
-    let mut harness = common::app::sample_app(tab);
+    let mut harness = crate::common::app::sample_app(tab);
     harness.run();
     harness
 }
@@ -277,7 +276,7 @@ fn a_broken_run_file_keeps_the_session_and_the_model() {
     std::fs::write(&broken, "time_s,fuel_flow_gph,shaft_speed_rpm\n0.0,1.0,oops\n").unwrap();
     let mut harness = sample_harness(Tab::ZPlane);
     let (poles, _) = model_of(harness.state(), SPEED);
-    harness.state_mut().apply(Command::load(&broken, Role::Validation));
+    harness.state_mut().apply(Command::load(&broken, RunRole::Validation));
     run_settled(&mut harness);
     let app = harness.state();
     assert_eq!(app.session.runs.len(), 4);
@@ -359,8 +358,8 @@ fn a_saved_project_reads_back_with_io_project_and_opens_in_the_app() {
     let mut other = App::new(jetid::ui::Session::default());
     other.apply(Command::OpenProject(path));
     assert!(other.view.errors.is_empty(), "{:?}", other.view.errors);
-    let roles: Vec<Role> = other.session.runs.iter().map(|r| r.role).collect();
-    assert_eq!(roles, vec![Role::Identification, Role::Validation, Role::Chirp, Role::Steady]);
+    let roles: Vec<RunRole> = other.session.runs.iter().map(|r| r.role).collect();
+    assert_eq!(roles, vec![RunRole::Identification, RunRole::Validation, RunRole::Chirp, RunRole::Steady]);
     assert_eq!(other.session.setup.segments, Some(segments));
     assert_eq!(other.session.setup.output(THRUST).clusters, Some(clusters));
     other.settle();

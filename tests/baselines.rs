@@ -1,7 +1,6 @@
 //! The black-box baselines: recovery of known systems, determinism, every user error, and the bundled
 //! SR-30 runs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-mod common;
 
 use std::path::Path;
 
@@ -31,7 +30,7 @@ fn random_levels(n: usize, lo: f64, hi: f64, hold: (usize, usize), seed: u64) ->
     u
 }
 
-use common::noisy;
+use crate::common::noisy;
 
 fn rmspe(y: &[f64], yhat: &[f64]) -> f64 {
     metrics(y, yhat).unwrap().rmspe_pct

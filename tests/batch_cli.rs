@@ -1,16 +1,13 @@
 //! `jetid --batch` and `jetid predict` end to end on the bundled sample runs, and the errors a user
 //! can cause through them.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+use crate::common::jetid;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use jetid::core::identification::pipeline::{OutputSettings, identify_output, segments_for};
 use jetid::core::identification::segment::SegmentSettings;
 use jetid::io::csv_run::{LoadOptions, load_run};
-
-fn jetid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().expect("jetid runs")
-}
 
 fn samples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/sr30")

@@ -138,7 +138,7 @@ fn assert_found(
     let c = current(&b);
     let (model, report) = structure_first(&b, &c);
     let best = report.best().unwrap();
-    assert_eq!(best.effect, id, "{spec} seed {seed}: {}", summary(&report));
+    assert_eq!(best.effect.name(), id, "{spec} seed {seed}: {}", summary(&report));
     assert!(
         best.significant && best.kind == DiagnosisKind::Physics,
         "{spec} seed {seed}: {}",
@@ -226,7 +226,7 @@ fn slow_deceleration_is_not_read_as_a_rate_limit() {
     for seed in [2, 3] {
         let b = bench(&["asymmetric_dynamics"], seed);
         let (_, report) = structure_first(&b, &speed_default(&b));
-        let entry = report.entries.iter().find(|d| d.effect == "rate_limit").unwrap();
+        let entry = report.entries.iter().find(|d| d.effect.name() == "rate_limit").unwrap();
         assert!(!entry.significant, "seed {seed}: {}\n{}", entry.evidence, summary(&report));
     }
 }
@@ -309,7 +309,7 @@ fn sensor_resonance_shows_in_the_evidence() {
     for seed in [2, 3] {
         let b = bench(&["sensor_dynamics"], seed);
         let report = run_diagnosis(&b, &thrust_model_from_speed(&b));
-        let sensor = report.entries.iter().find(|d| d.effect == "sensor_dynamics").unwrap();
+        let sensor = report.entries.iter().find(|d| d.effect.name() == "sensor_dynamics").unwrap();
         assert!(sensor.evidence.contains("rings at a fixed frequency"), "{}", sensor.evidence);
         let freq_hz: f64 =
             sensor.evidence.split(" Hz").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
@@ -338,7 +338,7 @@ fn loop_history(spec: &[&str], seed: u64) -> (Vec<String>, usize, Vec<f64>) {
             diagnose(&model, &b.ident, &identified.fits, &[&b.validation, &b.chirp], &settings).unwrap();
         let Some(best) = report.best().filter(|d| d.significant) else { break };
         if best.kind == DiagnosisKind::Physics {
-            physics.push(best.effect.clone());
+            physics.push(best.effect.name().to_owned());
         }
         model = best.model.clone();
         history.push(error(&model));
@@ -439,7 +439,7 @@ fn misuse_is_a_typed_error_and_effects_can_be_removed() {
     );
     // The diagnosis skips the effect that cannot be tried on these runs and says why.
     let report = diagnose(&c.model, &b.ident, &c.fits, &[&bare], &c.settings).unwrap();
-    let skipped = report.skipped.iter().find(|s| s.effect == "ambient_correction").unwrap();
+    let skipped = report.skipped.iter().find(|s| s.effect.name() == "ambient_correction").unwrap();
     assert!(
         skipped.reason.contains("ambient_temp_c") && skipped.reason.contains("bare"),
         "{}",

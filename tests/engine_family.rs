@@ -225,7 +225,7 @@ fn first_physics_is(report: &DiagnosisReport, id: &str) -> bool {
         .entries
         .iter()
         .find(|d| d.significant && d.kind == DiagnosisKind::Physics)
-        .is_some_and(|d| d.effect == id)
+        .is_some_and(|d| d.effect.name() == id)
 }
 
 fn assert_found_on_two(spec: &str, output: &str) {
@@ -290,7 +290,7 @@ fn rate_limit_is_found_on_engines_of_the_family() {
             "engine {}: fresh-run error {before:.3} % → {after:.3} % with {}",
             b.engine.seed, entry.effect
         );
-        entry.effect == "rate_limit" && after <= 0.75 * before
+        entry.effect.name() == "rate_limit" && after <= 0.75 * before
     });
     eprintln!("rate_limit:\n{log}");
     assert!(count >= 2, "rate_limit found on {count} of {} engines:\n{log}", EFFECT_ENGINES.len());
@@ -323,7 +323,7 @@ fn transport_delay_is_found_on_engines_of_the_family() {
 #[test]
 fn sensor_dynamics_shows_in_the_evidence_on_engines_of_the_family() {
     let (count, log) = found_on("sensor_dynamics", THRUST, |_, report| {
-        report.entries.iter().find(|d| d.effect == "sensor_dynamics").is_some_and(|d| {
+        report.entries.iter().find(|d| d.effect.name() == "sensor_dynamics").is_some_and(|d| {
             let freq_hz: Option<f64> = d
                 .evidence
                 .split(" Hz")

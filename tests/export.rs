@@ -6,14 +6,11 @@
 //! the comparisons are skipped with a message, unless `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), where a
 //! missing tool fails the test.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+use crate::common::jetid;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use jetid::io::model_file::read_model;
-
-fn jetid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().expect("jetid runs")
-}
 
 fn ok(o: &Output, what: &str) -> String {
     assert!(

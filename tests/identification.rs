@@ -1,6 +1,5 @@
 //! The gray-box pipeline on systems with known truth.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-mod common;
 
 use jetid::core::identification::cluster::RootKind;
 use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
@@ -23,7 +22,7 @@ fn staircase(levels: &[(f64, f64)]) -> Vec<f64> {
     levels.iter().flat_map(|&(level, secs)| std::iter::repeat_n(level, (secs / DT) as usize)).collect()
 }
 
-use common::noisy;
+use crate::common::noisy;
 
 fn run(name: &str, u: Vec<f64>, y: Vec<f64>) -> Run {
     Run {

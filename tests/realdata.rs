@@ -1,27 +1,16 @@
-//! The real-engine project (JetCat P300-PRO ECU telemetry) end to end, when the dataset is present
-//! beside the repository (`../shared/realdata/jetcat_p300pro_ecu`); skipped with a message when not.
+//! The real engines end to end (JetCat P300-PRO ECU telemetry, the two-shaft micro gas turbine T07),
+//! from the datasets beside the repository (`../shared/realdata`); marked ignored, with the reason,
+//! where they are absent (see `common::realdata`).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use crate::common::realdata;
 use std::process::Command;
 
-/// The shared real-data folder `name`, or `None` after saying the test is skipped (real data are
-/// never copied into the repository).
-fn dataset(name: &str) -> Option<PathBuf> {
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata").join(name);
-    if data.is_dir() {
-        return Some(data);
-    }
-    eprintln!(
-        "SKIPPED: the dataset is not at {} (real data are never copied into the repository)",
-        data.display()
-    );
-    None
-}
-
 #[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
 fn jetcat_project_identifies_and_scores_runs_a_and_f() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let Some(_) = dataset("jetcat_p300pro_ecu") else { return };
     let dir = tempfile::tempdir().unwrap();
     let project = root.join("sample_runs/jetcat_p300/project.toml");
     let o = Command::new(env!("CARGO_BIN_EXE_jetid"))
@@ -68,8 +57,9 @@ fn jetcat_project_identifies_and_scores_runs_a_and_f() {
 /// Runs B and D as they come, read with nothing but the column mapping (no windows, no quality
 /// column, no settings): the identification must still end with a model, not a dead end.
 #[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
 fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
-    let Some(data) = dataset("jetcat_p300pro_ecu") else { return };
+    let data = realdata("jetcat_p300pro_ecu");
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str| data.join(name).to_str().unwrap().replace('\\', "/");
     let project = dir.path().join("project.toml");
@@ -103,9 +93,10 @@ fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
 /// the stage leaving 60, "running") and start once the start sequence has reached its last stages
 /// (stage 50 or 60) but no later than 5 s after the stage reaches 60.
 #[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
 fn t07_running_windows_found_from_the_signals_agree_with_the_controller_stage() {
     use jetid::io::csv_run::{LoadOptions, load_run_with_notes};
-    let Some(data) = dataset("micro_gas_turbine_twoshaft_20kW") else { return };
+    let data = realdata("micro_gas_turbine_twoshaft_20kW");
     let map = ["time=time_s", "input=fuel_flow_Lpm", "output=PR", "output=N2_krpm", "output=power_kW"];
     let mut judged = 0;
     for log in
@@ -150,9 +141,9 @@ fn t07_running_windows_found_from_the_signals_agree_with_the_controller_stage() 
 /// sentinels, automatic windows, ramps and holds) give a report, and the residual analysis of PR
 /// says what the flow meter does (dips of 1–3 s the pressure ratio never shows) without being told.
 #[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
 fn t07_project_runs_and_the_residuals_name_the_flow_meter_dropouts() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let Some(_) = dataset("micro_gas_turbine_twoshaft_20kW") else { return };
     let dir = tempfile::tempdir().unwrap();
     let project = root.join("sample_runs/t07/project.toml");
     let o = Command::new(env!("CARGO_BIN_EXE_jetid"))

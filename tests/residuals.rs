@@ -2,7 +2,6 @@
 //! resonance, a drifting inlet temperature, errors only in decelerations; and every error a caller
 //! can cause.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-mod common;
 
 use std::sync::OnceLock;
 
@@ -32,7 +31,7 @@ fn validation_run(seed: u64, effects: &[&str]) -> SimOutput {
 }
 
 fn sample(path: &str) -> Run {
-    load_run(&common::sample(path), &LoadOptions::default()).unwrap()
+    load_run(&crate::common::sample(path), &LoadOptions::default()).unwrap()
 }
 
 fn identify(ident: &Run, output: &str) -> WienerModel {

@@ -1,8 +1,8 @@
 //! Run files: reading with column mapping, errors that name file/row/column, atomic writing.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use crate::common::jetid;
+use std::path::PathBuf;
 
 use jetid::core::run::{Channel, Run};
 use jetid::io::csv_run::{
@@ -433,18 +433,19 @@ fn write_error_names_the_file() {
 // ---------------------------------------------------------------- the real engine files
 
 #[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
 fn real_jetcat_run_a_loads_with_map_window_and_quality() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata/jetcat_p300pro_ecu");
-    let Some(path) = std::fs::read_dir(&dir).ok().and_then(|entries| {
-        entries.filter_map(Result::ok).map(|e| e.path()).find(|p| {
+    let dir = crate::common::realdata("jetcat_p300pro_ecu");
+    let path = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .find(|p| {
             p.file_name()
                 .and_then(|n| n.to_str())
                 .is_some_and(|n| n.starts_with("runA") && n.ends_with(".csv"))
         })
-    }) else {
-        eprintln!("skipped: no JetCat runA file under {}", dir.display());
-        return;
-    };
+        .unwrap_or_else(|| panic!("no JetCat runA file under {}", dir.display()));
     let opts = LoadOptions::from_cli(
         &["input=pump_V", "output=rpm", "time=t_est_s", "aux=egt_C"],
         None,
@@ -463,10 +464,6 @@ fn real_jetcat_run_a_loads_with_map_window_and_quality() {
 }
 
 // ---------------------------------------------------------------- the binary
-
-fn jetid(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().unwrap()
-}
 
 #[test]
 fn inspect_prints_a_good_file() {

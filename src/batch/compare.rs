@@ -1,4 +1,4 @@
-//! Stage 5 of the batch: every model of one output scored on the scored runs, beside the baselines,
+//! Stage 4 of the batch: every model of one output scored on the scored runs, beside the baselines,
 //! with the chirp's frequency responses and the Monte Carlo study (`core::compare`).
 use std::collections::BTreeMap;
 
@@ -13,7 +13,7 @@ use crate::core::run::Run;
 use crate::io::report::OutputReport;
 
 use super::Timings;
-use super::load::Runs;
+use crate::workflow::runs::Runs;
 
 /// Every model simulated on every scored run that records `output`, into `report.models`; why a
 /// failing one fails, into `report.failure_reasons`.

@@ -4,7 +4,7 @@ use crate::core::control::{ContinuousTf, OperatingPoint, d2c_zoh, identified_ran
 use crate::core::effects::ExtendedModel;
 use crate::core::numerics::stats::mean;
 
-use super::load::Runs;
+use crate::workflow::runs::Runs;
 
 /// Operating points of `model` and the ZOH equivalent of its linear block; what could not be
 /// computed goes to `notes`.

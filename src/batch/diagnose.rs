@@ -1,30 +1,28 @@
-//! Stage 4 of the batch: which missing effect or structure would help the final model most.
+//! Stage 3 of the batch: which missing effect or structure would help the final model most.
 use anyhow::Result;
 
 use crate::core::diagnose;
 use crate::core::effects::ExtendedModel;
 use crate::core::identification::pipeline::Identified;
-use crate::io::project::Project;
 use crate::io::report::DiagnosisEntry;
-
-use super::load::Runs;
+use crate::workflow::OutputPlan;
+use crate::workflow::runs::Runs;
 
 /// The diagnosis of `current` (report.json `diagnosis`, best first) and, in words, the candidates
 /// not tried and the structure note. `done` is that diagnosis when the missing-physics loop already
 /// made it (it ended on `current`): it is not computed twice.
 pub fn diagnose_output(
-    project: &Project,
+    plan: &OutputPlan,
     runs: &Runs,
     identified: &Identified,
     current: &ExtendedModel,
-    output: &str,
     done: Option<diagnose::DiagnosisReport>,
 ) -> Result<(Vec<DiagnosisEntry>, Vec<String>)> {
+    let output = plan.output.as_str();
     let validation = runs.validation_of(output);
-    let settings = project.settings_for(output);
     let report = match done {
         Some(report) => report,
-        None => diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &settings)?,
+        None => diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &plan.settings)?,
     };
     let skipped = report
         .skipped
@@ -37,7 +35,7 @@ pub fn diagnose_output(
         .entries
         .iter()
         .map(|d| DiagnosisEntry {
-            effect: d.effect.clone(),
+            effect: d.effect.to_string(),
             kind: d.kind.label().to_owned(),
             significant: d.significant,
             rmspe_before_pct: d.rmspe_before_pct,

@@ -1,60 +1,58 @@
-//! Stage 3 of the batch: the project's effects (`--add-effect`, `add_effects`) added in order.
-use anyhow::{Context, Result};
+//! Stage 2 of the batch: the project's effects (`add_effects`, then the `auto_effects` loop) added
+//! by the workflow, and the diagnosis of the final model.
+use anyhow::Result;
 
-use crate::core::diagnose::{EffectSequence, apply_in_order, auto_effects};
-use crate::core::effects::ExtendedModel;
 use crate::core::identification::pipeline::Identified;
-use crate::io::project::Project;
+use crate::io::report::DiagnosisEntry;
+use crate::workflow::model::{self, Effects, OutputPlan};
+use crate::workflow::runs::Runs;
 
-use super::load::Runs;
+use super::Timings;
+use super::diagnose::diagnose_output;
 
-/// The gray-box model of `output` with the project's effects, each refitted on the identification
-/// data, and the validation error after each step. An effect that cannot be added fails the batch;
-/// a step without a validation error is a note.
-pub fn apply_effects(
-    project: &Project,
+/// The final model's effects and what the diagnosis says of it.
+pub struct Built {
+    pub effects: Effects,
+    /// report.json `diagnosis`, best first.
+    pub diagnosis: Vec<DiagnosisEntry>,
+    /// The candidates not tried and what the trials were judged on, or why there is no diagnosis.
+    pub diagnosis_notes: Vec<String>,
+}
+
+/// The gray-box model of the plan's output with its effects, each refitted on the identification
+/// data, the validation error after each step, and the diagnosis of the result. An effect that
+/// cannot be added, or a loop that fails, fails the batch; a step without a validation error is a
+/// note (in `notes`, as the loop's rounds are).
+pub fn effects_and_diagnosis(
+    plan: &OutputPlan,
     runs: &Runs,
     identified: &Identified,
-    output: &str,
     notes: &mut Vec<String>,
-) -> Result<EffectSequence> {
-    let base = ExtendedModel::from_gray_box(&identified.model);
-    let settings = project.settings_for(output);
+    timings: &mut Timings,
+) -> Result<Built> {
+    let output = plan.output.as_str();
     let validation = runs.validation_of(output);
-    let mut sequence =
-        apply_in_order(&base, &project.add_effects, &runs.ident, &identified.fits, &settings, &validation);
-    if let Some((id, err)) = sequence.failed.take() {
-        return Err(err).with_context(|| format!("adding the effect '{id}' to '{output}'"));
-    }
-    if project.auto_effects > 0 {
-        let rounds = auto_effects(
-            &mut sequence,
-            project.auto_effects,
+    let mut effects = timings.time(&format!("effects_{output}"), || {
+        model::add_effects(
+            &identified.model,
+            &plan.effects,
             &runs.ident,
             &identified.fits,
-            &settings,
+            &plan.settings,
             &validation,
+            &mut |_| true,
         )
-        .with_context(|| format!("the missing-physics loop on '{output}'"))?;
-        if rounds.len() < project.auto_effects {
-            notes.push(format!(
-                "'{output}': the missing-physics loop stopped after {} of {} rounds: nothing further is significant",
-                rounds.len(),
-                project.auto_effects
-            ));
-        }
-        for round in &rounds {
-            notes.push(format!(
-                "'{output}': the loop added {} ({}): {:.3} % → {:.3} %; {}; {}",
-                round.added,
-                round.kind,
-                round.rmspe_before_pct,
-                round.rmspe_after_pct,
-                round.evidence,
-                round.significance
-            ));
-        }
-    }
-    notes.extend(sequence.history_gaps.iter().map(|gap| format!("'{output}': {gap}")));
-    Ok(sequence)
+    });
+    effects.check(output)?;
+    notes.extend(effects.notes(output, &plan.effects));
+    // The loop's last diagnosis is of the final model: it is not computed again.
+    let done = effects.sequence.final_diagnosis.take();
+    let diagnosis = timings.time(&format!("diagnosis_{output}"), || {
+        diagnose_output(plan, runs, identified, effects.model(), done)
+    });
+    let (diagnosis, diagnosis_notes) = match diagnosis {
+        Ok((entries, skipped)) => (entries, skipped),
+        Err(e) => (Vec::new(), vec![format!("diagnosis of '{output}': {e}")]),
+    };
+    Ok(Built { effects, diagnosis, diagnosis_notes })
 }

@@ -5,43 +5,79 @@ use std::path::Path;
 use std::collections::BTreeMap;
 
 use crate::core::compare::{FrequencyComparison, ModelKind, OutputModels};
-use crate::core::identification::pipeline::Identified;
+use crate::core::identification::pipeline::{GrayBoxModel, Identified};
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::core::numerics::metrics::BoxStats;
-use crate::core::numerics::tf::{BodePoint, log_space};
-use crate::core::run::Run;
+use crate::core::numerics::tf::BodePoint;
+use crate::core::run::{Channel, Run};
 use crate::io::figures::{self, BodeCurve, EmpiricalBode};
+use crate::workflow::products::bode_grid;
 
-/// Draw the figures of one output into `dir`; returns the file names written and notes on failures.
-pub fn output_figures(
-    dir: &Path,
-    output: &str,
-    identified: &Identified,
-    models: &OutputModels,
-    validation: &[&Run],
-    freq: Option<&FrequencyComparison>,
-    boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
-) -> (Vec<String>, Vec<String>) {
-    let (mut written, mut notes) = (Vec::new(), Vec::new());
-    let mut keep = |name: String, result: Result<(), figures::FigureError>| match result {
-        Ok(()) => written.push(name),
-        Err(e) => notes.push(format!("figure {name}: {e}")),
-    };
+/// What one output's figures show, computed before anything is drawn: the segment roots and
+/// clusters, every Bode curve, the static map over its steady points, each model's traces on the
+/// compared runs and the chirp's responses.
+pub struct OutputCurves<'a> {
+    identified: &'a Identified,
+    /// Every segment model's Bode curve and the reduced model's (emphasised).
+    bode: Vec<BodeCurve>,
+    /// f(v) over the range of the steady points.
+    static_map: Vec<(f64, f64)>,
+    /// Per compared run that records the output: the run, its measurement, each model's simulation.
+    traces: Vec<RunTraces<'a>>,
+    /// Each model's response to the chirp and the measured one, when there is a chirp run.
+    chirp: Option<ChirpCurves>,
+}
+
+/// A compared run with every model's simulation of it.
+struct RunTraces<'a> {
+    run: &'a Run,
+    measured: &'a Channel,
+    models: Vec<(String, Vec<f64>)>,
+}
+
+/// The chirp's measured response and every model's, by the same Welch estimate.
+struct ChirpCurves {
+    run: String,
+    curves: Vec<BodeCurve>,
+    measured: EmpiricalBode,
+}
+
+impl<'a> OutputCurves<'a> {
+    /// The curves of `identified`'s output and of every model in `models` on the runs `compared`.
+    pub fn of(
+        identified: &'a Identified,
+        models: &OutputModels,
+        compared: &[&'a Run],
+        freq: Option<&FrequencyComparison>,
+    ) -> Self {
+        let output = &identified.model.output;
+        let traces = compared
+            .iter()
+            .filter_map(|run| {
+                let measured = run.output(output)?;
+                let models = models
+                    .simulate_run(run)
+                    .into_iter()
+                    .map(|(kind, y)| (kind.label().to_owned(), y))
+                    .collect();
+                Some(RunTraces { run, measured, models })
+            })
+            .collect();
+        Self {
+            identified,
+            bode: bode_curves(identified),
+            static_map: static_map_curve(&identified.model),
+            traces,
+            chirp: freq.and_then(chirp_curves),
+        }
+    }
+}
+
+/// Segment models are in deviation units; the reduced model's curve is drawn beside them to compare
+/// shapes.
+fn bode_curves(identified: &Identified) -> Vec<BodeCurve> {
     let fits = &identified.fits;
-    let model = &identified.model;
-    let name = format!("{output}_zplane.png");
-    keep(
-        name.clone(),
-        figures::zplane_png(
-            &dir.join(&name),
-            &format!("{output}: segment poles/zeros and clusters"),
-            &fits.roots,
-            &identified.evals,
-            fits.dt_secs,
-        ),
-    );
-
-    let omegas = log_space(0.05, std::f64::consts::PI / fits.dt_secs, 256);
+    let omegas = bode_grid(fits.dt_secs);
     let mut curves: Vec<BodeCurve> = fits
         .models
         .iter()
@@ -52,116 +88,130 @@ pub fn output_figures(
             emphasis: false,
         })
         .collect();
-    // Segment models are in deviation units; scale the reduced model's curve to compare shapes.
     curves.push(BodeCurve {
         name: "reduced model".into(),
-        points: model.wiener.linear.tf.bode_response(&omegas),
+        points: identified.model.wiener.linear.tf.bode_response(&omegas),
         emphasis: true,
     });
-    let name = format!("{output}_bode.png");
-    keep(
-        name.clone(),
-        figures::bode_png(
-            &dir.join(&name),
-            &format!("{output}: segment models and the reduced model"),
-            &curves,
-            None,
-        ),
-    );
+    curves
+}
 
+/// f(v) at 101 points over the range of the steady points.
+fn static_map_curve(model: &GrayBoxModel) -> Vec<(f64, f64)> {
     let (lo, hi) = model
         .steady_points
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (v, _)| (a.min(*v), b.max(*v)));
-    let curve: Vec<(f64, f64)> =
-        (0..=100).map(|i| lo + (hi - lo) * i as f64 / 100.0).map(|v| (v, model.wiener.map.eval(v))).collect();
-    let name = format!("{output}_static_map.png");
+    (0..=100).map(|i| lo + (hi - lo) * i as f64 / 100.0).map(|v| (v, model.wiener.map.eval(v))).collect()
+}
+
+/// The chirp's curves, when the measured response is among them.
+fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
+    let measured = freq.responses.get("measured")?;
+    let curves = freq
+        .responses
+        .iter()
+        .filter(|(name, _)| name.as_str() != "measured")
+        .map(|(name, r)| BodeCurve {
+            name: model_label(name).to_owned(),
+            points: r
+                .omega_rad_s
+                .iter()
+                .zip(&r.mag_db)
+                .zip(&r.phase_deg)
+                .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
+                .collect(),
+            emphasis: name.as_str() == ModelKind::GrayBox.report_name(),
+        })
+        .collect();
+    let measured = EmpiricalBode {
+        omega_rad_s: measured.omega_rad_s.clone(),
+        mag_db: measured.mag_db.clone(),
+        phase_deg: measured.phase_deg.clone(),
+        coherence: measured.coherence.clone(),
+    };
+    Some(ChirpCurves { run: freq.run.clone(), curves, measured })
+}
+
+/// Draw the figures of one output into `dir`; returns the file names written and notes on failures.
+pub fn output_figures(
+    dir: &Path,
+    output: &str,
+    curves: &OutputCurves<'_>,
+    boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
+) -> (Vec<String>, Vec<String>) {
+    let (mut written, mut notes) = (Vec::new(), Vec::new());
+    let mut keep = |name: String, result: Result<(), figures::FigureError>| match result {
+        Ok(()) => written.push(name),
+        Err(e) => notes.push(format!("figure {name}: {e}")),
+    };
+    let (fits, model) = (&curves.identified.fits, &curves.identified.model);
+    let name = format!("{output}_zplane.png");
+    let title = format!("{output}: segment poles/zeros and clusters");
     keep(
         name.clone(),
-        figures::static_map_png(
-            &dir.join(&name),
-            &format!("{output}: static map f(v)"),
-            &model.steady_points,
-            &curve,
-            "v (linear block output)",
-            output,
-        ),
+        figures::zplane_png(&dir.join(&name), &title, &fits.roots, &curves.identified.evals, fits.dt_secs),
     );
-
-    for run in validation {
-        let Some(y) = run.output(output) else { continue };
-        let traces: Vec<(String, Vec<f64>)> =
-            models.simulate_run(run).into_iter().map(|(kind, y)| (kind.label().to_owned(), y)).collect();
+    let name = format!("{output}_bode.png");
+    let title = format!("{output}: segment models and the reduced model");
+    keep(name.clone(), figures::bode_png(&dir.join(&name), &title, &curves.bode, None));
+    let name = format!("{output}_static_map.png");
+    let title = format!("{output}: static map f(v)");
+    let v_label = "v (linear block output)";
+    let drawn = figures::static_map_png(
+        &dir.join(&name),
+        &title,
+        &model.steady_points,
+        &curves.static_map,
+        v_label,
+        output,
+    );
+    keep(name, drawn);
+    for traces in &curves.traces {
+        let run = traces.run;
         let name = format!("{output}_traces_{}.png", run.name);
-        keep(
-            name.clone(),
-            figures::traces_png(
-                &dir.join(&name),
-                &format!("{output} on '{}': every model from the input alone", run.name),
-                &run.t_secs,
-                &y.values,
-                &traces,
-                &figures::with_unit(output, &y.unit),
-            ),
+        let title = format!("{output} on '{}': every model from the input alone", run.name);
+        let y_label = figures::with_unit(output, &traces.measured.unit);
+        let drawn = figures::traces_png(
+            &dir.join(&name),
+            &title,
+            &run.t_secs,
+            &traces.measured.values,
+            &traces.models,
+            &y_label,
         );
+        keep(name, drawn);
     }
-
-    if let Some(freq) = freq
-        && let Some(measured) = freq.responses.get("measured")
-    {
-        let curves: Vec<BodeCurve> = freq
-            .responses
-            .iter()
-            .filter(|(name, _)| name.as_str() != "measured")
-            .map(|(name, r)| BodeCurve {
-                name: model_label(name).to_owned(),
-                points: r
-                    .omega_rad_s
-                    .iter()
-                    .zip(&r.mag_db)
-                    .zip(&r.phase_deg)
-                    .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
-                    .collect(),
-                emphasis: name.as_str() == ModelKind::GrayBox.report_name(),
-            })
-            .collect();
-        let empirical = EmpiricalBode {
-            omega_rad_s: measured.omega_rad_s.clone(),
-            mag_db: measured.mag_db.clone(),
-            phase_deg: measured.phase_deg.clone(),
-            coherence: measured.coherence.clone(),
-        };
+    if let Some(chirp) = &curves.chirp {
         let name = format!("{output}_bode_compare.png");
-        keep(
-            name.clone(),
-            figures::bode_png(
-                &dir.join(&name),
-                &format!("{output}: chirp '{}' measured vs every model (same Welch estimate)", freq.run),
-                &curves,
-                Some(&empirical),
-            ),
-        );
+        let title = format!("{output}: chirp '{}' measured vs every model (same Welch estimate)", chirp.run);
+        keep(name.clone(), figures::bode_png(&dir.join(&name), &title, &chirp.curves, Some(&chirp.measured)));
     }
+    if let Some((name, drawn)) = error_boxes_figure(dir, output, boxes) {
+        keep(name, drawn);
+    }
+    (written, notes)
+}
 
+/// The box plot of every model's percentage error on every run, when there are any.
+fn error_boxes_figure(
+    dir: &Path,
+    output: &str,
+    boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
+) -> Option<(String, Result<(), figures::FigureError>)> {
     let box_list: Vec<(String, BoxStats)> = boxes
         .iter()
         .flat_map(|(model, runs)| {
             runs.iter().map(move |(run, b)| (format!("{} / {run}", model_label(model)), *b))
         })
         .collect();
-    if !box_list.is_empty() {
-        let name = format!("{output}_error_boxes.png");
-        keep(
-            name.clone(),
-            figures::boxplot_png(
-                &dir.join(&name),
-                &format!("{output}: percentage error 100·(y − ŷ)/y per model and run"),
-                &box_list,
-                "error (%)",
-            ),
-        );
+    if box_list.is_empty() {
+        return None;
     }
-    (written, notes)
+    let name = format!("{output}_error_boxes.png");
+    let title = format!("{output}: percentage error 100·(y − ŷ)/y per model and run");
+    let drawn = figures::boxplot_png(&dir.join(&name), &title, &box_list, "error (%)");
+    Some((name, drawn))
 }
 
 /// The name people read for a model keyed by its report name.

@@ -1,4 +1,4 @@
-//! Stage 6 of the batch: report.json, report.md and model.json, and the summary on stdout.
+//! The last stage of the batch: report.json, report.md and model.json, and the summary on stdout.
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -6,13 +6,13 @@ use anyhow::Result;
 
 use crate::core::compare::OutputModels;
 use crate::core::identification::pipeline::Identified;
-use crate::io::model_file::{ModelFile, SignalInfo, write_model};
+use crate::io::model_file::{ModelFile, write_model};
 use crate::io::project::Project;
 use crate::io::report::{
     IdentSummary, OutputReport, REPORT_FORMAT_VERSION, Report, write_report_json, write_report_md,
 };
 
-use super::load::Runs;
+use crate::workflow::runs::Runs;
 
 /// The report's head, before any output is modelled.
 pub fn new_report(project: &Project, runs: &Runs, diagnostics: Vec<String>) -> Report {
@@ -28,14 +28,6 @@ pub fn new_report(project: &Project, runs: &Runs, diagnostics: Vec<String>) -> R
         figures: Vec::new(),
         diagnostics,
     }
-}
-
-/// The model file's head: the identification run's sample time and input.
-pub fn new_model_file(runs: &Runs) -> ModelFile {
-    ModelFile::new(
-        runs.ident.dt_secs,
-        SignalInfo { name: runs.ident.input.name.clone(), unit: runs.ident.input.unit.clone() },
-    )
 }
 
 /// The report of one output before it is scored: what was identified and how runs are started.
@@ -63,29 +55,21 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
     }
 }
 
-/// Write model.json, report.json and report.md to `out_dir` and print the scores.
-pub fn write_all(out_dir: &Path, model_file: &ModelFile, report: &Report) -> Result<()> {
+/// Write model.json, report.json and report.md to `out_dir`; returns the names of every file of the
+/// results (these three and the figures).
+pub fn write_all(out_dir: &Path, model_file: &ModelFile, report: &Report) -> Result<Vec<String>> {
     write_model(&out_dir.join("model.json"), model_file)?;
     write_report_json(&out_dir.join("report.json"), report)?;
     write_report_md(&out_dir.join("report.md"), report)?;
-    let written: Vec<String> = ["model.json", "report.json", "report.md"]
+    Ok(["model.json", "report.json", "report.md"]
         .into_iter()
         .map(str::to_owned)
         .chain(report.figures.iter().cloned())
-        .collect();
-    let removed = super::manifest::replace(out_dir, &written)?;
-    print_summary(report, out_dir);
-    if !removed.is_empty() {
-        println!(
-            "removed {} file(s) an earlier run wrote there and this one did not: {}",
-            removed.len(),
-            removed.join(", ")
-        );
-    }
-    Ok(())
+        .collect())
 }
 
-fn print_summary(report: &Report, out_dir: &Path) {
+/// The scores on stdout, where the results went and which stale files were removed.
+pub fn print_summary(report: &Report, out_dir: &Path, removed: &[String]) {
     for (output, o) in &report.outputs {
         for (model, runs) in &o.models {
             for (run, m) in runs {
@@ -97,4 +81,11 @@ fn print_summary(report: &Report, out_dir: &Path) {
         }
     }
     println!("wrote model.json, report.json and report.md to {}", out_dir.display());
+    if !removed.is_empty() {
+        println!(
+            "removed {} file(s) an earlier run wrote there and this one did not: {}",
+            removed.len(),
+            removed.join(", ")
+        );
+    }
 }

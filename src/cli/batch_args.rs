@@ -1,12 +1,15 @@
 //! The arguments of `jetid --batch` and the project they describe.
-use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use crate::core::effects::EffectId;
-use crate::io::project::{LoadSpec, Project, RunSource, bundled_project_path, load_project};
+use crate::io::project::Project;
+use crate::workflow::Overrides;
+
+/// Where results go unless `--out` says otherwise.
+const DEFAULT_OUT: &str = "jetid-out";
 
 #[derive(Debug, Args, Default, Clone)]
 pub struct BatchArgs {
@@ -52,7 +55,7 @@ pub struct BatchArgs {
     #[arg(long)]
     pub resample: bool,
     /// Where results go.
-    #[arg(long, default_value = "jetid-out")]
+    #[arg(long, default_value = DEFAULT_OUT)]
     pub out: PathBuf,
     /// Print no stage lines on stderr while the batch works.
     #[arg(long)]
@@ -60,69 +63,47 @@ pub struct BatchArgs {
 }
 
 impl BatchArgs {
+    /// What the command line overrides in the project.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            project: self.project.clone(),
+            ident: self.ident.clone(),
+            validate: self.validate.clone(),
+            held_out: self.held_out.clone(),
+            chirp: self.chirp.clone(),
+            steady: self.steady.clone(),
+            outputs: self.outputs.clone(),
+            add_effects: self.add_effects.clone(),
+            auto_effects: self.auto_effects,
+            maps: self.maps.clone(),
+            clusters_from: self.clusters_from.clone(),
+            sample_time: self.sample_time,
+            resample: self.resample,
+        }
+    }
+
     /// The project the command line asks for: the given file, else the bundled one, else none (when
     /// runs are given on the command line), with the command line's overrides applied.
     pub fn project(&self) -> Result<Project> {
-        let mut project = match (&self.project, &self.ident) {
-            (Some(path), _) => load_project(path)?,
-            (None, Some(_)) => Project {
-                name: "command line".into(),
-                ident: vec![],
-                validate: vec![],
-                held_out: vec![],
-                chirp: None,
-                steady: None,
-                outputs: vec![],
-                add_effects: vec![],
-                auto_effects: 0,
-                settings: BTreeMap::new(),
-                segments: BTreeMap::new(),
-                clusters: BTreeMap::new(),
-                clusters_from: None,
-                steps_from: None,
-            },
-            (None, None) => load_project(&bundled_project_path()?)?,
-        };
-        let cli_load = LoadSpec {
-            map: self.maps.clone(),
-            sample_time: self.sample_time,
-            resample: self.resample,
-            ..LoadSpec::default()
-        };
-        cli_load.to_options().context("command-line load options")?;
-        let cwd = PathBuf::from(".");
-        let src = |p: &PathBuf| RunSource { path: cwd.join(p), load: cli_load.clone() };
-        if let Some(p) = &self.ident {
-            project.ident = vec![src(p)];
-        }
-        if !self.validate.is_empty() {
-            project.validate = self.validate.iter().map(src).collect();
-        }
-        if !self.held_out.is_empty() {
-            project.held_out = self.held_out.iter().map(src).collect();
-        }
-        if let Some(rounds) = self.auto_effects {
-            project.auto_effects = rounds;
-        }
-        if let Some(p) = &self.chirp {
-            project.chirp = Some(src(p));
-        }
-        if let Some(p) = &self.steady {
-            project.steady = Some(src(p));
-        }
-        if !self.outputs.is_empty() {
-            project.outputs = self.outputs.clone();
-        }
-        project.add_effects.extend(self.add_effects.iter().cloned());
-        if let Some(p) = &self.clusters_from {
-            project.clusters_from = Some(p.clone());
-        }
-        if self.resample {
-            let sources = project.ident.iter_mut().chain(&mut project.validate).chain(&mut project.held_out);
-            for source in sources.chain(&mut project.chirp).chain(&mut project.steady) {
-                source.load.resample = true;
-            }
-        }
-        Ok(project)
+        self.overrides().project()
+    }
+
+    /// The options given that only a batch reads (for refusing them elsewhere), by their flags.
+    pub fn batch_only_flags(&self) -> Vec<&'static str> {
+        let given = [
+            ("--ident", self.ident.is_some()),
+            ("--validate", !self.validate.is_empty()),
+            ("--held-out", !self.held_out.is_empty()),
+            ("--chirp", self.chirp.is_some()),
+            ("--steady", self.steady.is_some()),
+            ("--auto-effects", self.auto_effects.is_some()),
+            ("--map", !self.maps.is_empty()),
+            ("--clusters", self.clusters_from.is_some()),
+            ("--sample-time", self.sample_time.is_some()),
+            ("--resample", self.resample),
+            ("--out", self.out != Path::new(DEFAULT_OUT)),
+            ("--quiet", self.quiet),
+        ];
+        given.into_iter().filter(|(_, set)| *set).map(|(flag, _)| flag).collect()
     }
 }

@@ -13,6 +13,9 @@ pub mod inspect;
 pub mod predict;
 pub mod simulate;
 
+/// The view `--screenshot` takes unless `--view` says otherwise.
+const DEFAULT_VIEW: &str = "data";
+
 #[derive(Debug, Parser)]
 #[command(name = "jetid", version, about = "Turbojet test-bench runs to control-oriented gray-box models")]
 #[command(args_conflicts_with_subcommands = true)]
@@ -28,7 +31,7 @@ pub struct Cli {
     pub screenshot: Option<PathBuf>,
     /// The view to capture with --screenshot: data, zplane, bode, static, traces, compare, diagnosis
     /// or failures (the Diagnosis view's "Where it fails" section).
-    #[arg(long, default_value = "data")]
+    #[arg(long, default_value = DEFAULT_VIEW)]
     pub view: String,
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -54,9 +57,17 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Predict(args)) => predict::run(&args),
         Some(Command::Export(args)) => export::run(&args),
         None if cli.batch => {
+            if cli.screenshot.is_some() {
+                anyhow::bail!("--screenshot takes a picture of the app; it cannot be combined with --batch");
+            }
             let project = cli.batch_args.project()?;
             crate::batch::run(project, &cli.batch_args.out, cli.batch_args.quiet)
         }
+        None if !cli.batch_args.batch_only_flags().is_empty() => anyhow::bail!(
+            "{} {} read only by a batch: add --batch to run one (the app and --screenshot take PROJECT, --output and --add-effect)",
+            cli.batch_args.batch_only_flags().join(", "),
+            if cli.batch_args.batch_only_flags().len() == 1 { "is" } else { "are" }
+        ),
         #[cfg(feature = "gui")]
         None if let Some(out) = &cli.screenshot => {
             // `--output NAME` picks the output the model views show (default: the first).
@@ -65,16 +76,20 @@ pub fn run(cli: Cli) -> Result<()> {
             let output = args.outputs.first().map(String::as_str);
             crate::ui::screenshot(out, &cli.view, output, args.project.as_deref(), &args.add_effects)
         }
-        None => run_app(),
+        None if cli.view != DEFAULT_VIEW => {
+            anyhow::bail!("--view {} chooses the view of --screenshot; give --screenshot OUT.png", cli.view)
+        }
+        None => run_app(&cli.batch_args),
     }
 }
 
 #[cfg(feature = "gui")]
-fn run_app() -> Result<()> {
-    crate::ui::run_app()
+fn run_app(args: &BatchArgs) -> Result<()> {
+    let output = args.outputs.first().map(String::as_str);
+    crate::ui::run_app(args.project.as_deref(), output, &args.add_effects)
 }
 
 #[cfg(not(feature = "gui"))]
-fn run_app() -> Result<()> {
+fn run_app(_: &BatchArgs) -> Result<()> {
     anyhow::bail!("this jetid was built without the desktop app (feature `gui`); use `jetid --batch`")
 }

@@ -2,6 +2,39 @@
 
 use serde::{Deserialize, Serialize};
 
+/// What a run is used for: the models are identified on the identification runs (joined end to end
+/// when there are several), chosen on the validation runs, and scored on the validation, held-out
+/// and chirp runs; the steady run gives the input noise of the Monte Carlo study.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunRole {
+    Identification,
+    Validation,
+    /// Scored beside the validation runs, never used to choose anything (the diagnosis, the
+    /// effects and the live error read only validation runs).
+    HeldOut,
+    Chirp,
+    Steady,
+}
+
+impl RunRole {
+    pub const ALL: [Self; 5] =
+        [Self::Identification, Self::Validation, Self::HeldOut, Self::Chirp, Self::Steady];
+
+    /// The roles whose runs every model is scored on, in the order the reports list them.
+    pub const SCORED: [Self; 3] = [Self::Validation, Self::HeldOut, Self::Chirp];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Identification => "identification",
+            Self::Validation => "validation",
+            Self::HeldOut => "held out",
+            Self::Chirp => "chirp",
+            Self::Steady => "steady",
+        }
+    }
+}
+
 /// One named signal with its unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Channel {

@@ -6,7 +6,6 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::identification::cluster::Cluster;
-use crate::core::identification::pipeline::GrayBoxModel;
 use crate::core::identification::refine::Refinement;
 use crate::core::identification::wiener::WienerModel;
 use crate::io::atomic::write_atomic;
@@ -63,29 +62,23 @@ impl ModelFile {
             outputs: Vec::new(),
         }
     }
-
-    pub fn push(&mut self, model: &GrayBoxModel, unit: &str) {
-        let tf = &model.wiener.linear.tf;
-        self.outputs.push(OutputModel {
-            name: model.output.clone(),
-            unit: unit.to_owned(),
-            wiener: model.wiener.clone(),
-            static_map_beta: model.wiener.map.beta(),
-            poles: tf.poles().unwrap_or_default(),
-            zeros: tf.zeros().unwrap_or_default(),
-            clusters: model.clusters.clone(),
-            refinement: model.refinement.clone(),
-            effects: Vec::new(),
-        });
-    }
 }
 
-/// The clusters of every output of a saved model, checked against the sample time they will be used
-/// with: a z-plane position means a different frequency at another sample time.
-pub fn clusters_from_model(
+/// What a saved model's output was built from: its clusters and the input dead time the linear
+/// block carries (part of the structure the clusters were chosen with).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SavedStructure {
+    pub clusters: Vec<Cluster>,
+    pub dead_time_samples: usize,
+}
+
+/// The clusters and dead time of every output of a saved model that has clusters, checked against
+/// the sample time they will be used with: a z-plane position means a different frequency at
+/// another sample time.
+pub fn structures_from_model(
     path: &Path,
     dt_secs: f64,
-) -> Result<std::collections::BTreeMap<String, Vec<Cluster>>> {
+) -> Result<std::collections::BTreeMap<String, SavedStructure>> {
     let model = read_model(path)?;
     if ((model.dt_secs - dt_secs) / dt_secs).abs() > 0.02 {
         bail!(
@@ -95,7 +88,15 @@ pub fn clusters_from_model(
             dt_secs
         );
     }
-    Ok(model.outputs.into_iter().filter(|o| !o.clusters.is_empty()).map(|o| (o.name, o.clusters)).collect())
+    Ok(model
+        .outputs
+        .into_iter()
+        .filter(|o| !o.clusters.is_empty())
+        .map(|o| {
+            let dead_time_samples = o.wiener.linear.tf.input_delay();
+            (o.name, SavedStructure { clusters: o.clusters, dead_time_samples })
+        })
+        .collect())
 }
 
 pub fn write_model(path: &Path, model: &ModelFile) -> Result<()> {

@@ -77,6 +77,29 @@ impl LoadSpec {
         Ok(options)
     }
 
+    /// `self` with the command line's options over it: a `--map` role replaces the same role of
+    /// `self`'s map (the outputs, or the auxiliary channels, as a list: giving one replaces them
+    /// all), a sample time replaces `self`'s, and `--resample` is added; `self`'s window, quality
+    /// column, sentinels and units stay.
+    pub fn with_command_line(&self, cli: &LoadSpec) -> Result<LoadSpec> {
+        use crate::io::csv_run::{MapSpec, Role};
+        let role = |spec: &String| spec.parse::<MapSpec>().map(|m| m.role);
+        let cli_roles = cli.map.iter().map(role).collect::<Result<Vec<Role>, _>>()?;
+        let mut map = Vec::new();
+        for spec in &self.map {
+            if !cli_roles.contains(&role(spec)?) {
+                map.push(spec.clone());
+            }
+        }
+        map.extend(cli.map.iter().cloned());
+        Ok(LoadSpec {
+            map,
+            sample_time: cli.sample_time.or(self.sample_time),
+            resample: self.resample || cli.resample,
+            ..self.clone()
+        })
+    }
+
     /// `self` with the fields `over` sets taken from `over`.
     fn overridden_by(&self, over: &LoadSpec) -> LoadSpec {
         LoadSpec {
@@ -186,6 +209,9 @@ pub struct Project {
     /// Channel the identification steps are detected on (default: the input), e.g. a set-point
     /// when the input is a closed-loop controller's output.
     pub steps_from: Option<String>,
+    /// How the project reads its runs unless a run says otherwise (its `[load]` table): runs
+    /// added on the command line are read this way too.
+    pub load: LoadSpec,
 }
 
 impl Project {
@@ -308,6 +334,7 @@ pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
             .transpose()
             .with_context(|| format!("project file {origin}"))?,
         steps_from: file.steps_from.clone(),
+        load: file.load.clone(),
     })
 }
 

@@ -2,7 +2,7 @@
 //! one place where commands change the session.
 use std::time::Instant;
 
-use crate::core::effects::EffectId;
+use crate::core::diagnose::TrialId;
 
 use crate::ui::derived::Derived;
 use crate::ui::derived::model_cache::IdentCache;
@@ -122,7 +122,11 @@ impl App {
             }
             Command::SetSegments(segments) => {
                 let status = if segments.is_some() { "Segments changed" } else { "Segments detected again" };
-                self.edit_setup(status, |setup| setup.segments = segments);
+                // The Data view's segments are every output's from now on.
+                self.edit_setup(status, |setup| {
+                    setup.segments = segments;
+                    setup.outputs.values_mut().for_each(|o| o.segments = None);
+                });
             }
             Command::SetClusters { output, clusters } => {
                 let status = Self::clusters_status(&output, clusters.as_ref().map(Vec::len));
@@ -135,8 +139,18 @@ impl App {
                 let status = format!("{output}: settings changed");
                 self.edit_setup(&status, |setup| setup.output_mut(&output).settings = settings);
             }
-            Command::ApplyEffect { output, effect } => self.apply_effect(&output, &effect),
-            Command::RemoveEffect { output, effect } => self.remove_effect(&output, &effect),
+            Command::ApplyEffect { output, trial } => self.apply_effect(&output, trial),
+            Command::RemoveEffect { output, effect } => {
+                let status = format!("{output}: effect {effect} removed");
+                self.edit_setup(&status, |setup| setup.output_mut(&output).effects.retain(|e| *e != effect));
+            }
+            Command::SetAutoEffects { output, rounds } => {
+                let status = match rounds {
+                    0 => format!("{output}: the missing-physics loop is off"),
+                    n => format!("{output}: the missing-physics loop runs {n} round(s)"),
+                };
+                self.edit_setup(&status, |setup| setup.output_mut(&output).auto_effects = rounds);
+            }
             Command::Undo => self.undo(),
             Command::Redo => self.redo(),
             Command::StartFresh => self.start_fresh(),
@@ -216,14 +230,15 @@ impl App {
         *self = fresh;
     }
 
-    /// Add a catalog effect to an output's setup (undoable); an unknown id is an error shown.
-    fn apply_effect(&mut self, output: &str, effect: &str) {
-        let effect: EffectId = match effect.parse() {
-            Ok(id) => id,
-            Err(err) => {
-                return self
-                    .push_error(&anyhow::Error::new(err).context(format!("adding an effect to {output}")));
-            }
+    /// Add what a trial adds to an output's setup (undoable): its catalog effect. A refinement
+    /// of the linear block or the map is no block: it is an error shown, with where to make it.
+    fn apply_effect(&mut self, output: &str, trial: TrialId) {
+        let Some(effect) = trial.as_effect() else {
+            let err = anyhow::anyhow!(
+                "{trial} changes the linear block or the static map itself: add or move a cluster on the \
+                 z-plane, or raise the map's order in the output's settings"
+            );
+            return self.push_error(&err.context(format!("adding {trial} to {output}")));
         };
         let status = format!("{output}: effect {effect} applied");
         self.edit_setup(&status, |setup| {
@@ -232,20 +247,6 @@ impl App {
                 effects.push(effect);
             }
         });
-    }
-
-    /// Take an effect out of an output's setup (undoable); an unknown id is an error shown.
-    fn remove_effect(&mut self, output: &str, effect: &str) {
-        let effect: EffectId = match effect.parse() {
-            Ok(id) => id,
-            Err(err) => {
-                return self.push_error(
-                    &anyhow::Error::new(err).context(format!("removing an effect from {output}")),
-                );
-            }
-        };
-        let status = format!("{output}: effect {effect} removed");
-        self.edit_setup(&status, |setup| setup.output_mut(output).effects.retain(|e| *e != effect));
     }
 
     fn reload_run(&mut self, index: usize, options: crate::io::csv_run::LoadOptions) {

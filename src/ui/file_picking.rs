@@ -4,7 +4,7 @@ use crate::ui::app::App;
 use crate::ui::file_dialog::{PendingPick, PickPoll, PickPurpose};
 use crate::ui::path_prompt::PathPrompt;
 use crate::ui::state::command::{Command, FileAction};
-use crate::ui::state::session::Role;
+use crate::ui::state::session::guess_role;
 
 impl App {
     /// A file action whose failure goes to the error window.
@@ -21,7 +21,7 @@ impl App {
         let path = prompt.path();
         match prompt.purpose {
             PickPurpose::Runs => {
-                let role = Role::guess_from_path(&path, &self.session);
+                let role = guess_role(&path, &self.session);
                 self.apply(Command::load(path, role));
             }
             PickPurpose::File(action) => {
@@ -87,7 +87,7 @@ impl App {
         self.view.status = None;
         for path in paths {
             let command = match purpose {
-                PickPurpose::Runs => Command::load(path.clone(), Role::guess_from_path(&path, &self.session)),
+                PickPurpose::Runs => Command::load(path.clone(), guess_role(&path, &self.session)),
                 PickPurpose::File(action) => action.command(path),
             };
             self.apply(command);

@@ -6,15 +6,13 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 
 use crate::io::atomic::write_atomic;
-use crate::io::model_file::{ModelFile, SignalInfo, read_model, write_model};
+use crate::io::model_file::{ModelFile, structures_from_model, write_model};
 use crate::io::project::load_project;
 use crate::ui::app::App;
 use crate::ui::project_io;
 use crate::ui::state::command::FileAction;
 use crate::ui::state::session::file_label;
-
-/// A model file's sample time may differ from the identification run's by this fraction.
-const DT_TOLERANCE: f64 = 0.02;
+use crate::workflow::model_file::{new_model_file, output_entry};
 
 impl App {
     /// Show an error until dismissed (and name it in the status bar).
@@ -57,8 +55,7 @@ impl App {
         let Some(ident) = &self.cache.ident else {
             bail!("there is no identification run, so there is no model");
         };
-        let input = SignalInfo { name: ident.run.input.name.clone(), unit: ident.run.input.unit.clone() };
-        let mut file = ModelFile::new(ident.run.dt_secs, input);
+        let mut file = new_model_file(&ident.run);
         let mut skipped = Vec::new();
         for output in &ident.outputs {
             let Ok(live) = &output.live else {
@@ -70,16 +67,7 @@ impl App {
                 skipped.push(format!("{} (its effects could not be added)", output.name));
                 continue;
             }
-            file.push(&live.model, &output.unit);
-            if let (Some(extended), Some(last)) = (&live.effects.model, file.outputs.last_mut()) {
-                // The effects are fitted together with the gain, roots and static map beside them.
-                let tf = &extended.wiener.linear.tf;
-                last.poles = tf.poles().unwrap_or_default();
-                last.zeros = tf.zeros().unwrap_or_default();
-                last.static_map_beta = extended.wiener.map.beta();
-                last.wiener = extended.wiener.clone();
-                last.effects = extended.records();
-            }
+            file.outputs.push(output_entry(&live.model, &live.current_model(), &output.unit));
         }
         if file.outputs.is_empty() {
             bail!("no output has a valid model ({})", skipped.join(", "));
@@ -91,34 +79,27 @@ impl App {
     /// undoable change; the model is fitted again on the session's runs.
     fn import_model(&mut self, path: &Path) -> Result<()> {
         self.refresh();
-        let clusters = read_model(path).and_then(|file| {
+        let clusters = (|| {
             let Some(ident) = &self.cache.ident else {
                 bail!("open an identification run first: clusters are fitted on it");
             };
-            let ratio = file.dt_secs / ident.run.dt_secs;
-            if (ratio - 1.0).abs() > DT_TOLERANCE {
-                bail!(
-                    "the model is sampled every {:.5} s but the identification run every {:.5} s",
-                    file.dt_secs,
-                    ident.run.dt_secs
-                );
-            }
-            let shared: Vec<_> = file
-                .outputs
-                .iter()
-                .filter(|o| ident.output(&o.name).is_some())
-                .map(|o| (o.name.clone(), o.clusters.clone(), o.wiener.linear.tf.input_delay()))
+            let saved = structures_from_model(path, ident.run.dt_secs)?;
+            let shared: Vec<_> = saved
+                .into_iter()
+                .filter(|(name, _)| ident.output(name).is_some())
+                .map(|(name, s)| (name, s.clusters, s.dead_time_samples))
                 .collect();
             if shared.is_empty() {
-                let in_file: Vec<&str> = file.outputs.iter().map(|o| o.name.as_str()).collect();
+                let in_file = crate::io::model_file::read_model(path)?;
+                let names: Vec<&str> = in_file.outputs.iter().map(|o| o.name.as_str()).collect();
                 bail!(
-                    "the model's outputs ({}) are not outputs of the identification run ({})",
-                    in_file.join(", "),
+                    "the model's outputs with clusters ({}) are not outputs of the identification run ({})",
+                    names.join(", "),
                     ident.outputs.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
                 );
             }
             Ok(shared)
-        });
+        })();
         let clusters = clusters.context("importing a model (the clusters were kept)")?;
         let names: Vec<String> = clusters.iter().map(|(name, _, _)| name.clone()).collect();
         let status = format!(

@@ -1,5 +1,6 @@
 //! The column-mapping dialog: pick which header column is time, input, output(s) and auxiliary
 //! channels, then load again with that [`ColumnMap`].
+use crate::core::run::RunRole;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
@@ -7,7 +8,7 @@ use egui::RichText;
 
 use crate::io::csv_run::{ColumnMap, LoadOptions};
 use crate::ui::state::command::Command;
-use crate::ui::state::session::{Role, file_label};
+use crate::ui::state::session::file_label;
 use crate::ui::theme;
 
 // Guesses that pre-fill the dialog (names lower-cased): the canonical names of CONTRACT.md and
@@ -28,7 +29,7 @@ fn looks_like_output(name: &str) -> bool {
 #[derive(Clone, Debug, PartialEq)]
 pub enum MappingTarget {
     /// A file that is not in the session yet.
-    New { path: PathBuf, role: Role },
+    New { path: PathBuf, role: RunRole },
     /// Session run `index`, read again.
     Existing { index: usize, path: PathBuf },
 }

@@ -28,7 +28,7 @@ pub mod widgets;
 pub use app::App;
 pub use derived::Derived;
 pub use state::command::Command;
-pub use state::session::{Role, SavedSession, Session};
+pub use state::session::{SavedSession, Session};
 pub use state::{Tab, ViewState};
 
 /// The `--screenshot --view` name of the Diagnosis view's "Where it fails" section.
@@ -51,12 +51,35 @@ pub fn bundled_sample_dir() -> Option<PathBuf> {
     candidates.into_iter().flatten().find(|dir| dir.is_dir())
 }
 
-/// `jetid` with no arguments: the desktop app, on the saved session or the bundled sample runs.
-pub fn run_app() -> Result<()> {
+/// `jetid` with no arguments: the desktop app, on the saved session or the bundled sample runs;
+/// `jetid PROJECT [--output NAME] [--add-effect ID]…` opens it on the project as File > Open project
+/// does, with the effects applied to every output (an error in them is returned before any window
+/// opens).
+pub fn run_app(
+    project: Option<&Path>,
+    output: Option<&str>,
+    add_effects: &[crate::core::effects::EffectId],
+) -> Result<()> {
+    let opened = match project {
+        Some(path) => Some(screenshot::app_on_project(path, add_effects)?),
+        None if !add_effects.is_empty() => Some(screenshot::app_on_project_or_samples(None, add_effects)?),
+        None => None,
+    };
     check_display()?;
     let options = native_options(None);
-    eframe::run_native("jetid", options, Box::new(|cc| Ok(Box::new(DesktopApp::new(cc)))))
-        .map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))
+    let output = output.map(ToOwned::to_owned);
+    eframe::run_native(
+        "jetid",
+        options,
+        Box::new(move |cc| {
+            let mut app = DesktopApp::new(cc, opened);
+            if output.is_some() {
+                app.app.view.output = output;
+            }
+            Ok(Box::new(app))
+        }),
+    )
+    .map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))
 }
 
 /// `jetid --screenshot OUT [--view NAME] [--output NAME] [PROJECT] [--add-effect ID]…`: a picture of
@@ -128,9 +151,13 @@ struct DesktopApp {
 }
 
 impl DesktopApp {
-    fn new(cc: &eframe::CreationContext<'_>) -> Self {
-        let saved: Option<SavedSession> = cc.storage.and_then(|s| eframe::get_value(s, STORAGE_KEY));
-        Self { app: App::startup(saved.as_ref()) }
+    /// The app `opened` on a project, else on the session saved last time.
+    fn new(cc: &eframe::CreationContext<'_>, opened: Option<App>) -> Self {
+        let app = opened.unwrap_or_else(|| {
+            let saved: Option<SavedSession> = cc.storage.and_then(|s| eframe::get_value(s, STORAGE_KEY));
+            App::startup(saved.as_ref())
+        });
+        Self { app }
     }
 }
 

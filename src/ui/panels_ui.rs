@@ -1,10 +1,11 @@
 //! The frame around the views: menu bar, run list, status bar, load-error window, empty-session
 //! hint. Each returns the commands the user asked for.
+use crate::core::run::RunRole;
 use egui::RichText;
 
 use crate::ui::state::ViewState;
 use crate::ui::state::command::{Command, FileAction};
-use crate::ui::state::session::{LoadFailure, Role, Session, file_label};
+use crate::ui::state::session::{LoadFailure, Session, file_label};
 use crate::ui::state::setup::History;
 use crate::ui::theme;
 use crate::ui::widgets::hint;
@@ -145,7 +146,7 @@ pub fn runs_panel_ui(ui: &mut egui::Ui, session: &Session, selected: Option<usiz
                     .selected_text(run.role.label())
                     .width(130.0)
                     .show_ui(ui, |ui| {
-                        for role in Role::ALL {
+                        for role in RunRole::ALL {
                             if ui.selectable_label(run.role == role, role.label()).clicked() {
                                 commands.push(Command::SetRole(i, role));
                             }

@@ -2,6 +2,7 @@
 //! from the session (runs with roles and load options, per-output settings, segments, clusters,
 //! effects as `add_effects`) in the same format, so `jetid --batch PROJECT` and File > Open
 //! project read it.
+use crate::core::run::RunRole;
 use std::collections::BTreeSet;
 use std::path::Path;
 
@@ -10,15 +11,17 @@ use anyhow::{Context, Result};
 use crate::core::effects::EffectId;
 use crate::io::csv_run::LoadOptions;
 use crate::io::project::{IdentEntry, LoadSpec, OutputSpec, Project, ProjectFile, RunEntry, RunSource};
-use crate::ui::state::session::{LoadFailure, Role, Session, SessionRun};
+use crate::ui::state::session::{LoadFailure, Session, SessionRun};
 use crate::ui::state::setup::{ModelSetup, OutputSetup};
+use crate::workflow::OutputPlan;
+use crate::workflow::runs::sources_by_role;
 
 /// The project file text for `session`, to be written at `project_path`; the notes say what a
 /// project file cannot hold (a second chirp or steady run).
 pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, Vec<String>)> {
     let base = project_path.parent().unwrap_or(Path::new(""));
     let mut notes = Vec::new();
-    let mut single = |role: Role| -> Option<RunEntry> {
+    let mut single = |role: RunRole| -> Option<RunEntry> {
         let mut runs = session.runs.iter().filter(|r| r.role == role);
         let first = runs.next().map(|r| run_entry(r, base));
         for extra in runs {
@@ -30,17 +33,22 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         }
         first
     };
-    let idents: Vec<RunEntry> =
-        session.runs.iter().filter(|r| r.role == Role::Identification).map(|r| run_entry(r, base)).collect();
-    let chirp = single(Role::Chirp);
-    let steady = single(Role::Steady);
+    let idents: Vec<RunEntry> = session
+        .runs
+        .iter()
+        .filter(|r| r.role == RunRole::Identification)
+        .map(|r| run_entry(r, base))
+        .collect();
+    let chirp = single(RunRole::Chirp);
+    let steady = single(RunRole::Steady);
     let validate =
-        session.runs.iter().filter(|r| r.role == Role::Validation).map(|r| run_entry(r, base)).collect();
+        session.runs.iter().filter(|r| r.role == RunRole::Validation).map(|r| run_entry(r, base)).collect();
     let outputs: Vec<String> = session
         .ident_run()
         .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
         .unwrap_or_default();
     let add_effects = shared_effects(&session.setup, &outputs, &mut notes);
+    let auto_effects = shared_rounds(&session.setup, &outputs, &mut notes);
     let names: BTreeSet<&String> = outputs.iter().chain(session.setup.outputs.keys()).collect();
     let output = names.into_iter().map(|name| (name.clone(), output_spec(&session.setup, name))).collect();
     let file = ProjectFile {
@@ -54,14 +62,14 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         held_out: session
             .runs
             .iter()
-            .filter(|r| r.role == Role::HeldOut)
+            .filter(|r| r.role == RunRole::HeldOut)
             .map(|r| run_entry(r, base))
             .collect(),
         chirp,
         steady,
         outputs,
         add_effects,
-        auto_effects: None,
+        auto_effects: (auto_effects > 0).then_some(auto_effects),
         clusters_from: None,
         steps_from: session.setup.steps_from.clone(),
         load: LoadSpec::default(),
@@ -91,6 +99,19 @@ fn shared_effects(setup: &ModelSetup, outputs: &[String], notes: &mut Vec<String
     shared
 }
 
+/// The rounds of the missing-physics loop to write as the project's `auto_effects`, which applies to
+/// every output: the most any output has, with a note when the outputs differ.
+fn shared_rounds(setup: &ModelSetup, outputs: &[String], notes: &mut Vec<String>) -> usize {
+    let rounds: Vec<usize> = outputs.iter().map(|o| setup.output(o).auto_effects).collect();
+    let most = rounds.iter().copied().max().unwrap_or(0);
+    if rounds.iter().any(|r| *r != most) {
+        notes.push(format!(
+            "a project's auto_effects applies to every output: saved as {most} rounds for all of them"
+        ));
+    }
+    most
+}
+
 fn run_entry(run: &SessionRun, base: &Path) -> RunEntry {
     let relative = run.path.strip_prefix(base).ok().filter(|p| !p.as_os_str().is_empty());
     let path = relative.unwrap_or(&run.path).to_string_lossy().into_owned();
@@ -112,7 +133,8 @@ fn load_spec(options: &LoadOptions) -> LoadSpec {
 }
 
 fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
-    let OutputSetup { settings, clusters, effects: _ } = setup.output(name);
+    let OutputSetup { settings, clusters, segments, effects: _, auto_effects: _ } = setup.output(name);
+    let segments = segments.or_else(|| setup.segments.clone());
     OutputSpec {
         na: Some(settings.orders.na),
         nb: Some(settings.orders.nb),
@@ -121,7 +143,7 @@ fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
         static_order: settings.static_order,
         min_segments: settings.cluster.min_segments,
         refine: Some(settings.refine),
-        segments: setup.segments.as_ref().map(|s| s.iter().map(|s| [s.start, s.step_at, s.end]).collect()),
+        segments: segments.map(|s| s.iter().map(|s| [s.start, s.step_at, s.end]).collect()),
         dead_time_samples: settings.dead_time_samples.filter(|_| clusters.is_some()),
         clusters,
         initial_state: Some(settings.initial_state),
@@ -130,19 +152,12 @@ fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
 }
 
 /// A session from a project: its runs read with their roles (those that fail are returned as
-/// failures) and its segments, settings and clusters.
+/// failures) and its segments, settings, clusters and effects (`add_effects` and `auto_effects`
+/// for every output the batch models).
 pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
     let mut session = Session::default();
     let mut failures = Vec::new();
-    let sources = project
-        .ident
-        .iter()
-        .map(|s| (s, Role::Identification))
-        .chain(project.validate.iter().map(|s| (s, Role::Validation)))
-        .chain(project.held_out.iter().map(|s| (s, Role::HeldOut)))
-        .chain(project.chirp.iter().map(|s| (s, Role::Chirp)))
-        .chain(project.steady.iter().map(|s| (s, Role::Steady)));
-    for (source, role) in sources {
+    for (source, role) in sources_by_role(project) {
         match load_source(source, role) {
             Ok(run) => session.runs.push(run),
             Err(failure) => failures.push(*failure),
@@ -150,20 +165,23 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
     }
     session.setup.segments = project.segments.values().next().cloned();
     session.setup.steps_from = project.steps_from.clone();
-    let names: BTreeSet<&String> = project.settings.keys().chain(project.clusters.keys()).collect();
+    let sections = project.settings.keys().chain(project.clusters.keys()).chain(project.segments.keys());
+    let names: BTreeSet<&String> = sections.collect();
     for name in names {
-        session.setup.outputs.insert(
-            name.clone(),
-            OutputSetup {
-                settings: project.settings_for(name),
-                clusters: project.clusters.get(name).cloned(),
-                effects: Vec::new(),
-            },
-        );
+        let plan = OutputPlan::of_project(project, name);
+        // Segments of its own only when they are not the ones the Data view shows.
+        let segments = plan.segments.filter(|s| Some(s) != session.setup.segments.as_ref());
+        let setup = OutputSetup {
+            settings: plan.settings,
+            clusters: plan.clusters,
+            segments,
+            ..OutputSetup::for_output(name)
+        };
+        session.setup.outputs.insert(name.clone(), setup);
     }
-    // `add_effects` applies to every output the batch models: the project's list, else every
-    // output of the identification run.
-    if !project.add_effects.is_empty() {
+    // The effects apply to every output the batch models: the project's list, else every output of
+    // the identification run.
+    if !project.add_effects.is_empty() || project.auto_effects > 0 {
         let outputs: Vec<String> = if project.outputs.is_empty() {
             session
                 .ident_run()
@@ -173,13 +191,15 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
             project.outputs.clone()
         };
         for output in outputs {
-            session.setup.output_mut(&output).effects = project.add_effects.clone();
+            let setup = session.setup.output_mut(&output);
+            setup.effects = project.add_effects.clone();
+            setup.auto_effects = project.auto_effects;
         }
     }
     (session, failures)
 }
 
-fn load_source(source: &RunSource, role: Role) -> Result<SessionRun, Box<LoadFailure>> {
+fn load_source(source: &RunSource, role: RunRole) -> Result<SessionRun, Box<LoadFailure>> {
     match source.load.to_options() {
         Ok(options) => SessionRun::load(&source.path, role, options),
         Err(err) => Err(Box::new(LoadFailure {

@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result, anyhow};
 
+use crate::core::diagnose::TrialId;
 use crate::core::effects::EffectId;
 
 use crate::ui::app::App;
@@ -23,10 +24,23 @@ const WARMUP: Duration = Duration::from_millis(600);
 /// training, are waited for; unoptimised builds take minutes).
 const TIMEOUT: Duration = Duration::from_secs(600);
 
-/// The app a screenshot shows: the bundled sample runs, or `project` opened as File > Open
-/// project does; then `add_effects` applied to every identified output, as the Apply button does.
-/// Errors (a project that cannot be opened, an unknown effect) are returned, not drawn.
+/// The app a screenshot shows: [`app_on_project_or_samples`], every model finished.
 pub fn screenshot_app(project: Option<&Path>, add_effects: &[EffectId]) -> Result<App> {
+    let mut app = app_on_project_or_samples(project, add_effects)?;
+    app.settle();
+    Ok(app)
+}
+
+/// The app on `project`, opened as File > Open project does, with `add_effects` applied to every
+/// output (the models are finished in the background).
+pub fn app_on_project(project: &Path, add_effects: &[EffectId]) -> Result<App> {
+    app_on_project_or_samples(Some(project), add_effects)
+}
+
+/// The app on the bundled sample runs, or `project` opened as File > Open project does; then
+/// `add_effects` applied to every identified output, as the Apply button does. Errors (a project
+/// that cannot be opened, an unknown effect) are returned, not drawn.
+pub fn app_on_project_or_samples(project: Option<&Path>, add_effects: &[EffectId]) -> Result<App> {
     let mut app = match project {
         None => App::startup(None),
         Some(path) => {
@@ -35,11 +49,14 @@ pub fn screenshot_app(project: Option<&Path>, add_effects: &[EffectId]) -> Resul
             app
         }
     };
-    app.settle();
+    if let Some(error) = app.view.errors.first() {
+        return Err(anyhow!("{error}"));
+    }
+    app.refresh();
     let outputs: Vec<String> = app.cache.output_names().into_iter().map(ToOwned::to_owned).collect();
     for effect in add_effects {
         for output in &outputs {
-            app.apply(Command::ApplyEffect { output: output.clone(), effect: effect.name().to_owned() });
+            app.apply(Command::ApplyEffect { output: output.clone(), trial: TrialId::Effect(*effect) });
         }
     }
     if let Some(error) = app.view.errors.first() {
@@ -49,7 +66,6 @@ pub fn screenshot_app(project: Option<&Path>, add_effects: &[EffectId]) -> Resul
         // Each Apply named its own output; the last one would name only the last output.
         app.view.status = Some(applied_status(add_effects, &outputs));
     }
-    app.settle();
     Ok(app)
 }
 

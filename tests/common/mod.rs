@@ -1,8 +1,7 @@
-//! Set-up shared by the integration tests: sample paths, noise, and the app under a test harness.
-//! Each test crate uses a part of it.
-#![allow(dead_code)]
-
+//! Set-up shared by the integration tests: sample paths, the binary, the real-data folder, noise,
+//! and the app under a test harness.
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -10,6 +9,20 @@ use rand_distr::{Distribution, Normal};
 /// A file or folder under the bundled `sample_runs/`.
 pub fn sample(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs").join(path)
+}
+
+/// Run the `jetid` binary with `args`.
+pub fn jetid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().expect("jetid runs")
+}
+
+/// The shared real-data folder `name` beside the repository (`../shared/realdata/NAME`; real data
+/// are never copied into the repository). Tests that need it are marked
+/// `#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]`: the build script sets
+/// `jetid_realdata` when the folder is there, so they run where the data exist and are listed as
+/// ignored, with the reason, where they do not.
+pub fn realdata(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/realdata").join(name)
 }
 
 /// `x` with seeded white Gaussian noise of standard deviation `sigma`.

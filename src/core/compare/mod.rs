@@ -24,8 +24,8 @@ pub use failure::failure_reasons;
 pub use model_kind::{ModelKind, PaperOutput, PaperRow};
 pub use models::{Cancelled, OutputModels, fit_baselines, fit_baselines_with_progress, scaled};
 pub use studies::{
-    FrequencyComparison, MonteCarloSummary, error_boxes, frequency_comparison, monte_carlo_all,
-    monte_carlo_for, monte_carlo_with_progress, noise_fits,
+    FrequencyComparison, MonteCarloSummary, chirp_grid, chirp_welch_options, error_boxes,
+    frequency_comparison, monte_carlo_all, monte_carlo_for, monte_carlo_with_progress, noise_fits,
 };
 
 /// The parts of [`compare_output`]'s progress: fitting the Hammerstein–Wiener model, training the

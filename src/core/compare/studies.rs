@@ -25,6 +25,24 @@ pub struct FrequencyComparison {
     pub responses: BTreeMap<String, EmpiricalResponse>,
 }
 
+/// Lowest frequency of the chirp's response grid, rad/s: below it a chirp of the paper's band
+/// (0.574–13.78 rad/s) holds too few periods for a Welch estimate.
+const CHIRP_LOWEST_OMEGA_RAD_S: f64 = 0.3;
+/// Points of the chirp's response grid, log-spaced to 0.9 × Nyquist.
+const CHIRP_GRID_POINTS: usize = 120;
+
+/// The frequencies the chirp's response is estimated at (those the chirp does not excite are
+/// dropped by [`chirp_welch_options`]), rad/s.
+pub fn chirp_grid(dt_secs: f64) -> Vec<f64> {
+    log_space(CHIRP_LOWEST_OMEGA_RAD_S, 0.9 * std::f64::consts::PI / dt_secs, CHIRP_GRID_POINTS)
+}
+
+/// The Welch estimate of a chirp's response: only frequencies whose input power reaches 1 % of the
+/// largest (outside the excited band the ratio of two noise spectra says nothing).
+pub fn chirp_welch_options() -> WelchOptions {
+    WelchOptions { excited_only: Some(0.01), ..WelchOptions::default() }
+}
+
 /// Empirical responses of the measured chirp and of every model's simulation of it.
 pub fn frequency_comparison(
     models: &OutputModels,
@@ -34,9 +52,8 @@ pub fn frequency_comparison(
 ) -> Option<FrequencyComparison> {
     let y = &chirp.output(output)?.values;
     let u = &chirp.input.values;
-    let nyquist = std::f64::consts::PI / chirp.dt_secs;
-    let omegas = log_space(0.3, 0.9 * nyquist, 120);
-    let opts = WelchOptions { excited_only: Some(0.01), ..WelchOptions::default() };
+    let omegas = chirp_grid(chirp.dt_secs);
+    let opts = chirp_welch_options();
     let mut responses = BTreeMap::new();
     let mut cutoff_rad_s = BTreeMap::new();
     let mut series = vec![("measured".to_owned(), y.clone())];

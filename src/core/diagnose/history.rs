@@ -6,7 +6,9 @@ use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::run::Run;
 
-use super::{DiagnoseError, DiagnosisKind, DiagnosisReport, apply, diagnose, validation_rmspe};
+use super::{
+    DiagnoseError, DiagnosisKind, DiagnosisReport, TrialId, apply, diagnose_with_progress, validation_rmspe,
+};
 
 /// The mean validation RMSPE of the model after one step ("base", "+thermal_soak", …).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -65,19 +67,18 @@ pub fn apply_in_order(
 
 /// One round of the missing-physics loop: what the diagnosis ranked first among the significant
 /// entries and was added, with its evidence.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct AutoRound {
-    /// The effect id or structural refinement added.
-    pub added: String,
-    /// "physics" or "structure".
-    pub kind: String,
+    /// The effect or structural refinement added.
+    pub added: TrialId,
+    /// Physics or structure.
+    pub kind: DiagnosisKind,
     /// Validation RMSPE before and after, %.
     pub rmspe_before_pct: f64,
     pub rmspe_after_pct: f64,
     /// The evidence sentence the diagnosis gave for it.
     pub evidence: String,
     /// What made it significant: the witnesses' tests, in words (see [`super::Comparison::words`]).
-    #[serde(default)]
     pub significance: String,
 }
 
@@ -85,6 +86,8 @@ pub struct AutoRound {
 /// top significant entry (physics or structure, already refitted on the identification data by the
 /// diagnosis), record the validation error, repeat. Stops early when nothing is significant; every
 /// choice is made on `validation`, so held-out runs stay a fair test. Returns the rounds taken.
+/// `progress` gets the fraction of the rounds done (0..=1); when it returns false the loop stops
+/// with [`DiagnoseError::Cancelled`].
 pub fn auto_effects(
     sequence: &mut EffectSequence,
     rounds: usize,
@@ -92,21 +95,20 @@ pub fn auto_effects(
     fits: &SegmentFits,
     settings: &OutputSettings,
     validation: &[&Run],
+    progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<Vec<AutoRound>, DiagnoseError> {
     let mut taken = Vec::new();
-    for _ in 0..rounds {
-        let report = diagnose(&sequence.model, ident, fits, validation, settings)?;
+    for round in 0..rounds {
+        let mut round_progress = |f: f64| progress((round as f64 + f) / rounds as f64);
+        let report =
+            diagnose_with_progress(&sequence.model, ident, fits, validation, settings, &mut round_progress)?;
         let Some(top) = report.entries.iter().find(|d| d.significant) else {
             sequence.final_diagnosis = Some(report);
             break;
         };
         taken.push(AutoRound {
-            added: top.effect.clone(),
-            kind: match top.kind {
-                DiagnosisKind::Physics => "physics",
-                DiagnosisKind::Structure => "structure",
-            }
-            .to_owned(),
+            added: top.effect,
+            kind: top.kind,
             rmspe_before_pct: top.rmspe_before_pct,
             rmspe_after_pct: top.rmspe_after_pct,
             evidence: top.evidence.clone(),

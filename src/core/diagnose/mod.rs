@@ -74,7 +74,7 @@ mod witness;
 pub use edit::{apply, remove};
 use held_out::{HeldOut, Recipe};
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
-pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, StructureRival};
+pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, StructureRival, TrialId};
 pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
 use witness::{Judge, Scores, Verdict};
 
@@ -277,7 +277,7 @@ pub fn diagnose_with_progress(
         let (model, words, after) = match trial {
             Ok(t) => t,
             Err(e) => {
-                skipped.push(SkippedEffect { effect: change.id().to_owned(), reason: e.to_string() });
+                skipped.push(SkippedEffect { effect: TrialId::Structure(change), reason: e.to_string() });
                 continue;
             }
         };
@@ -286,11 +286,11 @@ pub fn diagnose_with_progress(
             "{words}: with it the validation error goes from {rmspe_before_pct:.3} % to {rmspe_after_pct:.3} %"
         );
         if rival.as_ref().is_none_or(|(r, ..)| rmspe_after_pct < r.rmspe_pct) {
-            let r = StructureRival { id: change.id().to_owned(), rmspe_pct: rmspe_after_pct, test };
+            let r = StructureRival { id: change, rmspe_pct: rmspe_after_pct, test };
             rival = Some((r, after.clone(), Recipe::Structure(change)));
         }
         entries.push(Diagnosis {
-            effect: change.id().to_owned(),
+            effect: TrialId::Structure(change),
             kind: DiagnosisKind::Structure,
             physics: change.meaning().to_owned(),
             significant,
@@ -308,7 +308,7 @@ pub fn diagnose_with_progress(
             return Err(DiagnoseError::Cancelled);
         }
         if let Some(reason) = not_applicable(id, current, &all_runs) {
-            skipped.push(SkippedEffect { effect: id.name().to_owned(), reason });
+            skipped.push(SkippedEffect { effect: TrialId::Effect(id), reason });
             continue;
         }
         let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
@@ -319,7 +319,7 @@ pub fn diagnose_with_progress(
         let (model, after) = match trial {
             Ok(t) => t,
             Err(e) => {
-                skipped.push(SkippedEffect { effect: id.name().to_owned(), reason: e.to_string() });
+                skipped.push(SkippedEffect { effect: TrialId::Effect(id), reason: e.to_string() });
                 continue;
             }
         };
@@ -343,7 +343,7 @@ pub fn diagnose_with_progress(
             .as_ref()
             .is_none_or(|r| r.test.passes() || (evidence_says_dead_time && r.test.reduction > 0.0));
         entries.push(Diagnosis {
-            effect: id.name().to_owned(),
+            effect: TrialId::Effect(id),
             kind: DiagnosisKind::Physics,
             physics: id.physics().to_owned(),
             significant: beats_current && beats_structure && evidence.supports,

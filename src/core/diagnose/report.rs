@@ -1,10 +1,62 @@
 //! What a diagnosis hands back: the trials, ranked, with their tests and evidence.
+use std::fmt;
+
 use super::Comparison;
 use super::{FOLDS, MIN_HELD_OUT_SEGMENTS};
-use crate::core::effects::ExtendedModel;
+use crate::core::effects::{EffectId, ExtendedModel, StructuralChange};
+
+/// What a diagnosis trial adds to the model: a refinement of its own structure, or an effect of the
+/// catalog. Shown by its id (`extra_pole_pair`, `thermal_soak`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TrialId {
+    Structure(StructuralChange),
+    Effect(EffectId),
+}
+
+impl TrialId {
+    /// The id the reports and the app list it under.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Structure(change) => change.id(),
+            Self::Effect(id) => id.name(),
+        }
+    }
+
+    /// Physics or structure.
+    pub fn kind(self) -> DiagnosisKind {
+        match self {
+            Self::Structure(_) => DiagnosisKind::Structure,
+            Self::Effect(_) => DiagnosisKind::Physics,
+        }
+    }
+
+    /// The catalog effect that adds this as a block, when one does: every effect, and the
+    /// scheduled spool time constant, a refinement that is also a block. The other refinements
+    /// change the linear block or the map themselves (the clusters, the map's order).
+    pub fn as_effect(self) -> Option<EffectId> {
+        match self {
+            Self::Effect(id) => Some(id),
+            Self::Structure(StructuralChange::ScheduledTimeConstant) => Some(EffectId::ScheduledTimeConstant),
+            Self::Structure(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for TrialId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl serde::Serialize for TrialId {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
 
 /// Whether a trial adds physics (an effect of the catalog) or refines the model's own structure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum DiagnosisKind {
     /// An effect of the catalog.
     Physics,
@@ -23,11 +75,17 @@ impl DiagnosisKind {
     }
 }
 
+impl fmt::Display for DiagnosisKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
 /// The best structural refinement a physical effect was held against.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructureRival {
-    /// Id of the structural refinement (see [`StructuralChange::id`](crate::core::effects::StructuralChange::id)).
-    pub id: String,
+    /// The structural refinement.
+    pub id: StructuralChange,
     /// Its validation error, %.
     pub rmspe_pct: f64,
     /// The test of "the effect is no better than this refinement", with the share of the
@@ -38,8 +96,8 @@ pub struct StructureRival {
 /// One trial: the fitted extension, its validation score and the evidence.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diagnosis {
-    /// Catalog id of the effect, or the id of the structural refinement.
-    pub effect: String,
+    /// The effect of the catalog or the structural refinement tried.
+    pub effect: TrialId,
     /// Physics or structure.
     pub kind: DiagnosisKind,
     /// What the effect means physically.
@@ -71,8 +129,8 @@ impl Diagnosis {
 /// An effect that was not tried, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkippedEffect {
-    /// Catalog id of the effect.
-    pub effect: String,
+    /// The effect or refinement not tried.
+    pub effect: TrialId,
     /// Why it was not tried, in words.
     pub reason: String,
 }

@@ -24,7 +24,7 @@ use crate::core::identification::structure::root_words;
 const ZERO_GUESSES: [f64; 5] = [0.9, 0.6, 0.3, 0.0, -0.5];
 
 /// A refinement of the model's structure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum StructuralChange {
     RealPole,
     PolePair,
@@ -67,6 +67,12 @@ impl StructuralChange {
                  is slower at low speed)"
             }
         }
+    }
+}
+
+impl std::fmt::Display for StructuralChange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.id())
     }
 }
 

@@ -455,7 +455,9 @@ pub fn live_update_proposed(
     live_result(model, evals, fits, settings, validation, omegas_rad_s)
 }
 
-fn live_result(
+/// What the app redraws for a built model: its simulation and the linear block's of every run
+/// (started as `settings.initial_state` says), and its Bode at `omegas_rad_s`.
+pub fn live_result(
     model: GrayBoxModel,
     evals: Vec<ClusterEval>,
     fits: &SegmentFits,
@@ -479,6 +481,38 @@ fn live_result(
     Ok(LiveResult { model, evals, predictions, linear, bode })
 }
 
+/// Where a model's structure comes from: clusters the user (or a project) gives, or the automatic
+/// proposal for the segment fits (its clusters with its dead time, or its direct fit).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelSource {
+    Clusters(Vec<Cluster>),
+    Proposal(std::sync::Arc<Proposal>),
+}
+
+impl ModelSource {
+    /// The clusters the model is drawn from (the proposal's kept clusters).
+    pub fn clusters(&self) -> Vec<Cluster> {
+        match self {
+            Self::Clusters(clusters) => clusters.clone(),
+            Self::Proposal(proposal) => proposal.clusters.clone(),
+        }
+    }
+
+    /// The model of this source on the identification range (see [`build_gray_box`] and
+    /// [`build_proposed`]).
+    pub fn build(
+        &self,
+        fits: &SegmentFits,
+        ident: &Run,
+        settings: &OutputSettings,
+    ) -> Result<(GrayBoxModel, Vec<ClusterEval>), PipelineError> {
+        match self {
+            Self::Clusters(clusters) => build_gray_box(fits, ident, clusters, settings),
+            Self::Proposal(proposal) => build_proposed(fits, ident, proposal, settings),
+        }
+    }
+}
+
 /// Segments → fits → clusters (given or automatic) → model, for one output.
 pub struct Identified {
     pub fits: SegmentFits,
@@ -488,6 +522,8 @@ pub struct Identified {
     pub proposal: Option<Proposal>,
 }
 
+/// The model of one output: the segment fits, then the given clusters or the automatic proposal,
+/// then the model of that [`ModelSource`].
 pub fn identify_output(
     ident: &Run,
     output: &str,
@@ -496,17 +532,16 @@ pub fn identify_output(
     clusters: Option<&[Cluster]>,
 ) -> Result<Identified, PipelineError> {
     let fits = fit_segments_for(ident, output, segments, settings)?;
-    match clusters {
-        Some(c) => {
-            let (model, evals) = build_gray_box(&fits, ident, c, settings)?;
-            Ok(Identified { fits, model, evals, proposal: None })
-        }
-        None => {
-            let proposal = propose(&fits, ident, settings)?;
-            let (model, evals) = build_proposed(&fits, ident, &proposal, settings)?;
-            Ok(Identified { fits, model, evals, proposal: Some(proposal) })
-        }
-    }
+    let source = match clusters {
+        Some(c) => ModelSource::Clusters(c.to_vec()),
+        None => ModelSource::Proposal(std::sync::Arc::new(propose(&fits, ident, settings)?)),
+    };
+    let (model, evals) = source.build(&fits, ident, settings)?;
+    let proposal = match source {
+        ModelSource::Proposal(p) => Some(std::sync::Arc::unwrap_or_clone(p)),
+        ModelSource::Clusters(_) => None,
+    };
+    Ok(Identified { fits, model, evals, proposal })
 }
 
 /// The static map as the paper prints it: β0, β1, … (for reports).

@@ -1,12 +1,15 @@
-//! Which runs a model is identified on and scored on: the session's identification runs joined end
-//! to end, their segments, and the validation, held-out and chirp runs on the identification grid.
+//! Which runs a model is identified on and scored on, from the session: its identification runs
+//! joined end to end, their segments, and the validation, held-out and chirp runs on the
+//! identification grid, each decided by the workflow's step ([`crate::workflow::runs`]) the batch
+//! takes too.
 use std::sync::Arc;
 
-use crate::core::identification::pipeline::{segments_for, step_signal};
-use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
-use crate::core::run::{Run, join_runs};
-use crate::ui::derived::model_cache::DT_TOLERANCE;
-use crate::ui::state::session::{Role, Session};
+use crate::core::identification::segment::Segment;
+use crate::core::run::{Run, RunRole};
+use crate::ui::state::session::Session;
+use crate::workflow::runs::{
+    Grid, grid_of, join_identification as join, resample_note, resampled_onto, segments,
+};
 
 /// The identification run from the session's identification runs: the one, or all of them joined
 /// end to end with the junctions (what the batch does with a project's); when they cannot be joined,
@@ -18,7 +21,7 @@ pub(super) fn join_identification(sources: &[Arc<Run>]) -> Option<(Arc<Run>, Vec
     }
     let names: Vec<&str> = sources.iter().map(|r| r.name.as_str()).collect();
     let runs: Vec<Run> = sources.iter().map(|r| Run::clone(r)).collect();
-    Some(match join_runs(&runs) {
+    Some(match join(&runs) {
         Ok((joined, junctions)) => (
             Arc::new(joined),
             junctions,
@@ -46,15 +49,9 @@ pub(super) fn detect_or_check(
     given: Option<&[Segment]>,
     steps_from: Option<&str>,
 ) -> Result<Vec<Segment>, String> {
-    if given.is_some() {
-        return segments_for(run, given, &SegmentSettings::default()).map_err(|e| e.to_string());
-    }
-    let signal = step_signal(run, steps_from).map_err(|e| e.to_string())?;
-    auto_segments_joined(signal, junctions, run.dt_secs, &SegmentSettings::default()).map_err(|e| {
-        match steps_from {
-            Some(name) => format!("segmentation of '{}' on {name}: {e}", run.name),
-            None => e.to_string(),
-        }
+    segments(run, junctions, given, steps_from).map_err(|e| match steps_from {
+        Some(name) if given.is_none() => format!("{e} (steps detected on {name})"),
+        _ => e.to_string(),
     })
 }
 
@@ -63,7 +60,7 @@ pub(super) fn detect_or_check(
 pub(super) struct ScoredSource {
     /// Index of the run in the session.
     pub(super) index: usize,
-    pub(super) role: Role,
+    pub(super) role: RunRole,
     /// The run as scored (on the identification run's grid).
     pub(super) run: Arc<Run>,
     /// The session's run it was made from.
@@ -84,42 +81,40 @@ pub(super) fn scored_runs(
 ) -> Vec<ScoredSource> {
     notes.clear();
     let mut scored = Vec::new();
-    for role in [Role::Validation, Role::HeldOut, Role::Chirp] {
+    for role in RunRole::SCORED {
         for (index, entry) in session.runs.iter().enumerate().filter(|(_, r)| r.role == role) {
             let name = entry.display_name();
-            let off_grid = (entry.run.dt_secs / ident.dt_secs - 1.0).abs() > DT_TOLERANCE;
             if entry.run.output(output).is_none() {
                 notes.push(format!("{} run {name} has no {output} column; not scored", role.label()));
-            } else if off_grid && entry.options.resample {
-                notes.push(format!(
-                    "{} run {name}: resampled again from {:.5} s onto the identification run's {:.5} s grid",
-                    role.label(),
-                    entry.run.dt_secs,
-                    ident.dt_secs
-                ));
-                let kept = previous.iter().find(|p| {
-                    Arc::ptr_eq(&p.source, &entry.run)
-                        && (p.run.dt_secs - ident.dt_secs).abs() <= f64::EPSILON * ident.dt_secs
-                });
-                let run =
-                    kept.map_or_else(|| Arc::new(entry.run.resampled(ident.dt_secs)), |p| Arc::clone(&p.run));
-                scored.push(ScoredSource { index, role, run, source: Arc::clone(&entry.run) });
-            } else if off_grid {
-                notes.push(format!(
-                    "{} run {name} is sampled every {:.4} s, the identification run every {:.4} s; not scored \
-                     (the load option \"resample\" puts it on the identification run's grid)",
-                    role.label(),
-                    entry.run.dt_secs,
-                    ident.dt_secs
-                ));
-            } else {
-                scored.push(ScoredSource {
-                    index,
-                    role,
-                    run: Arc::clone(&entry.run),
-                    source: Arc::clone(&entry.run),
-                });
+                continue;
             }
+            let run = match grid_of(&entry.run, ident.dt_secs, entry.options.resample) {
+                Grid::On => Arc::clone(&entry.run),
+                Grid::Resample => {
+                    let kept = previous.iter().find(|p| {
+                        Arc::ptr_eq(&p.source, &entry.run)
+                            && (p.run.dt_secs - ident.dt_secs).abs() <= f64::EPSILON * ident.dt_secs
+                    });
+                    let (run, note) = match kept {
+                        Some(kept) => (Arc::clone(&kept.run), resample_note(&entry.run, ident.dt_secs)),
+                        None => {
+                            let (run, note) = resampled_onto(&entry.run, ident.dt_secs);
+                            (Arc::new(run), note)
+                        }
+                    };
+                    notes.push(note);
+                    run
+                }
+                Grid::Off(off_grid) => {
+                    notes.push(format!(
+                        "{} run {name}: not scored: {off_grid} (the load option \"resample\" puts it on the \
+                         identification run's grid)",
+                        role.label()
+                    ));
+                    continue;
+                }
+            };
+            scored.push(ScoredSource { index, role, run, source: Arc::clone(&entry.run) });
         }
     }
     scored

@@ -8,11 +8,25 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::{Duration, Instant};
 
-/// The message of a job the user cancelled.
-pub const CANCELLED: &str = "cancelled";
+/// Why a job has no value.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum JobError {
+    /// The user cancelled it (or the job was dropped for a newer one).
+    #[error("cancelled")]
+    Cancelled,
+    /// The work failed, with a message for the user.
+    #[error("{0}")]
+    Failed(String),
+}
 
-/// What a job's work returns: its value, or a message for the user.
-pub type JobResult<T> = Result<T, String>;
+impl From<String> for JobError {
+    fn from(message: String) -> Self {
+        Self::Failed(message)
+    }
+}
+
+/// What a job's work returns: its value, or why there is none.
+pub type JobResult<T> = Result<T, JobError>;
 
 /// Work running on its own thread.
 pub struct Job<T> {
@@ -48,7 +62,7 @@ impl<T: Send + 'static> Job<T> {
             };
             let outcome = work(&mut report);
             let outcome =
-                if worker_cancel.load(Ordering::Relaxed) { Err(CANCELLED.to_owned()) } else { outcome };
+                if worker_cancel.load(Ordering::Relaxed) { Err(JobError::Cancelled) } else { outcome };
             // The receiver is gone when the job was dropped; nobody wants the result then.
             let _ = tx.send(outcome);
             repaint();
@@ -57,7 +71,7 @@ impl<T: Send + 'static> Job<T> {
             Ok(_) => rx,
             Err(err) => {
                 let (tx, rx) = mpsc::channel();
-                let _ = tx.send(Err(format!("could not start a worker thread: {err}")));
+                let _ = tx.send(Err(JobError::Failed(format!("could not start a worker thread: {err}"))));
                 rx
             }
         };
@@ -80,7 +94,7 @@ impl<T> Job<T> {
         self.started.elapsed()
     }
 
-    /// Ask the work to stop; its result will be [`CANCELLED`].
+    /// Ask the work to stop; its result will be [`JobError::Cancelled`].
     pub fn cancel(&self) {
         self.cancel.store(true, Ordering::Relaxed);
     }
@@ -94,14 +108,25 @@ impl<T> Job<T> {
         match self.result.try_recv() {
             Ok(result) => Some(result),
             Err(TryRecvError::Empty) => None,
-            Err(TryRecvError::Disconnected) => Some(Err("the worker thread stopped without a result".into())),
+            Err(TryRecvError::Disconnected) => Some(Err(stopped())),
         }
     }
 
     /// Block until the work ends (for tests and screenshots, never in a frame).
     pub fn wait(self) -> JobResult<T> {
-        self.result.recv().unwrap_or_else(|_| Err("the worker thread stopped without a result".into()))
+        self.result.recv().unwrap_or_else(|_| Err(stopped()))
     }
+}
+
+impl<T> Drop for Job<T> {
+    /// A job nobody holds any more (its result was for a model nobody shows) stops its work.
+    fn drop(&mut self) {
+        self.cancel();
+    }
+}
+
+fn stopped() -> JobError {
+    JobError::Failed("the worker thread stopped without a result".into())
 }
 
 #[cfg(test)]
@@ -136,7 +161,7 @@ mod tests {
             "wait",
             || {},
             move |progress| {
-                go_rx.recv().map_err(|e| e.to_string())?;
+                go_rx.recv().map_err(|e| JobError::Failed(e.to_string()))?;
                 let keep_going = progress(0.5);
                 Ok(keep_going)
             },
@@ -144,13 +169,14 @@ mod tests {
         job.cancel();
         assert!(job.is_cancelled());
         go_tx.send(()).unwrap();
-        assert_eq!(job.wait(), Err(CANCELLED.to_owned()));
+        assert_eq!(job.wait(), Err(JobError::Cancelled));
     }
 
     #[test]
     fn poll_is_none_while_the_work_runs() {
         let (go_tx, go_rx) = mpsc::channel::<()>();
-        let job = Job::spawn("wait", || {}, move |_| go_rx.recv().map_err(|e| e.to_string()));
+        let job =
+            Job::spawn("wait", || {}, move |_| go_rx.recv().map_err(|e| JobError::Failed(e.to_string())));
         assert!(job.poll().is_none());
         go_tx.send(()).unwrap();
         assert_eq!(job.wait(), Ok(()));

@@ -1,11 +1,52 @@
 //! The committed or previewed model of one output as every view shows it: the gray-box model, its
-//! effects, its Bode and its simulation of every scored run.
-use crate::core::effects::EffectRecord;
+//! effects (added by hand and by the missing-physics loop, see [`crate::workflow::model`]), its
+//! Bode and its simulation of every scored run.
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::core::diagnose::{AutoRound, HistoryStep};
+use crate::core::effects::{EffectRecord, ExtendedModel};
 use crate::core::identification::pipeline::{GrayBoxModel, RunPrediction};
 use crate::core::identification::wiener::WienerModel;
 use crate::core::numerics::tf::BodePoint;
-use crate::ui::derived::diagnosis_model::EffectsOutcome;
-use crate::ui::state::session::Role;
+use crate::core::run::RunRole;
+use crate::workflow::EffectPlan;
+
+/// Every live model gets its own id, so that results computed for a model (the diagnosis, the
+/// residual analysis) can tell when they are stale.
+static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(1);
+
+/// A new model id.
+pub fn next_model_id() -> u64 {
+    NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed)
+}
+
+/// The effects of one output's model.
+#[derive(Clone, Debug, Default)]
+pub struct EffectsOutcome {
+    /// What the setup asks for: effects by hand, in the order they were applied, then the rounds of
+    /// the missing-physics loop.
+    pub requested: EffectPlan,
+    /// The gray-box model with every effect added and refitted; `None` without effects, during a
+    /// drag preview, or when an effect could not be added.
+    pub model: Option<ExtendedModel>,
+    /// Validation RMSPE (mean over the validation runs) after each step: base, +effect, …
+    pub history: Vec<HistoryStep>,
+    /// What each round of the loop added.
+    pub rounds: Vec<AutoRound>,
+    /// What the loop did, in words (the batch's notes).
+    pub notes: Vec<String>,
+    /// What went wrong (an effect that could not be added, a run the model cannot simulate).
+    pub problems: Vec<String>,
+    /// The model is a drag preview: the effects are left out until the drag is committed.
+    pub left_out_for_preview: bool,
+}
+
+impl EffectsOutcome {
+    /// True when the setup asks for effects but the model shown does not (fully) hold them.
+    pub fn incomplete(&self) -> bool {
+        !self.requested.is_empty() && (self.model.is_none() || !self.problems.is_empty())
+    }
+}
 
 /// A model's simulation of one scored run.
 #[derive(Clone, Debug)]
@@ -13,7 +54,7 @@ pub struct ScoredRun {
     /// Index of the run in the session.
     pub index: usize,
     pub name: String,
-    pub role: Role,
+    pub role: RunRole,
     /// The model's simulation: the gray-box model with its effects, when it has any.
     pub gray_box: RunPrediction,
     /// The gray-box model without its effects (only when effects are in the model).
@@ -39,7 +80,7 @@ impl ScoredRun {
 /// The live path's result for one set of clusters.
 #[derive(Clone, Debug)]
 pub struct LiveModel {
-    /// Tells this model from every other one (see [`crate::ui::derived::diagnosis_model::next_model_id`]).
+    /// Tells this model from every other one (see [`next_model_id`]).
     pub id: u64,
     pub model: GrayBoxModel,
     /// The effects added to the model, the model with them and the error history.
@@ -76,17 +117,14 @@ impl LiveModel {
         let values: Vec<f64> = self
             .runs
             .iter()
-            .filter(|r| r.role == Role::Validation)
+            .filter(|r| r.role == RunRole::Validation)
             .map(|r| r.gray_box.metrics.rmspe_pct)
             .collect();
         (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
     }
 
     /// The model as the views show it: with its effects when they could be added.
-    pub fn current_model(&self) -> crate::core::effects::ExtendedModel {
-        self.effects
-            .model
-            .clone()
-            .unwrap_or_else(|| crate::core::effects::ExtendedModel::from_gray_box(&self.model))
+    pub fn current_model(&self) -> ExtendedModel {
+        self.effects.model.clone().unwrap_or_else(|| ExtendedModel::from_gray_box(&self.model))
     }
 }

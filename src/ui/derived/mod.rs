@@ -1,6 +1,9 @@
 //! Data computed from the session and recomputed when its revision changes: the plot traces of
-//! each run and the identification (see [`model_cache`](super::model_cache)), plus the live preview
-//! of a cluster drag.
+//! each run and the identification (see [`model_cache`]), plus the live preview of a cluster drag.
+//! Every model is built by the workflow's steps ([`crate::workflow`]), as the batch builds it.
+//!
+//! The modules import one way: `jobs` and `live_model` (the data) ← `ident_runs`,
+//! `empirical_bode`, `model_build`, `diagnosis_model`, `residuals` ← `model_cache` ← this one.
 pub mod diagnosis_model;
 pub mod empirical_bode;
 mod ident_runs;
@@ -130,8 +133,11 @@ impl Derived {
         if self.preview.as_ref().is_some_and(|p| p.output == output && p.clusters == clusters) {
             return false;
         }
-        self.preview =
-            self.ident.as_ref().and_then(|ident| Preview::compute(ident, output, clusters.to_vec()));
+        self.preview = self.ident.as_ref().and_then(|ident| {
+            let cache = ident.output(output)?;
+            let inputs = cache.inputs(&ident.run);
+            Some(Preview::compute(&inputs, output, clusters.to_vec(), &cache.preview_settings()))
+        });
         true
     }
 

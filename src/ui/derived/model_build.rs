@@ -1,39 +1,24 @@
 //! One output's model built from its cache: the committed model (the user's clusters or the
-//! automatic proposal's model, polished and with its effects) and, while a cluster is dragged, the
-//! [`Preview`] that runs the live path on the dragged clusters every frame without polishing the
-//! centroids (`refine = false`) and without the effects.
+//! automatic proposal's model, polished, with its effects and the missing-physics loop) and, while a
+//! cluster is dragged, the [`Preview`] that builds the model of the dragged clusters every frame
+//! without polishing the centroids (`refine = false`) and without the effects. Each step is the
+//! workflow's ([`crate::workflow::model`]), as in the batch.
 //!
 //! Everything a build needs is owned ([`ModelInputs`]), so the committed model can be finished on a
-//! worker thread (see [`OutputCache`](super::model_cache::OutputCache)); the effects are added as in
-//! [`diagnosis_model`](super::diagnosis_model).
+//! worker thread (see `model_cache::OutputCache`), with the loop's progress.
+//!
+//! While a cluster is dragged the preview shows the gray-box model **without** its effects (and
+//! says so): refitting the effects every frame would be too slow, and the effect parameters fitted
+//! for the previous Wiener part do not fit a moved one (the ambient correction, for one, changes
+//! the units the gain is fitted in). The effects are refitted once the drag is committed.
 use std::sync::Arc;
 
-use crate::core::effects::EffectId;
 use crate::core::identification::cluster::{self, Cluster, ClusterEval};
-use crate::core::identification::pipeline::{
-    LiveResult, OutputSettings, SegmentFits, live_update, live_update_proposed,
-};
-use crate::core::identification::structure::Proposal;
-use crate::core::run::Run;
-use crate::ui::derived::diagnosis_model::{self, EffectsOutcome};
+use crate::core::identification::pipeline::{self, LiveResult, OutputSettings, SegmentFits, live_result};
+use crate::core::run::{Run, RunRole};
 use crate::ui::derived::ident_runs::ScoredSource;
-use crate::ui::derived::live_model::{LiveModel, ScoredRun};
-use crate::ui::derived::model_cache::IdentCache;
-
-/// The model a cache builds: the user's clusters, or the automatic proposal's model.
-pub(super) enum ModelSource {
-    Clusters(Vec<Cluster>),
-    Proposal(Arc<Proposal>),
-}
-
-impl ModelSource {
-    pub(super) fn clusters(&self) -> Vec<Cluster> {
-        match self {
-            Self::Clusters(clusters) => clusters.clone(),
-            Self::Proposal(proposal) => proposal.clusters.clone(),
-        }
-    }
-}
+use crate::ui::derived::live_model::{EffectsOutcome, LiveModel, ScoredRun, next_model_id};
+use crate::workflow::model::{self, EffectPlan, ModelSource};
 
 /// Cluster evaluations and the model, as a cache keeps them.
 pub(super) type Built = (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>);
@@ -44,63 +29,108 @@ pub(super) struct ModelInputs {
     pub(super) fits: Result<Arc<SegmentFits>, String>,
     pub(super) scored: Vec<ScoredSource>,
     pub(super) omegas_rad_s: Arc<[f64]>,
-    pub(super) effects: Vec<EffectId>,
+    pub(super) effects: EffectPlan,
 }
 
 impl ModelInputs {
-    /// The model of `source` with `settings`, without its effects.
+    /// The model of `source` with `settings`, without its effects. For clusters that give no model
+    /// the clusters are still evaluated, so that the z-plane says which cluster fails.
     pub(super) fn build(&self, source: &ModelSource, settings: &OutputSettings) -> Built {
-        match source {
-            ModelSource::Clusters(clusters) => self.evaluate(clusters, settings),
-            ModelSource::Proposal(proposal) => self.evaluate_proposal(proposal, settings),
-        }
-    }
-
-    /// [`Self::build`], then the effects added and refitted.
-    pub(super) fn finish(&self, source: &ModelSource, settings: &OutputSettings) -> Built {
-        let (evals, mut live) = self.build(source, settings);
-        if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
-            let runs: Vec<Arc<Run>> = self.scored.iter().map(|s| Arc::clone(&s.run)).collect();
-            diagnosis_model::apply_effects(live, &self.effects, &self.run, fits, settings, &runs);
-        }
-        (evals, live)
-    }
-
-    /// Cluster evaluations and the live path for `clusters` with `settings`: one core call, which
-    /// evaluates the clusters once; only when it gives no model are the clusters evaluated alone, so
-    /// that the z-plane still says which cluster fails.
-    fn evaluate(&self, clusters: &[Cluster], settings: &OutputSettings) -> Built {
         let fits = match &self.fits {
             Ok(fits) => fits,
             Err(err) => return (Err(err.clone()), Err(err.clone())),
         };
-        if clusters.is_empty() {
+        if let ModelSource::Clusters(clusters) = source
+            && clusters.is_empty()
+        {
             let why = "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned();
             return (Ok(Vec::new()), Err(why));
         }
         let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        match live_update(fits, &self.run, clusters, settings, &runs, &self.omegas_rad_s) {
-            Ok(result) => self.split_result(result, settings),
-            Err(err) => {
+        let live = source
+            .build(fits, &self.run, settings)
+            .and_then(|(model, evals)| live_result(model, evals, fits, settings, &runs, &self.omegas_rad_s));
+        match (live, source) {
+            (Ok(result), _) => self.split_result(result, settings),
+            (Err(err), ModelSource::Clusters(clusters)) => {
                 let evals =
                     cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
                         .map_err(|e| e.to_string());
                 (evals, Err(err.to_string()))
             }
+            (Err(err), ModelSource::Proposal(_)) => (Ok(Vec::new()), Err(err.to_string())),
         }
     }
 
-    /// The model of the automatic proposal (its clusters with its dead time, or its direct fit).
-    fn evaluate_proposal(&self, proposal: &Proposal, settings: &OutputSettings) -> Built {
-        let fits = match &self.fits {
-            Ok(fits) => fits,
-            Err(err) => return (Err(err.clone()), Err(err.clone())),
-        };
-        let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
-        match live_update_proposed(fits, &self.run, proposal, settings, &runs, &self.omegas_rad_s) {
-            Ok(result) => self.split_result(result, settings),
-            Err(err) => (Ok(Vec::new()), Err(err.to_string())),
+    /// [`Self::build`], then the effects added and refitted and the missing-physics loop run
+    /// (`progress` gets the loop's fraction done; false cancels it).
+    pub(super) fn finish(
+        &self,
+        source: &ModelSource,
+        settings: &OutputSettings,
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) -> Built {
+        let (evals, mut live) = self.build(source, settings);
+        if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
+            self.add_effects(live, fits, settings, progress);
         }
+        (evals, live)
+    }
+
+    /// Add the effects of the plan to the committed `live` model ([`model::add_effects`], as the
+    /// batch does) and simulate the scored runs with the result.
+    fn add_effects(
+        &self,
+        live: &mut LiveModel,
+        fits: &SegmentFits,
+        settings: &OutputSettings,
+        progress: &mut dyn FnMut(f64) -> bool,
+    ) {
+        let plan = &self.effects;
+        let mut outcome = EffectsOutcome { requested: plan.clone(), ..EffectsOutcome::default() };
+        if plan.is_empty() {
+            if let Some(rmspe_pct) = live.mean_validation_rmspe() {
+                outcome.history.push(crate::core::diagnose::HistoryStep { step: "base".into(), rmspe_pct });
+            }
+            live.effects = outcome;
+            return;
+        }
+        let output = live.model.output.clone();
+        let validation: Vec<&Run> = self
+            .scored
+            .iter()
+            .filter(|scored| scored.role == RunRole::Validation)
+            .map(|scored| scored.run.as_ref())
+            .collect();
+        let effects = model::add_effects(&live.model, plan, &self.run, fits, settings, &validation, progress);
+        outcome.history = effects.sequence.history.clone();
+        outcome.rounds = effects.rounds.clone();
+        outcome.notes = effects.notes(&output, plan);
+        if let Err(err) = effects.check(&output) {
+            outcome.problems.push(err.to_string());
+            live.effects = outcome;
+            return;
+        }
+        let model = effects.sequence.model;
+        for (scored, source) in live.runs.iter_mut().zip(&self.scored) {
+            let run = &source.run;
+            let prediction = model
+                .simulate_scored(run, settings.initial_state)
+                .map_err(|e| e.to_string())
+                .and_then(|y_hat| pipeline::score(run, &output, y_hat).map_err(|e| e.to_string()));
+            match prediction {
+                Ok(p) => scored.without_effects = Some(std::mem::replace(&mut scored.gray_box, p)),
+                Err(err) => {
+                    outcome.problems.push(format!(
+                        "run {}: {err}; the model without effects is shown for it",
+                        scored.name
+                    ));
+                    scored.effects_error = Some(err);
+                }
+            }
+        }
+        outcome.model = Some(model);
+        live.effects = outcome;
     }
 
     /// The core's live result as the cache keeps it: the evaluations apart, the model with its runs.
@@ -125,7 +155,7 @@ impl ModelInputs {
             })
             .collect();
         LiveModel {
-            id: diagnosis_model::next_model_id(),
+            id: next_model_id(),
             effects: EffectsOutcome { requested: self.effects.clone(), ..EffectsOutcome::default() },
             model: result.model,
             bode: result.bode,
@@ -145,13 +175,18 @@ pub struct Preview {
 }
 
 impl Preview {
-    /// The live path on `clusters` for `output`, without polishing (fast enough for every frame).
-    pub fn compute(ident: &IdentCache, output: &str, clusters: Vec<Cluster>) -> Option<Self> {
-        let cache = ident.output(output)?;
-        let (evals, mut live) = cache.inputs(&ident.run).evaluate(&clusters, &cache.preview_settings());
+    /// The model of `clusters` for `output` from `inputs`, without polishing (fast enough for every
+    /// frame) and without the effects.
+    pub(super) fn compute(
+        inputs: &ModelInputs,
+        output: &str,
+        clusters: Vec<Cluster>,
+        settings: &OutputSettings,
+    ) -> Self {
+        let (evals, mut live) = inputs.build(&ModelSource::Clusters(clusters.clone()), settings);
         if let Ok(live) = &mut live {
             live.effects.left_out_for_preview = !live.effects.requested.is_empty();
         }
-        Some(Self { output: output.to_owned(), clusters, evals, live })
+        Self { output: output.to_owned(), clusters, evals, live }
     }
 }

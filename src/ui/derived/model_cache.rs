@@ -12,30 +12,23 @@
 use std::sync::Arc;
 
 use crate::core::identification::cluster::{Cluster, ClusterEval};
-use crate::core::identification::pipeline::{self, OutputSettings, SegmentFits, fit_segments_for};
+use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
 use crate::core::identification::segment::Segment;
 use crate::core::identification::structure::Proposal;
-use crate::core::numerics::tf::{BodePoint, log_space};
-use crate::core::run::Run;
+use crate::core::numerics::tf::BodePoint;
+use crate::core::run::{Run, RunRole};
 
 use crate::ui::derived::diagnosis_model::DiagnosisInput;
+use crate::ui::derived::empirical_bode::EmpiricalBode;
 use crate::ui::derived::ident_runs::{ScoredSource, detect_or_check, join_identification, scored_runs};
 use crate::ui::derived::jobs::{Job, JobResult};
 pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
 pub use crate::ui::derived::model_build::Preview;
-use crate::ui::derived::model_build::{Built, ModelInputs, ModelSource};
-use crate::ui::state::session::{Role, Session, SessionRun};
+use crate::ui::derived::model_build::{Built, ModelInputs};
+use crate::ui::state::session::{Session, SessionRun};
 use crate::ui::state::setup::OutputSetup;
-
-/// Frequencies of the Bode curves: log-spaced from this to the Nyquist frequency.
-const LOWEST_OMEGA_RAD_S: f64 = 0.05;
-const BODE_POINTS: usize = 400;
-/// Runs sampled more than this fraction off the identification run are not scored.
-pub(super) const DT_TOLERANCE: f64 = 0.02;
-
-/// A point of an empirical frequency response (e.g. from the chirp run): ω [rad/s], |G| [dB],
-/// ∠G [deg], coherence in 0..=1.
-pub type EmpiricalPoint = (f64, f64, f64, f64);
+use crate::workflow::model::{self, EffectPlan, ModelSource};
+use crate::workflow::products::bode_grid;
 
 /// The identification run and everything identified from it.
 pub struct IdentCache {
@@ -64,7 +57,7 @@ impl IdentCache {
     /// session has no identification run.
     pub fn refresh(old: Option<Self>, session: &Session) -> Option<Self> {
         let idents: Vec<(usize, &SessionRun)> =
-            session.runs.iter().enumerate().filter(|(_, r)| r.role == Role::Identification).collect();
+            session.runs.iter().enumerate().filter(|(_, r)| r.role == RunRole::Identification).collect();
         let run_index = idents.first()?.0;
         let sources: Vec<Arc<Run>> = idents.iter().map(|(_, e)| Arc::clone(&e.run)).collect();
         let source_indices: Vec<usize> = idents.iter().map(|(i, _)| *i).collect();
@@ -100,8 +93,14 @@ impl IdentCache {
                 };
                 let scored = scored_runs(session, &run, &channel.name, &mut cache.notes, &cache.scored);
                 cache.notes.splice(0..0, join_note.iter().cloned());
-                cache.update(&run, &segments, session.setup.output(&channel.name), scored);
-                crate::ui::derived::empirical_bode::refresh_empirical_bode(&mut cache, session, &run);
+                let setup = session.setup.output(&channel.name);
+                // An output with segments of its own (from a project) is fitted on those.
+                let own = setup
+                    .segments
+                    .as_deref()
+                    .map(|given| detect_or_check(&run, &junctions, Some(given), steps_from.as_deref()));
+                cache.update(&run, own.as_ref().unwrap_or(&segments), setup, scored);
+                cache.empirical_bode.refresh(session, &run, &channel.name);
                 cache
             })
             .collect();
@@ -193,7 +192,7 @@ impl Proposed {
         Self::Running(Job::spawn(
             format!("Proposing clusters for {}", fits.output),
             || {},
-            move |_| pipeline::propose(&fits, &run, &settings).map(Arc::new).map_err(|e| e.to_string()),
+            move |_| model::propose(&fits, &run, &settings).map(Arc::new).map_err(|e| e.to_string().into()),
         ))
     }
 
@@ -251,9 +250,8 @@ pub struct OutputCache {
     /// The committed model being finished on a worker thread (centroids polished, effects
     /// refitted); `live` is its unpolished first look meanwhile.
     finishing: Option<Job<Built>>,
-    /// The chirp run's empirical frequency response; drawn on the Bode view when not empty.
-    pub empirical_bode: Vec<EmpiricalPoint>,
-    pub(super) empirical_source: Option<crate::ui::derived::empirical_bode::EmpiricalSource>,
+    /// The chirp run's measured frequency response; drawn on the Bode view when not empty.
+    pub empirical_bode: EmpiricalBode,
     /// Runs that were not scored, and why.
     pub notes: Vec<String>,
 }
@@ -275,8 +273,7 @@ impl OutputCache {
             scored: Vec::new(),
             live: Err("not computed yet".into()),
             finishing: None,
-            empirical_bode: Vec::new(),
-            empirical_source: None,
+            empirical_bode: EmpiricalBode::default(),
             notes: Vec::new(),
         }
     }
@@ -299,13 +296,12 @@ impl OutputCache {
         let refit = !same_run || key != self.fits_key || self.fits_key.is_none();
         if refit {
             self.fits = match segments {
-                Ok(segments) => fit_segments_for(run, &self.name, segments, &setup.settings)
+                Ok(segments) => model::fit_segments(run, &self.name, segments, &setup.settings)
                     .map(Arc::new)
                     .map_err(|e| e.to_string()),
                 Err(err) => Err(format!("no segments: {err}")),
             };
-            self.omegas_rad_s =
-                log_space(LOWEST_OMEGA_RAD_S, std::f64::consts::PI / run.dt_secs, BODE_POINTS).into();
+            self.omegas_rad_s = bode_grid(run.dt_secs).into();
             self.segment_bode = match &self.fits {
                 Ok(fits) => fits.models.iter().map(|m| m.bode_response(&self.omegas_rad_s)).collect(),
                 Err(_) => Vec::new(),
@@ -362,7 +358,7 @@ impl OutputCache {
         let settings = self.setup.settings.clone();
         self.clusters = source.clusters();
         if !settings.refine && inputs.effects.is_empty() {
-            (self.evals, self.live) = inputs.finish(&source, &settings);
+            (self.evals, self.live) = inputs.finish(&source, &settings, &mut |_| true);
             return;
         }
         let quick = OutputSettings { refine: false, ..settings.clone() };
@@ -372,8 +368,12 @@ impl OutputCache {
             live.effects.left_out_for_preview = !live.effects.requested.is_empty();
         }
         (self.evals, self.live) = (evals, live);
-        let label = format!("Finishing the model of {}", self.name);
-        self.finishing = Some(Job::spawn(label, || {}, move |_| Ok(inputs.finish(&source, &settings))));
+        let label = match inputs.effects.auto_rounds {
+            0 => format!("Finishing the model of {}", self.name),
+            rounds => format!("Running the missing-physics loop on {} ({rounds} rounds)", self.name),
+        };
+        self.finishing =
+            Some(Job::spawn(label, || {}, move |progress| Ok(inputs.finish(&source, &settings, progress))));
     }
 
     /// Take the finished model when its job has ended; true when it did.
@@ -404,8 +404,14 @@ impl OutputCache {
             fits: self.fits.clone(),
             scored: self.scored.clone(),
             omegas_rad_s: Arc::clone(&self.omegas_rad_s),
-            effects: self.setup.effects.clone(),
+            effects: EffectPlan { by_hand: self.setup.effects.clone(), auto_rounds: self.setup.auto_effects },
         }
+    }
+
+    /// The job finishing the committed model (polish, effects, the missing-physics loop), while it
+    /// runs: its label, progress and time, for the views to show.
+    pub fn finishing_job(&self) -> Option<&Job<Built>> {
+        self.finishing.as_ref()
     }
 
     /// Take the proposal when its job has ended, and rebuild the model when it follows it.
@@ -413,7 +419,7 @@ impl OutputCache {
         let Some(result) = self.proposal.job().and_then(Job::poll) else { return false };
         self.proposal = match result {
             Ok(proposal) => Proposed::Ready(proposal),
-            Err(err) => Proposed::Failed(err),
+            Err(err) => Proposed::Failed(err.to_string()),
         };
         self.rebuild();
         true
@@ -429,7 +435,7 @@ impl OutputCache {
         };
         self.proposal = match job.wait() {
             Ok(proposal) => Proposed::Ready(proposal),
-            Err(err) => Proposed::Failed(err),
+            Err(err) => Proposed::Failed(err.to_string()),
         };
         self.rebuild();
     }
@@ -456,8 +462,12 @@ impl OutputCache {
         if let Some(problem) = live.effects.problems.first().filter(|_| live.effects.model.is_none()) {
             return Err(format!("the model's effects could not be added: {problem}"));
         }
-        let validation: Vec<Arc<Run>> =
-            self.scored.iter().filter(|s| s.role == Role::Validation).map(|s| Arc::clone(&s.run)).collect();
+        let validation: Vec<Arc<Run>> = self
+            .scored
+            .iter()
+            .filter(|s| s.role == RunRole::Validation)
+            .map(|s| Arc::clone(&s.run))
+            .collect();
         if validation.is_empty() {
             return Err("give a run the role validation: the effects are scored on validation runs".into());
         }

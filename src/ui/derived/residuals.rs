@@ -1,8 +1,9 @@
 //! "Where it fails" of one model, computed once per model (keyed by its id): core's residual
 //! analysis of every scored run, with the noise band's σ from the steady run when there is one.
 use crate::core::residuals::{ResidualAnalysis, ResidualSettings, analyse_residuals, steady_noise_sigma};
+use crate::core::run::RunRole;
 use crate::ui::derived::model_cache::LiveModel;
-use crate::ui::state::session::{Role, Session};
+use crate::ui::state::session::Session;
 use crate::ui::widgets::at_noise_precision;
 
 /// One scored run's analysis.
@@ -24,7 +25,7 @@ pub struct Analyses {
 /// The measurement-noise σ of `output`: the normal fit (maximum likelihood: the standard
 /// deviation) of the first steady run that records it.
 fn steady_sigma(session: &Session, output: &str) -> Option<(f64, String)> {
-    session.runs.iter().filter(|r| r.role == Role::Steady).find_map(|entry| {
+    session.runs.iter().filter(|r| r.role == RunRole::Steady).find_map(|entry| {
         let sigma = steady_noise_sigma(&entry.run, output)?;
         Some((
             sigma,

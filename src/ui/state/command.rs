@@ -3,12 +3,14 @@
 //! the session changed).
 use std::path::PathBuf;
 
+use crate::core::diagnose::TrialId;
+use crate::core::effects::EffectId;
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::pipeline::OutputSettings;
 use crate::core::identification::segment::Segment;
+use crate::core::run::RunRole;
 use crate::io::csv_run::LoadOptions;
 use crate::ui::state::Tab;
-use crate::ui::state::session::Role;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
@@ -17,7 +19,7 @@ pub enum Command {
     /// error is shown.
     LoadRun {
         path: PathBuf,
-        role: Role,
+        role: RunRole,
         options: LoadOptions,
     },
     /// Read session run `index` again with other options (e.g. a new column mapping); on failure
@@ -27,7 +29,7 @@ pub enum Command {
         options: LoadOptions,
     },
     RemoveRun(usize),
-    SetRole(usize, Role),
+    SetRole(usize, RunRole),
 
     // --- Setup changes (undoable) ---
     /// The segments of the identification run; `None` detects them from the input again.
@@ -41,15 +43,21 @@ pub enum Command {
         output: String,
         settings: OutputSettings,
     },
-    /// Add an effect of the catalog to an output's model (fitted on the identification data).
+    /// Add what a diagnosis trial adds to an output's model (fitted on the identification data):
+    /// an effect of the catalog, or a refinement that is a block (the scheduled time constant).
     ApplyEffect {
         output: String,
-        effect: String,
+        trial: TrialId,
     },
     /// Take an effect out of an output's model (the others are fitted again).
     RemoveEffect {
         output: String,
-        effect: String,
+        effect: EffectId,
+    },
+    /// The rounds of the missing-physics loop run after the effects added by hand (0: none).
+    SetAutoEffects {
+        output: String,
+        rounds: usize,
     },
     Undo,
     Redo,
@@ -122,7 +130,7 @@ impl FileAction {
 
 impl Command {
     /// Shorthand for loading a file with default options (canonical column names).
-    pub fn load(path: impl Into<PathBuf>, role: Role) -> Self {
+    pub fn load(path: impl Into<PathBuf>, role: RunRole) -> Self {
         Self::LoadRun { path: path.into(), role, options: LoadOptions::default() }
     }
 }

@@ -8,53 +8,25 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::core::run::Run;
+use crate::core::run::{Run, RunRole};
 use crate::io::csv_run::{ColumnMap, LoadOptions, RunFileError, load_run};
 use crate::ui::state::setup::ModelSetup;
 
-/// What a run is used for in the identification.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Role {
-    Identification,
-    Validation,
-    /// Scored beside the validation runs, never used to choose anything (the diagnosis, the
-    /// effects and the live error read only validation runs).
-    HeldOut,
-    Chirp,
-    Steady,
-}
-
-impl Role {
-    pub const ALL: [Self; 5] =
-        [Self::Identification, Self::Validation, Self::HeldOut, Self::Chirp, Self::Steady];
-
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::Identification => "identification",
-            Self::Validation => "validation",
-            Self::HeldOut => "held out",
-            Self::Chirp => "chirp",
-            Self::Steady => "steady",
-        }
-    }
-
-    /// A first guess from the file name; the user can change it in the run list.
-    pub fn guess_from_path(path: &Path, session: &Session) -> Self {
-        let stem = path.file_stem().map(|s| s.to_string_lossy().to_lowercase()).unwrap_or_default();
-        if stem.contains("chirp") {
-            Self::Chirp
-        } else if stem.contains("steady") {
-            Self::Steady
-        } else if stem.contains("held") {
-            Self::HeldOut
-        } else if stem.contains("valid") {
-            Self::Validation
-        } else if stem.contains("ident") || !session.runs.iter().any(|r| r.role == Self::Identification) {
-            Self::Identification
-        } else {
-            Self::Validation
-        }
+/// A first guess of a run's role from its file name; the user can change it in the run list.
+pub fn guess_role(path: &Path, session: &Session) -> RunRole {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().to_lowercase()).unwrap_or_default();
+    if stem.contains("chirp") {
+        RunRole::Chirp
+    } else if stem.contains("steady") {
+        RunRole::Steady
+    } else if stem.contains("held") {
+        RunRole::HeldOut
+    } else if stem.contains("valid") {
+        RunRole::Validation
+    } else if stem.contains("ident") || !session.runs.iter().any(|r| r.role == RunRole::Identification) {
+        RunRole::Identification
+    } else {
+        RunRole::Validation
     }
 }
 
@@ -121,7 +93,7 @@ impl From<&SavedLoadOptions> for LoadOptions {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunSource {
     pub path: PathBuf,
-    pub role: Role,
+    pub role: RunRole,
     #[serde(default)]
     pub options: SavedLoadOptions,
 }
@@ -130,7 +102,7 @@ pub struct RunSource {
 #[derive(Clone, Debug)]
 pub struct SessionRun {
     pub path: PathBuf,
-    pub role: Role,
+    pub role: RunRole,
     pub options: LoadOptions,
     /// Shared with the derived caches and worker threads; replaced, never mutated.
     pub run: Arc<Run>,
@@ -138,7 +110,7 @@ pub struct SessionRun {
 
 impl SessionRun {
     /// Read a run file; the session is not touched, so a failure loses nothing.
-    pub fn load(path: &Path, role: Role, options: LoadOptions) -> Result<Self, Box<LoadFailure>> {
+    pub fn load(path: &Path, role: RunRole, options: LoadOptions) -> Result<Self, Box<LoadFailure>> {
         match load_run(path, &options) {
             Ok(run) => Ok(Self { path: path.to_owned(), role, options, run: Arc::new(run) }),
             Err(err) => Err(Box::new(LoadFailure {
@@ -167,7 +139,7 @@ impl SessionRun {
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoadFailure {
     pub path: PathBuf,
-    pub role: Role,
+    pub role: RunRole,
     pub options: LoadOptions,
     pub message: String,
     /// The error is about columns (missing, unmapped), so a column mapping is the likely fix.
@@ -236,13 +208,13 @@ impl Session {
     }
 
     /// The first run with this role.
-    pub fn first_with_role(&self, role: Role) -> Option<usize> {
+    pub fn first_with_role(&self, role: RunRole) -> Option<usize> {
         self.runs.iter().position(|r| r.role == role)
     }
 
     /// The identification run (the first with that role), with its index.
     pub fn ident_run(&self) -> Option<(usize, &SessionRun)> {
-        self.runs.iter().enumerate().find(|(_, r)| r.role == Role::Identification)
+        self.runs.iter().enumerate().find(|(_, r)| r.role == RunRole::Identification)
     }
 }
 
@@ -258,11 +230,11 @@ fn is_column_problem(err: &RunFileError) -> bool {
 }
 
 /// The bundled sample runs under `sample_runs/sr30`, with their roles.
-pub const BUNDLED_RUNS: [(&str, Role); 4] = [
-    ("ident.csv", Role::Identification),
-    ("validation.csv", Role::Validation),
-    ("chirp.csv", Role::Chirp),
-    ("steady.csv", Role::Steady),
+pub const BUNDLED_RUNS: [(&str, RunRole); 4] = [
+    ("ident.csv", RunRole::Identification),
+    ("validation.csv", RunRole::Validation),
+    ("chirp.csv", RunRole::Chirp),
+    ("steady.csv", RunRole::Steady),
 ];
 
 /// What is written to eframe's storage.

@@ -36,12 +36,30 @@ pub struct OutputSetup {
     /// applied them (each refitted on the identification data in turn).
     #[serde(default)]
     pub effects: Vec<EffectId>,
+    /// Rounds of the missing-physics loop run after them (a project's `auto_effects`): diagnose,
+    /// add the top significant effect or refinement, repeat (see `workflow::model::add_effects`).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub auto_effects: usize,
+    /// This output's own segments, when a project gives the outputs different ones (`None`: the
+    /// setup's segments, which the Data view shows and edits).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segments: Option<Vec<Segment>>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl OutputSetup {
     /// The defaults for an output of this name (the paper's ARX orders, automatic clusters).
     pub fn for_output(name: &str) -> Self {
-        Self { settings: OutputSettings::for_output(name), clusters: None, effects: Vec::new() }
+        Self {
+            settings: OutputSettings::for_output(name),
+            clusters: None,
+            effects: Vec::new(),
+            auto_effects: 0,
+            segments: None,
+        }
     }
 }
 

@@ -4,11 +4,11 @@
 use egui_plot::{Line, MarkerShape, PlotPoints, Points};
 
 use crate::core::numerics::tf::BodePoint;
-use crate::ui::derived::model_cache::EmpiricalPoint;
 use crate::ui::derived::{Derived, LiveView};
 use crate::ui::theme;
 use crate::ui::widgets::model as model_ui;
 use crate::ui::widgets::plot as plot_util;
+use crate::workflow::products::EmpiricalPoint;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
 /// The legend entry of the chirp's measured points.
@@ -70,7 +70,7 @@ pub fn bode_ui(ui: &mut egui::Ui, output: &str, state: &mut BodeViewState, cache
         }
         plot.show(ui, |plot_ui| {
             draw_curves(plot_ui, &view, state, part);
-            draw_empirical(plot_ui, &view.output.empirical_bode, part);
+            draw_empirical(plot_ui, &view.output.empirical_bode.points, part);
         });
     }
     if unit.is_empty() {
@@ -99,7 +99,7 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &BodeViewState) {
         if view.live.is_ok() {
             plot_util::line_key_ui(ui, theme::REDUCED, 3.0, false, REDUCED_NAME);
         }
-        if !view.output.empirical_bode.is_empty() {
+        if !view.output.empirical_bode.points.is_empty() {
             plot_util::diamond_key_ui(ui, theme::EMPIRICAL, EMPIRICAL_NAME);
         }
     });

@@ -2,6 +2,7 @@
 //! −3 dB bandwidth against the operating point), the local step responses overlaid and normalised,
 //! the Bode of the local model at a chosen point, and the table of every point. Computed from the
 //! model the other views show (with its effects), so it follows every change of the model.
+use crate::core::run::RunRole;
 use egui::RichText;
 use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
 
@@ -9,7 +10,7 @@ use crate::core::control::{OperatingPoint, PointSource, identified_range, operat
 use crate::core::numerics::stats::mean;
 use crate::core::numerics::tf::log_space;
 use crate::ui::derived::Derived;
-use crate::ui::state::session::{Role, Session};
+use crate::ui::state::session::Session;
 use crate::ui::theme;
 use crate::ui::widgets::model as model_ui;
 use crate::ui::widgets::plot as plot_util;
@@ -55,7 +56,7 @@ pub fn control_ui(
         let plateaus: Vec<(String, f64)> = session
             .runs
             .iter()
-            .filter(|r| r.role == Role::Steady)
+            .filter(|r| r.role == RunRole::Steady)
             .map(|r| (r.run.name.clone(), mean(&r.run.input.values)))
             .collect();
         let points = operating_points(&model, range, &plateaus).map_err(|e| e.to_string());

@@ -4,7 +4,6 @@ pub use super::hint;
 use egui::RichText;
 use num_complex::Complex64;
 
-use crate::core::effects::EffectId;
 use crate::core::identification::cluster::{ClusterEval, ClusterStatus};
 use crate::core::numerics::metrics::Metrics;
 use crate::ui::derived::model_cache::ScoredRun;
@@ -41,10 +40,7 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
         }
         Ok(live) if view.is_preview || live.finishing => {
             // The effects a drag preview or a model being finished leaves out, when it does.
-            let effects = live
-                .effects
-                .left_out_for_preview
-                .then(|| EffectId::names(&live.effects.requested).join(", "));
+            let effects = live.effects.left_out_for_preview.then(|| live.effects.requested.words());
             let text = if view.is_preview {
                 let left_out = effects.map(|e| format!("; without the effects {e}, fitted again on release"));
                 format!(
@@ -52,10 +48,14 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
                     left_out.unwrap_or_default()
                 )
             } else {
-                let refit = effects.map(|e| format!(" and refitting the effects {e}"));
+                let refit = effects.map(|e| format!(" and refitting the effects: {e}"));
+                let done = view.output.finishing_job().map(|job| {
+                    format!(" ({:.0} % after {:.1} s)", 100.0 * job.progress(), job.elapsed().as_secs_f64())
+                });
                 format!(
-                    "Polishing the centroids{}…; meanwhile the model without them is shown",
-                    refit.unwrap_or_default()
+                    "Polishing the centroids{}{}…; meanwhile the model without them is shown",
+                    refit.unwrap_or_default(),
+                    done.unwrap_or_default()
                 )
             };
             ui.label(RichText::new(text).color(theme::WARNING));

@@ -8,6 +8,7 @@
 //! marked stale, until the user asks for a recomputation.
 pub mod plots;
 pub mod table;
+use crate::core::run::RunRole;
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
@@ -20,8 +21,8 @@ use crate::core::identification::pipeline::SegmentFits;
 use crate::core::identification::wiener::WienerModel;
 use crate::core::run::Run;
 use crate::ui::derived::Derived;
-use crate::ui::derived::jobs::{CANCELLED, Job};
-use crate::ui::state::session::{Role, Session};
+use crate::ui::derived::jobs::{Job, JobError};
+use crate::ui::state::session::Session;
 use crate::ui::theme;
 use crate::ui::views::compare::plots as compare_plots;
 use crate::ui::views::compare::table as compare_table;
@@ -35,7 +36,7 @@ pub struct CompareKey {
     /// The model's effects with their fitted parameters.
     effects: Vec<crate::core::effects::EffectRecord>,
     fits: Arc<SegmentFits>,
-    runs: Vec<(Role, Arc<Run>)>,
+    runs: Vec<(RunRole, Arc<Run>)>,
     initial_state: InitialState,
 }
 
@@ -102,8 +103,8 @@ impl CompareViewState {
                         Some(CompareResult { key: (**key).clone(), comparison, duration: job.elapsed() });
                     Phase::Idle
                 }
-                Err(err) if err == CANCELLED => Phase::Cancelled,
-                Err(err) => Phase::Failed(err),
+                Err(JobError::Cancelled) => Phase::Cancelled,
+                Err(JobError::Failed(err)) => Phase::Failed(err),
             };
         }
     }
@@ -162,7 +163,7 @@ impl CompareViewState {
                 let job = Job::spawn(
                     format!("Comparing models of {output}"),
                     move || ctx.request_repaint(),
-                    move |progress| compare_output(&input, progress).map_err(|_| CANCELLED.to_owned()),
+                    move |progress| compare_output(&input, progress).map_err(|_| JobError::Cancelled),
                 );
                 Phase::Running { job, key: Box::new(key) }
             }
@@ -192,12 +193,12 @@ fn current_input(
     for run in &live.runs {
         let Some(entry) = session.runs.get(run.index) else { continue };
         runs.push((run.role, Arc::clone(&entry.run)));
-        scored.push((Arc::clone(&entry.run), run.role == Role::Chirp));
+        scored.push((Arc::clone(&entry.run), run.role == RunRole::Chirp));
     }
-    let steady = session.first_with_role(Role::Steady).and_then(|i| session.runs.get(i));
+    let steady = session.first_with_role(RunRole::Steady).and_then(|i| session.runs.get(i));
     let steady = steady.map(|entry| Arc::clone(&entry.run));
     if let Some(run) = &steady {
-        runs.push((Role::Steady, Arc::clone(run)));
+        runs.push((RunRole::Steady, Arc::clone(run)));
     }
     let wiener = live.model.wiener.clone();
     let extended = live.effects.model.clone().filter(|m| !m.effects.is_empty());

@@ -5,19 +5,18 @@
 //! The diagnosis ([`crate::core::diagnose`]) runs in a background [`Job`] for the committed model
 //! it was started on; when the model changes (an effect applied, a cluster moved) the result is
 //! kept but marked stale, with a button to run it again.
+mod effects;
 pub mod residuals;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use egui::RichText;
-use egui_plot::{Bar, BarChart, Plot, Text};
 
-use crate::core::diagnose::HistoryStep;
 use crate::core::diagnose::{self, DiagnosisKind, DiagnosisReport};
 use crate::core::effects::EffectId;
 use crate::ui::derived::Derived;
 use crate::ui::derived::diagnosis_model::DiagnosisInput;
-use crate::ui::derived::jobs::Job;
+use crate::ui::derived::jobs::{Job, JobError, JobResult};
 use crate::ui::derived::live_model::ModelKey;
 use crate::ui::state::command::Command;
 use crate::ui::state::session::Session;
@@ -75,7 +74,8 @@ impl DiagnosisViewState {
         let (output, model) = (input.output.clone(), input.model.clone());
         let job = Job::spawn(format!("Diagnosing {output}"), repaint, move |progress| {
             let started = Instant::now();
-            input.run(progress).map(|report| (report, started.elapsed())).map_err(|e| e.to_string())
+            let report = input.run(progress).map_err(|e| JobError::Failed(e.to_string()))?;
+            Ok((report, started.elapsed()))
         });
         self.running = Some(RunningDiagnosis { output, model, job });
     }
@@ -95,7 +95,7 @@ impl DiagnosisViewState {
         self.store(running.output, running.model, outcome, Duration::ZERO);
     }
 
-    fn finish(&mut self, outcome: Result<(DiagnosisReport, Duration), String>, elapsed: Duration) {
+    fn finish(&mut self, outcome: JobResult<(DiagnosisReport, Duration)>, elapsed: Duration) {
         let Some(running) = self.running.take() else { return };
         self.store(running.output, running.model, outcome, elapsed);
     }
@@ -104,14 +104,14 @@ impl DiagnosisViewState {
         &mut self,
         output: String,
         model: ModelKey,
-        outcome: Result<(DiagnosisReport, Duration), String>,
+        outcome: JobResult<(DiagnosisReport, Duration)>,
         elapsed: Duration,
     ) {
-        if outcome.as_ref().err().is_some_and(|e| e == crate::ui::derived::jobs::CANCELLED) {
+        if outcome.as_ref().err() == Some(&JobError::Cancelled) {
             return;
         }
         let duration = outcome.as_ref().map_or(elapsed, |(_, d)| *d);
-        let outcome = outcome.map(|(report, _)| report);
+        let outcome = outcome.map(|(report, _)| report).map_err(|e| e.to_string());
         self.results.insert(output, FinishedDiagnosis { model, outcome, duration });
     }
 
@@ -161,49 +161,25 @@ fn which_effect_ui(
     live: &crate::ui::derived::model_cache::LiveModel,
     is_preview: bool,
 ) -> Vec<Command> {
-    let mut commands = Vec::new();
-    ui.horizontal_top(|ui| {
-        ui.vertical(|ui| {
-            ui.set_width(460.0);
-            ui.label(RichText::new("Error history (mean validation RMSPE)").strong());
-            history_chart_ui(ui, output, &live.effects.history);
-        });
-        ui.vertical(|ui| {
-            ui.label(RichText::new("Effects in the model").strong());
-            if live.effects.requested.is_empty() {
-                hint(ui, "None yet: the model is the paper's gray-box Wiener model.");
-            }
-            for id in &live.effects.requested {
-                ui.horizontal(|ui| {
-                    ui.label(RichText::new(id.name()).monospace());
-                    if ui.button("Remove").on_hover_text("Take the effect out (undo: Ctrl+Z)").clicked() {
-                        commands.push(Command::RemoveEffect {
-                            output: output.to_owned(),
-                            effect: id.name().to_owned(),
-                        });
-                    }
-                });
-            }
-            if let Some(model) = &live.effects.model {
-                for effect in &model.effects {
-                    let params: Vec<String> =
-                        effect.params().iter().map(|(name, value)| format!("{name} = {value:.4}")).collect();
-                    hint(ui, &format!("{}: {}", effect.id(), params.join(", ")));
-                }
-            }
-        });
-    });
+    let mut commands = effects::effects_panel_ui(ui, output, cache, live);
     ui.separator();
     job_status_ui(ui, output, state, cache, &live.key(), is_preview, live.finishing);
-    let applied = &live.effects.requested;
     let Some(finished) = state.result(output) else { return commands };
-    let report = match &finished.outcome {
-        Ok(report) => report,
-        Err(err) => {
-            error_ui(ui, &format!("The diagnosis failed: {err}"));
-            return commands;
-        }
-    };
+    match &finished.outcome {
+        Ok(report) => commands.extend(ranking_ui(ui, output, report, &live.current_model().effect_ids())),
+        Err(err) => error_ui(ui, &format!("The diagnosis failed: {err}")),
+    }
+    commands
+}
+
+/// The trials best first, what the structure needs, and what was not tried.
+fn ranking_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    report: &DiagnosisReport,
+    applied: &[EffectId],
+) -> Vec<Command> {
+    let mut commands = Vec::new();
     let physics_found = report.entries.iter().any(|e| e.significant && e.kind == DiagnosisKind::Physics);
     hint(ui, &format!("Judged on the validation runs; {}.", report.held_out_words()));
     if let Some(note) = report.structure_note.as_ref().filter(|_| physics_found) {
@@ -258,15 +234,7 @@ fn job_status_ui(
         }
     };
     if let Some(running) = &state.running {
-        let mut cancel = false;
-        ui.horizontal(|ui| {
-            let bar = egui::ProgressBar::new(running.job.progress() as f32)
-                .desired_width(260.0)
-                .text(format!("{} … {:.1} s", running.job.label(), running.job.elapsed().as_secs_f64()));
-            ui.add(bar);
-            cancel = ui.button("Cancel").clicked();
-        });
-        if cancel {
+        if progress_ui(ui, &running.job) {
             state.cancel();
         }
         return;
@@ -283,41 +251,57 @@ fn job_status_ui(
         return;
     }
     let finished = state.result(output).map(|f| (&f.model != model, f.duration, f.outcome.is_ok()));
-    match finished {
-        None => start(state, ui),
-        Some((stale, duration, ok)) => {
-            ui.horizontal_wrapped(|ui| {
-                if stale {
-                    ui.label(
-                        RichText::new("The model changed since this diagnosis: the ranking below is stale.")
-                            .color(theme::WARNING),
-                    );
-                } else if ok && duration > Duration::ZERO {
-                    hint(ui, &format!("Diagnosed in {:.2} s.", duration.as_secs_f64()));
-                }
-                if ui.button(if stale { "Re-run diagnosis" } else { "Run again" }).clicked() {
-                    start(state, ui);
-                }
-            });
-            hint(
-                ui,
-                &format!(
-                    "Each effect is added to the current model, refitted on the identification run and \
-                     scored on the validation runs. Significant: a one-sided Diebold–Mariano test on \
-                     |% error| against the refitted current model, combined (Stouffer) with a signed-rank \
-                     test over the identification steps a cross-validation held out when at least {} of \
-                     them are changed by the effect, gives p < {} and the validation RMSPE falls by at \
-                     least {:.0} %. Structural refinements (one more pole, pole pair or zero, \
-                     the map's order, a scheduled time constant) are tried too; a physical effect counts \
-                     only when it also beats the best of them by the same rule and its own evidence shows \
-                     its signature.",
-                    diagnose::MIN_WITNESS_RESPONSES,
-                    diagnose::SIGNIFICANCE_LEVEL,
-                    100.0 * diagnose::MIN_RELATIVE_REDUCTION
-                ),
+    let Some((stale, duration, ok)) = finished else { return start(state, ui) };
+    ui.horizontal_wrapped(|ui| {
+        if stale {
+            ui.label(
+                RichText::new("The model changed since this diagnosis: the ranking below is stale.")
+                    .color(theme::WARNING),
             );
+        } else if ok && duration > Duration::ZERO {
+            hint(ui, &format!("Diagnosed in {:.2} s.", duration.as_secs_f64()));
         }
-    }
+        if ui.button(if stale { "Re-run diagnosis" } else { "Run again" }).clicked() {
+            start(state, ui);
+        }
+    });
+    method_hint(ui);
+}
+
+/// A job's progress bar with its label and time, and a Cancel button; true when it was clicked.
+pub(crate) fn progress_ui<T>(ui: &mut egui::Ui, job: &Job<T>) -> bool {
+    let mut cancel = false;
+    ui.horizontal(|ui| {
+        let bar = egui::ProgressBar::new(job.progress() as f32).desired_width(260.0).text(format!(
+            "{} … {:.1} s",
+            job.label(),
+            job.elapsed().as_secs_f64()
+        ));
+        ui.add(bar);
+        cancel = ui.button("Cancel").clicked();
+    });
+    cancel
+}
+
+/// How a trial is judged, in words.
+fn method_hint(ui: &mut egui::Ui) {
+    hint(
+        ui,
+        &format!(
+            "Each effect is added to the current model, refitted on the identification run and \
+             scored on the validation runs. Significant: a one-sided Diebold–Mariano test on \
+             |% error| against the refitted current model, combined (Stouffer) with a signed-rank \
+             test over the identification steps a cross-validation held out when at least {} of \
+             them are changed by the effect, gives p < {} and the validation RMSPE falls by at \
+             least {:.0} %. Structural refinements (one more pole, pole pair or zero, \
+             the map's order, a scheduled time constant) are tried too; a physical effect counts \
+             only when it also beats the best of them by the same rule and its own evidence shows \
+             its signature.",
+            diagnose::MIN_WITNESS_RESPONSES,
+            diagnose::SIGNIFICANCE_LEVEL,
+            100.0 * diagnose::MIN_RELATIVE_REDUCTION
+        ),
+    );
 }
 
 /// One ranked effect: numbers, verdict, Apply; its physics and evidence below.
@@ -356,9 +340,10 @@ fn entry_ui(
                 }
             }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-                if applied.iter().any(|id| id.name() == entry.effect) {
+                let effect = entry.effect.as_effect();
+                if effect.is_some_and(|id| applied.contains(&id)) {
                     ui.label(RichText::new("in the model").color(theme::OK));
-                } else if entry.effect.parse::<EffectId>().is_err() {
+                } else if effect.is_none() {
                     ui.label(RichText::new("edit the clusters").color(theme::HINT)).on_hover_text(
                         "A change of the linear block or the map is made on the z-plane (add or move a \
                          cluster) or in the output's settings, not added as a block",
@@ -368,10 +353,7 @@ fn entry_ui(
                     .on_hover_text(format!("Add {} to the model of {output} (undo: Ctrl+Z)", entry.effect))
                     .clicked()
                 {
-                    command = Some(Command::ApplyEffect {
-                        output: output.to_owned(),
-                        effect: entry.effect.clone(),
-                    });
+                    command = Some(Command::ApplyEffect { output: output.to_owned(), trial: entry.effect });
                 }
             });
         });
@@ -391,57 +373,4 @@ fn entry_ui(
         }
     });
     command
-}
-
-/// Bars of the validation RMSPE after each step, each labelled with its value.
-fn history_chart_ui(ui: &mut egui::Ui, output: &str, history: &[HistoryStep]) {
-    if history.is_empty() {
-        hint(ui, "No validation run: give a run the role validation to see the error.");
-        return;
-    }
-    let steps = history.len();
-    let top = history.iter().map(|s| s.rmspe_pct).fold(0.0, f64::max);
-    let bars: Vec<Bar> = history
-        .iter()
-        .enumerate()
-        .map(|(i, s)| Bar::new(i as f64, s.rmspe_pct).width(0.6).name(&s.step))
-        .collect();
-    Plot::new(("diagnosis_history", output))
-        .height(170.0)
-        .allow_drag(false)
-        .allow_zoom(false)
-        .allow_scroll(false)
-        .allow_boxed_zoom(false)
-        .show_x(false)
-        .include_y(0.0)
-        .include_y(top * 1.25)
-        .include_x(-0.6)
-        .include_x(history.len() as f64 - 0.4)
-        .y_axis_label("RMSPE [%]")
-        .show_grid([false, true])
-        // The steps are numbered on the axis and named below the chart: egui_plot drops tick labels
-        // that would overlap, and step names ("+scheduled_time_constant (auto)") are long.
-        .x_axis_formatter(move |mark, _| {
-            let i = mark.value.round();
-            if (mark.value - i).abs() > 1e-6 || i < 0.0 || i as usize >= steps {
-                return String::new();
-            }
-            format!("{}", i as usize + 1)
-        })
-        .show(ui, |plot_ui| {
-            plot_ui.bar_chart(BarChart::new("validation RMSPE", bars).color(theme::MODEL));
-            for (i, step) in history.iter().enumerate() {
-                let at = egui_plot::PlotPoint::new(i as f64, step.rmspe_pct + top * 0.04);
-                let label = Text::new(
-                    "value",
-                    at,
-                    RichText::new(format!("{:.3} %", step.rmspe_pct)).size(14.0).strong(),
-                )
-                .anchor(egui::Align2::CENTER_BOTTOM);
-                plot_ui.text(label);
-            }
-        });
-    let names: Vec<String> =
-        history.iter().enumerate().map(|(i, s)| format!("{} {}", i + 1, s.step)).collect();
-    hint(ui, &names.join("    "));
 }

@@ -1,12 +1,22 @@
-//! Stage 1 of the batch: the project's runs loaded and checked, the outputs to model chosen, saved
-//! clusters taken over.
+//! The runs a model is identified on and scored on, by role: read with their load options, the
+//! identification runs joined end to end, their segments, and the scored runs put on the
+//! identification run's grid. The batch loads a project's runs here ([`load_runs`]); the app, which
+//! keeps its runs in the session, calls the same steps one by one ([`join_identification`],
+//! [`segments`], [`grid_of`]).
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, bail};
 
-use crate::core::run::Run;
+use crate::core::identification::pipeline::{PipelineError, segments_for, step_signal};
+use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
+use crate::core::run::{Run, RunError, RunRole, join_runs};
 use crate::io::csv_run::load_run_with_notes;
 use crate::io::project::{Project, RunSource};
+
+/// Runs sampled more than this fraction off the identification run are on another grid: the
+/// models are discrete-time, so a 2 % different sample time is a 2 % different time scale, beyond
+/// the jitter a logger's clock has.
+pub const DT_TOLERANCE: f64 = 0.02;
 
 /// The loaded runs of a project, by role.
 pub struct Runs {
@@ -58,7 +68,8 @@ impl Runs {
     }
 }
 
-fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
+/// Read one run with its load options; what reading it changed goes to `notes`, in words.
+pub fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
     let opts = source.load.to_options()?;
     let (run, read) = load_run_with_notes(&source.path, &opts)?;
     if read.resampled || read.merged_repeats > 0 {
@@ -89,8 +100,78 @@ fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
     Ok(run)
 }
 
-/// Load every run of the project; runs sampled differently from the identification run are refused
-/// (the models are discrete-time).
+/// The identification run from one or several: the one, or all of them joined end to end with the
+/// index where each later one starts (no segment may cross a join).
+pub fn join_identification(parts: &[Run]) -> Result<(Run, Vec<usize>), RunError> {
+    match parts {
+        [one] => Ok((one.clone(), Vec::new())),
+        _ => join_runs(parts),
+    }
+}
+
+/// The segments of the identification run: the given ones (checked against the run), else the steps
+/// detected on the input or on the `steps_from` channel, each joined run on its own.
+pub fn segments(
+    run: &Run,
+    junctions: &[usize],
+    given: Option<&[Segment]>,
+    steps_from: Option<&str>,
+) -> Result<Vec<Segment>, PipelineError> {
+    if given.is_some() {
+        return segments_for(run, given, &SegmentSettings::default());
+    }
+    let signal = step_signal(run, steps_from)?;
+    auto_segments_joined(signal, junctions, run.dt_secs, &SegmentSettings::default())
+        .map_err(|source| PipelineError::Segment { run: run.name.clone(), source })
+}
+
+/// A scored run whose sample time is not the identification run's.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "run '{run}' is sampled every {dt_secs:.5} s but the identification run every {ident_dt_secs:.5} s; models are discrete-time, so resample it first"
+)]
+pub struct OffGrid {
+    pub run: String,
+    pub dt_secs: f64,
+    pub ident_dt_secs: f64,
+}
+
+/// Where a scored run stands against the identification run's grid.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Grid {
+    /// On it (within [`DT_TOLERANCE`]).
+    On,
+    /// Off it, but resampled from an irregular log (`resample`, each run onto its own median
+    /// step): resampled again onto it ([`resampled_onto`]).
+    Resample,
+    Off(OffGrid),
+}
+
+/// Where `run` stands against the identification run's sample time `ident_dt_secs`.
+pub fn grid_of(run: &Run, ident_dt_secs: f64, resample: bool) -> Grid {
+    let off = (run.dt_secs / ident_dt_secs - 1.0).abs() > DT_TOLERANCE;
+    match (off, resample) {
+        (false, _) => Grid::On,
+        (true, true) => Grid::Resample,
+        (true, false) => Grid::Off(OffGrid { run: run.name.clone(), dt_secs: run.dt_secs, ident_dt_secs }),
+    }
+}
+
+/// `run` resampled onto the identification run's grid, with the note saying so.
+pub fn resampled_onto(run: &Run, ident_dt_secs: f64) -> (Run, String) {
+    (run.resampled(ident_dt_secs), resample_note(run, ident_dt_secs))
+}
+
+/// What [`resampled_onto`] did to `run`, in words.
+pub fn resample_note(run: &Run, ident_dt_secs: f64) -> String {
+    format!(
+        "run '{}': resampled again from {:.5} s onto the identification run's {:.5} s grid",
+        run.name, run.dt_secs, ident_dt_secs
+    )
+}
+
+/// Load every run of the project; runs sampled differently from the identification run are put on
+/// its grid when they were resampled, else refused (the models are discrete-time).
 pub fn load_runs(project: &Project) -> Result<Runs> {
     if project.ident.is_empty() {
         bail!("the project names no identification run (give one with --ident FILE)");
@@ -98,9 +179,8 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
     let mut notes = Vec::new();
     let mut load = |source: &RunSource| load_source(source, &mut notes);
     let parts = project.ident.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
-    let (ident, ident_junctions) =
-        crate::core::run::join_runs(&parts).context("joining the identification runs")?;
-    crate::core::identification::pipeline::step_signal(&ident, project.steps_from.as_deref())?;
+    let (ident, ident_junctions) = join_identification(&parts).context("joining the identification runs")?;
+    step_signal(&ident, project.steps_from.as_deref())?;
     let mut validate = project.validate.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let mut held_out = project.held_out.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let mut chirp = project.chirp.as_ref().map(&mut load).transpose()?;
@@ -109,25 +189,28 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
         project.validate.iter().chain(&project.held_out).chain(&project.chirp).chain(&project.steady);
     let runs = validate.iter_mut().chain(&mut held_out).chain(&mut chirp).chain(&mut steady);
     for (run, source) in runs.zip(sources) {
-        let ratio = run.dt_secs / ident.dt_secs;
-        if (ratio - 1.0).abs() > 0.02 && source.load.resample {
-            // Both were resampled from irregular logs, each onto its own median step: put this one on
-            // the identification run's grid.
-            notes.push(format!(
-                "run '{}': resampled again from {:.5} s onto the identification run's {:.5} s grid",
-                run.name, run.dt_secs, ident.dt_secs
-            ));
-            *run = run.resampled(ident.dt_secs);
-        } else if (ratio - 1.0).abs() > 0.02 {
-            bail!(
-                "run '{}' is sampled every {:.5} s but the identification run every {:.5} s; models are discrete-time, so resample it first",
-                run.name,
-                run.dt_secs,
-                ident.dt_secs
-            );
+        match grid_of(run, ident.dt_secs, source.load.resample) {
+            Grid::On => {}
+            Grid::Resample => {
+                let (on_grid, note) = resampled_onto(run, ident.dt_secs);
+                notes.push(note);
+                *run = on_grid;
+            }
+            Grid::Off(off) => return Err(off.into()),
         }
     }
     Ok(Runs { ident, ident_junctions, validate, held_out, chirp, steady, notes })
+}
+
+/// The runs of a project by role, in the order they are listed (for the app's session).
+pub fn sources_by_role(project: &Project) -> Vec<(&RunSource, RunRole)> {
+    let roles = project.ident.iter().map(|s| (s, RunRole::Identification));
+    roles
+        .chain(project.validate.iter().map(|s| (s, RunRole::Validation)))
+        .chain(project.held_out.iter().map(|s| (s, RunRole::HeldOut)))
+        .chain(project.chirp.iter().map(|s| (s, RunRole::Chirp)))
+        .chain(project.steady.iter().map(|s| (s, RunRole::Steady)))
+        .collect()
 }
 
 /// Outputs to model: the project's list (each must exist), else every output of the ident run.
@@ -135,12 +218,11 @@ pub fn outputs_to_model(project: &Project, ident: &Run) -> Result<Vec<String>> {
     let sections = project.settings.keys().chain(project.segments.keys()).chain(project.clusters.keys());
     for name in sections {
         if ident.output(name).is_none() {
-            let available: Vec<&str> = ident.outputs.iter().map(|c| c.name.as_str()).collect();
             bail!(
                 "[output.{name}] in the project names no output of the identification run '{}' (outputs: {}): \
                  its settings would be ignored",
                 ident.name,
-                available.join(", ")
+                output_names(ident)
             );
         }
     }
@@ -149,38 +231,16 @@ pub fn outputs_to_model(project: &Project, ident: &Run) -> Result<Vec<String>> {
     }
     for name in &project.outputs {
         if ident.output(name).is_none() {
-            let available: Vec<&str> = ident.outputs.iter().map(|c| c.name.as_str()).collect();
             bail!(
                 "output '{name}' is not in the identification run '{}' (outputs: {})",
                 ident.name,
-                available.join(", ")
+                output_names(ident)
             );
         }
     }
     Ok(project.outputs.clone())
 }
 
-/// Take the clusters of the project's saved model (`clusters_from` / `--clusters`) for every output
-/// that has none of its own; say which outputs fall back to the automatic proposal.
-pub fn apply_saved_clusters(project: &mut Project, dt_secs: f64, outputs: &[String]) -> Result<Vec<String>> {
-    let Some(path) = &project.clusters_from else { return Ok(Vec::new()) };
-    let saved = crate::io::model_file::clusters_from_model(path, dt_secs)?;
-    let mut notes = Vec::new();
-    for output in outputs {
-        if project.clusters.contains_key(output) {
-            notes.push(format!(
-                "'{output}': the project's own clusters take precedence over {}",
-                path.display()
-            ));
-        } else if let Some(clusters) = saved.get(output) {
-            project.clusters.insert(output.clone(), clusters.clone());
-            notes.push(format!("'{output}': {} clusters taken from {}", clusters.len(), path.display()));
-        } else {
-            notes.push(format!(
-                "'{output}': {} holds no clusters for it; the automatic proposal is used",
-                path.display()
-            ));
-        }
-    }
-    Ok(notes)
+fn output_names(run: &Run) -> String {
+    run.outputs.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ")
 }

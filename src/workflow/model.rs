@@ -1,0 +1,212 @@
+//! One output's model, built the same way for the batch and the app: the segment fits, the given
+//! clusters or the automatic proposal, the polished Wiener model ([`identify`], or its steps
+//! [`fit_segments`], [`propose`] and [`ModelSource::build`] for the app, which caches each), then
+//! the effects added by hand and the missing-physics loop ([`add_effects`]).
+use crate::core::diagnose::{self, AutoRound, DiagnoseError, EffectSequence};
+use crate::core::effects::{EffectId, ExtendedModel};
+use crate::core::identification::cluster::Cluster;
+use crate::core::identification::pipeline::{
+    self, GrayBoxModel, Identified, OutputSettings, PipelineError, SegmentFits,
+};
+use crate::core::identification::segment::Segment;
+use crate::core::identification::structure::Proposal;
+use crate::core::run::Run;
+use crate::io::project::Project;
+
+pub use crate::core::identification::pipeline::ModelSource;
+
+use super::runs;
+
+/// The effects of one output's model: added by hand, in order, then the missing-physics loop.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct EffectPlan {
+    /// Catalog effects added in this order, each refitted on the identification data.
+    pub by_hand: Vec<EffectId>,
+    /// Rounds of the missing-physics loop after them (0: none).
+    pub auto_rounds: usize,
+}
+
+impl EffectPlan {
+    /// True when the model gets no effect at all.
+    pub fn is_empty(&self) -> bool {
+        self.by_hand.is_empty() && self.auto_rounds == 0
+    }
+
+    /// "thermal_soak, ambient_correction and the missing-physics loop (3 rounds)".
+    pub fn words(&self) -> String {
+        let mut parts: Vec<String> = self.by_hand.iter().map(|id| id.name().to_owned()).collect();
+        if self.auto_rounds > 0 {
+            parts.push(format!("the missing-physics loop ({} rounds)", self.auto_rounds));
+        }
+        match parts.as_slice() {
+            [] => String::new(),
+            [one] => one.clone(),
+            [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+        }
+    }
+}
+
+/// What one output's model is built from: its settings, segments, clusters and effects.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputPlan {
+    pub output: String,
+    pub settings: OutputSettings,
+    /// Segments given by the user; `None`: detected on the input or the `steps_from` channel.
+    pub segments: Option<Vec<Segment>>,
+    /// Channel the steps are detected on instead of the input.
+    pub steps_from: Option<String>,
+    /// Clusters given by the user; `None`: the automatic proposal.
+    pub clusters: Option<Vec<Cluster>>,
+    pub effects: EffectPlan,
+}
+
+impl OutputPlan {
+    /// The plan a project gives `output` (its clusters taken from `clusters_from` already, see
+    /// [`super::model_file::take_saved_clusters`]).
+    pub fn of_project(project: &Project, output: &str) -> Self {
+        Self {
+            output: output.to_owned(),
+            settings: project.settings_for(output),
+            segments: project.segments.get(output).cloned(),
+            steps_from: project.steps_from.clone(),
+            clusters: project.clusters.get(output).cloned(),
+            effects: EffectPlan { by_hand: project.add_effects.clone(), auto_rounds: project.auto_effects },
+        }
+    }
+}
+
+/// The segment fits of `output` (the input dead time estimated first when the settings ask).
+pub fn fit_segments(
+    ident: &Run,
+    output: &str,
+    segments: &[Segment],
+    settings: &OutputSettings,
+) -> Result<SegmentFits, PipelineError> {
+    pipeline::fit_segments_for(ident, output, segments, settings)
+}
+
+/// The automatic proposal for these fits: which candidate clusters the model keeps, and why.
+pub fn propose(
+    fits: &SegmentFits,
+    ident: &Run,
+    settings: &OutputSettings,
+) -> Result<Proposal, PipelineError> {
+    pipeline::propose(fits, ident, settings)
+}
+
+/// Segments → fits → the given clusters or the automatic proposal → the polished model, for the
+/// identification run `ident` (several runs joined at `junctions`).
+pub fn identify(ident: &Run, junctions: &[usize], plan: &OutputPlan) -> Result<Identified, PipelineError> {
+    let segments = runs::segments(ident, junctions, plan.segments.as_deref(), plan.steps_from.as_deref())?;
+    pipeline::identify_output(ident, &plan.output, &plan.settings, &segments, plan.clusters.as_deref())
+}
+
+/// The effects of a model as [`add_effects`] leaves them.
+#[derive(Clone, Debug)]
+pub struct Effects {
+    /// The model after the last step, its validation error after every step, and the effect that
+    /// could not be added (the loop is not run then).
+    pub sequence: EffectSequence,
+    /// What each round of the missing-physics loop added.
+    pub rounds: Vec<AutoRound>,
+    /// Why the loop stopped before its rounds were done, when it failed (or was cancelled).
+    pub loop_failed: Option<DiagnoseError>,
+}
+
+/// Why a model's effects could not all be added.
+#[derive(Debug, thiserror::Error)]
+pub enum EffectsError {
+    #[error("adding the effect '{id}' to '{output}': {source}")]
+    Add {
+        id: EffectId,
+        output: String,
+        #[source]
+        source: DiagnoseError,
+    },
+    #[error("the missing-physics loop on '{output}': {source}")]
+    Loop {
+        output: String,
+        #[source]
+        source: DiagnoseError,
+    },
+}
+
+impl Effects {
+    /// The model with every effect that could be added.
+    pub fn model(&self) -> &ExtendedModel {
+        &self.sequence.model
+    }
+
+    /// `Err` when an effect of the plan could not be added or the loop failed: the model is then
+    /// not the one the plan asks for.
+    pub fn check(&self, output: &str) -> Result<(), EffectsError> {
+        if let Some((id, source)) = &self.sequence.failed {
+            let (id, output, source) = (*id, output.to_owned(), source.clone());
+            return Err(EffectsError::Add { id, output, source });
+        }
+        match &self.loop_failed {
+            Some(source) => Err(EffectsError::Loop { output: output.to_owned(), source: source.clone() }),
+            None => Ok(()),
+        }
+    }
+
+    /// What the loop did and which steps have no validation error, in words (the batch's notes,
+    /// the app's Diagnosis view).
+    pub fn notes(&self, output: &str, plan: &EffectPlan) -> Vec<String> {
+        let mut notes = Vec::new();
+        let loop_ran = plan.auto_rounds > 0 && self.sequence.failed.is_none() && self.loop_failed.is_none();
+        if loop_ran && self.rounds.len() < plan.auto_rounds {
+            notes.push(format!(
+                "'{output}': the missing-physics loop stopped after {} of {} rounds: nothing further is significant",
+                self.rounds.len(),
+                plan.auto_rounds
+            ));
+        }
+        for round in &self.rounds {
+            notes.push(format!(
+                "'{output}': the loop added {} ({}): {:.3} % → {:.3} %; {}; {}",
+                round.added,
+                round.kind,
+                round.rmspe_before_pct,
+                round.rmspe_after_pct,
+                round.evidence,
+                round.significance
+            ));
+        }
+        notes.extend(self.sequence.history_gaps.iter().map(|gap| format!("'{output}': {gap}")));
+        notes
+    }
+}
+
+/// The gray-box `model` with the effects of `plan`: each effect added by hand refitted on the
+/// identification data (`ident`, `fits`) in turn, then the missing-physics loop, every choice made
+/// on `validation`; the validation error after each step. `progress` gets the fraction of the
+/// loop done; when it returns false the loop stops (cancelled).
+pub fn add_effects(
+    model: &GrayBoxModel,
+    plan: &EffectPlan,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+    validation: &[&Run],
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Effects {
+    let base = ExtendedModel::from_gray_box(model);
+    let mut sequence = diagnose::apply_in_order(&base, &plan.by_hand, ident, fits, settings, validation);
+    let (mut rounds, mut loop_failed) = (Vec::new(), None);
+    if plan.auto_rounds > 0 && sequence.failed.is_none() {
+        match diagnose::auto_effects(
+            &mut sequence,
+            plan.auto_rounds,
+            ident,
+            fits,
+            settings,
+            validation,
+            progress,
+        ) {
+            Ok(taken) => rounds = taken,
+            Err(err) => loop_failed = Some(err),
+        }
+    }
+    Effects { sequence, rounds, loop_failed }
+}

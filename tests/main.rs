@@ -1,0 +1,28 @@
+//! jetid's integration tests: one test target (one link of the library and the app), a module per
+//! area, the shared fixtures in `common`. `cargo test` runs them all; `cargo test --test integration
+//! diagnosis::` runs one area.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+
+mod app;
+mod app_compare;
+mod app_control;
+mod app_diagnosis;
+mod app_roles;
+mod app_zplane;
+mod architecture;
+mod baselines;
+mod batch_cli;
+mod control;
+mod diagnosis;
+mod engine_family;
+mod export;
+mod figures;
+mod identification;
+mod parser_props;
+mod realdata;
+mod residuals;
+mod run_files;
+mod simulator;
+mod validation_stats;

@@ -9,7 +9,7 @@ use egui_kittest::kittest::Queryable;
 use std::sync::Arc;
 use std::time::Duration;
 
-use jetid::core::compare::{Cancelled, CompareInput, ModelKind, compare_output, compare_stage};
+use jetid::core::compare::{Cancelled, CompareInput, Curve, ModelKind, compare_output, compare_stage};
 use jetid::core::diagnose::TrialId;
 use jetid::core::effects::EffectId;
 use jetid::core::numerics::metrics::metrics;
@@ -88,12 +88,14 @@ fn showing_compare_starts_a_job_with_progress_and_fills_table_1() {
     assert_eq!(comparison.runs.len(), 2);
     for name in [GRAY_BOX, LINEAR, HAMMERSTEIN_WIENER, NNARX] {
         assert!(comparison.runs.iter().all(|r| r.models.iter().any(|m| m.model == name)), "{name}");
-        let mc = comparison.monte_carlo.get(name.report_name()).expect("a Monte Carlo study");
+        let mc = comparison.monte_carlo.get(&name).expect("a Monte Carlo study");
         assert!(mc.std_difference > 0.0 && mc.std_difference.is_finite());
         assert_eq!(mc.histogram.counts.iter().sum::<usize>(), mc.differences.len());
     }
     let freq = comparison.frequency.as_ref().expect("the chirp's frequency comparison");
-    assert!(freq.responses.contains_key("measured") && freq.responses.contains_key(NNARX.report_name()));
+    assert!(
+        freq.responses.contains_key(&Curve::Measured) && freq.responses.contains_key(&Curve::Model(NNARX))
+    );
     assert!(comparison.noise.as_ref().is_some_and(|n| n.used.is_some()));
     // The table is on screen with the paper's values beside ours.
     assert!(harness.query_all_by_label("Hammerstein–Wiener").count() >= 1);

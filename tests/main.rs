@@ -26,3 +26,4 @@ mod residuals;
 mod run_files;
 mod simulator;
 mod validation_stats;
+mod workflow;

@@ -3,8 +3,8 @@
 use std::collections::BTreeMap;
 
 use crate::core::compare::{
-    FrequencyComparison, MonteCarloSummary, OutputModels, error_boxes, failure_reasons, frequency_comparison,
-    monte_carlo_all,
+    FrequencyComparison, ModelKind, MonteCarloSummary, OutputModels, error_boxes, failure_reasons,
+    frequency_comparison, monte_carlo_all,
 };
 use crate::core::identification::pipeline;
 use crate::core::monte_carlo::MonteCarloResult;
@@ -40,15 +40,11 @@ pub fn score_output(
                         let why = failure_reasons(&y.values, &p.y_hat, &run.input.values, ident_input);
                         report
                             .failure_reasons
-                            .entry(kind.report_name().to_owned())
+                            .entry(kind)
                             .or_default()
                             .insert(run.name.clone(), why.join("; "));
                     }
-                    report
-                        .models
-                        .entry(kind.report_name().to_owned())
-                        .or_default()
-                        .insert(run.name.clone(), p.metrics);
+                    report.models.entry(kind).or_default().insert(run.name.clone(), p.metrics);
                 }
                 Err(e) => notes.push(format!("{kind} on '{}': {e}", run.name)),
             }
@@ -60,7 +56,7 @@ pub fn score_output(
 /// responses and the Monte Carlo study of every model.
 pub struct Studies {
     pub frequency: Option<FrequencyComparison>,
-    pub monte_carlo: BTreeMap<String, MonteCarloResult>,
+    pub monte_carlo: BTreeMap<ModelKind, MonteCarloResult>,
 }
 
 /// Score every model, then run the studies the runs allow; `input_noise` is the steady run's fitted
@@ -96,7 +92,7 @@ fn mean_input(steady: &Run) -> f64 {
 
 /// What report.json carries of the Monte Carlo studies of one output.
 pub fn monte_carlo_summaries(
-    results: &BTreeMap<String, MonteCarloResult>,
-) -> BTreeMap<String, MonteCarloSummary> {
-    results.iter().map(|(k, r)| (k.clone(), MonteCarloSummary::from_result(r))).collect()
+    results: &BTreeMap<ModelKind, MonteCarloResult>,
+) -> BTreeMap<ModelKind, MonteCarloSummary> {
+    results.iter().map(|(k, r)| (*k, MonteCarloSummary::from_result(r))).collect()
 }

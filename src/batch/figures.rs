@@ -4,7 +4,7 @@ use std::path::Path;
 
 use std::collections::BTreeMap;
 
-use crate::core::compare::{FrequencyComparison, ModelKind, OutputModels};
+use crate::core::compare::{Curve, FrequencyComparison, ModelKind, OutputModels};
 use crate::core::identification::pipeline::{GrayBoxModel, Identified};
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::core::numerics::metrics::BoxStats;
@@ -107,13 +107,16 @@ fn static_map_curve(model: &GrayBoxModel) -> Vec<(f64, f64)> {
 
 /// The chirp's curves, when the measured response is among them.
 fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
-    let measured = freq.responses.get("measured")?;
+    let measured = freq.responses.get(&Curve::Measured)?;
     let curves = freq
         .responses
         .iter()
-        .filter(|(name, _)| name.as_str() != "measured")
-        .map(|(name, r)| BodeCurve {
-            name: model_label(name).to_owned(),
+        .filter_map(|(curve, r)| match curve {
+            Curve::Measured => None,
+            Curve::Model(kind) => Some((*kind, r)),
+        })
+        .map(|(kind, r)| BodeCurve {
+            name: kind.label().to_owned(),
             points: r
                 .omega_rad_s
                 .iter()
@@ -121,7 +124,7 @@ fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
                 .zip(&r.phase_deg)
                 .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
                 .collect(),
-            emphasis: name.as_str() == ModelKind::GrayBox.report_name(),
+            emphasis: kind == ModelKind::GrayBox,
         })
         .collect();
     let measured = EmpiricalBode {
@@ -138,7 +141,7 @@ pub fn output_figures(
     dir: &Path,
     output: &str,
     curves: &OutputCurves<'_>,
-    boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
+    boxes: &BTreeMap<ModelKind, BTreeMap<String, BoxStats>>,
 ) -> (Vec<String>, Vec<String>) {
     let (mut written, mut notes) = (Vec::new(), Vec::new());
     let mut keep = |name: String, result: Result<(), figures::FigureError>| match result {
@@ -197,13 +200,11 @@ pub fn output_figures(
 fn error_boxes_figure(
     dir: &Path,
     output: &str,
-    boxes: &BTreeMap<String, BTreeMap<String, BoxStats>>,
+    boxes: &BTreeMap<ModelKind, BTreeMap<String, BoxStats>>,
 ) -> Option<(String, Result<(), figures::FigureError>)> {
     let box_list: Vec<(String, BoxStats)> = boxes
         .iter()
-        .flat_map(|(model, runs)| {
-            runs.iter().map(move |(run, b)| (format!("{} / {run}", model_label(model)), *b))
-        })
+        .flat_map(|(model, runs)| runs.iter().map(move |(run, b)| (format!("{} / {run}", model.label()), *b)))
         .collect();
     if box_list.is_empty() {
         return None;
@@ -214,16 +215,11 @@ fn error_boxes_figure(
     Some((name, drawn))
 }
 
-/// The name people read for a model keyed by its report name.
-fn model_label(name: &str) -> &str {
-    ModelKind::from_report_name(name).map_or(name, |kind| kind.label())
-}
-
 /// One histogram per model of the Monte Carlo differences, with the fitted normal.
 pub fn monte_carlo_figures(
     dir: &Path,
     output: &str,
-    results: &BTreeMap<String, MonteCarloResult>,
+    results: &BTreeMap<ModelKind, MonteCarloResult>,
 ) -> (Vec<String>, Vec<String>) {
     let (mut written, mut notes) = (Vec::new(), Vec::new());
     for (model, r) in results {
@@ -236,7 +232,7 @@ pub fn monte_carlo_figures(
             &dir.join(&name),
             &format!(
                 "{output}, {}: noisy − nominal over {} runs (std {:.4})",
-                model_label(model),
+                model.label(),
                 r.std_per_run.len(),
                 r.std_difference
             ),

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 
-use crate::core::compare::{MonteCarloSummary, OutputModels, fit_baselines, noise_fits};
+use crate::core::compare::{ModelKind, MonteCarloSummary, OutputModels, fit_baselines, noise_fits};
 use crate::core::diagnose::steady_state_agreement;
 use crate::core::identification::pipeline::Identified;
 use crate::core::numerics::noise_fit::Distribution;
@@ -44,7 +44,7 @@ struct OutputPart {
     /// Figure files written, in report order.
     figures: Vec<String>,
     notes: Vec<String>,
-    monte_carlo: Option<BTreeMap<String, MonteCarloSummary>>,
+    monte_carlo: Option<BTreeMap<ModelKind, MonteCarloSummary>>,
     timings: Timings,
 }
 

@@ -35,6 +35,38 @@ impl RunRole {
     }
 }
 
+/// What an output measures, as far as the method needs to know: the shaft speed and the thrust
+/// each have their own ARX orders, ambient-corrected form and paper figures. Read from the output's
+/// column name in one place ([`Quantity::of`]); `None` for any other output (a pressure ratio, a
+/// power), which gets the defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    ShaftSpeed,
+    Thrust,
+}
+
+impl Quantity {
+    /// The quantity an output column measures, by its name (any case): `speed` or `rpm` is the
+    /// shaft speed, `thrust` the thrust.
+    pub fn of(output: &str) -> Option<Self> {
+        let name = output.to_ascii_lowercase();
+        if name.contains("speed") || name.contains("rpm") {
+            Some(Self::ShaftSpeed)
+        } else if name.contains("thrust") {
+            Some(Self::Thrust)
+        } else {
+            None
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::ShaftSpeed => "shaft speed",
+            Self::Thrust => "thrust",
+        }
+    }
+}
+
 /// One named signal with its unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Channel {

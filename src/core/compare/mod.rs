@@ -21,7 +21,7 @@ mod models;
 mod studies;
 
 pub use failure::failure_reasons;
-pub use model_kind::{ModelKind, PaperOutput, PaperRow};
+pub use model_kind::{Curve, ModelKind, PaperRow};
 pub use models::{Cancelled, OutputModels, fit_baselines, fit_baselines_with_progress, scaled};
 pub use studies::{
     FrequencyComparison, MonteCarloSummary, chirp_grid, chirp_welch_options, error_boxes,
@@ -101,7 +101,7 @@ pub struct OutputComparison {
     /// `None` without a steady run.
     pub noise: Option<InputNoiseFit>,
     /// Per model; empty without a steady run or a usable noise fit.
-    pub monte_carlo: BTreeMap<String, MonteCarloResult>,
+    pub monte_carlo: BTreeMap<ModelKind, MonteCarloResult>,
     /// Parts that failed (a baseline, a frequency response, a Monte Carlo study), in words.
     pub notes: Vec<String>,
 }
@@ -154,7 +154,7 @@ pub fn compare_output(
             let mut part = scaled(progress, lo, hi);
             match monte_carlo_with_progress(&models, kind, u0, steady.dt_secs, &noise, &mut part) {
                 Some(Ok(r)) => {
-                    monte_carlo.insert(kind.report_name().to_owned(), r);
+                    monte_carlo.insert(kind, r);
                 }
                 Some(Err(MonteCarloError::Cancelled)) => return Err(Cancelled),
                 Some(Err(e)) => notes.push(format!("Monte Carlo of {kind}: {e}")),

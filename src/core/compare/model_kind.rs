@@ -1,8 +1,9 @@
 //! The models of the paper's comparison, and the paper's own figures for them.
 use serde::{Deserialize, Serialize};
 
-/// A model of the comparison. Its report name is how report.json keys it (CONTRACT.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+/// A model of the comparison. Its report name is how report.json keys it (CONTRACT.md), and maps
+/// keyed by it are ordered by that name, as report.json lists them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ModelKind {
     /// The gray-box Wiener model `u → G(z) → f(v)`, with its effects where it has any.
@@ -28,32 +29,7 @@ pub struct PaperRow {
     pub se_chirp: f64,
 }
 
-/// The two outputs the paper models.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PaperOutput {
-    ShaftSpeed,
-    Thrust,
-}
-
-impl PaperOutput {
-    /// The paper's output an output column stands for, by its name.
-    pub fn of(output: &str) -> Option<Self> {
-        if output.contains("speed") || output.contains("rpm") {
-            Some(Self::ShaftSpeed)
-        } else if output.contains("thrust") {
-            Some(Self::Thrust)
-        } else {
-            None
-        }
-    }
-
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::ShaftSpeed => "shaft speed",
-            Self::Thrust => "thrust",
-        }
-    }
-}
+use crate::core::run::Quantity;
 
 impl ModelKind {
     /// In the order of the comparison tables: the gray-box model and its linear block, the paper's
@@ -119,31 +95,100 @@ impl ModelKind {
     }
 
     /// The paper's Table 1 for this model (section 6; the linear block alone is not in it).
-    pub fn paper_table1(self, output: PaperOutput) -> Option<PaperRow> {
+    pub fn paper_table1(self, output: Quantity) -> Option<PaperRow> {
         let row =
             |rmspe_pct, se, rmspe_chirp_pct, se_chirp| PaperRow { rmspe_pct, se, rmspe_chirp_pct, se_chirp };
         Some(match (self, output) {
-            (Self::GrayBox, PaperOutput::ShaftSpeed) => row(1.3429, 26.613, 2.0327, 11.641),
-            (Self::HammersteinWiener, PaperOutput::ShaftSpeed) => row(5.5167, 121.06, 8.5607, 47.835),
-            (Self::Nnarx, PaperOutput::ShaftSpeed) => row(3.1928, 52.280, 3.8578, 27.555),
-            (Self::GrayBox, PaperOutput::Thrust) => row(4.3739, 0.0580, 6.4324, 0.0309),
-            (Self::HammersteinWiener, PaperOutput::Thrust) => row(8.0221, 0.1431, 14.838, 0.0552),
-            (Self::Nnarx, PaperOutput::Thrust) => row(7.4271, 0.1466, 17.136, 0.0489),
+            (Self::GrayBox, Quantity::ShaftSpeed) => row(1.3429, 26.613, 2.0327, 11.641),
+            (Self::HammersteinWiener, Quantity::ShaftSpeed) => row(5.5167, 121.06, 8.5607, 47.835),
+            (Self::Nnarx, Quantity::ShaftSpeed) => row(3.1928, 52.280, 3.8578, 27.555),
+            (Self::GrayBox, Quantity::Thrust) => row(4.3739, 0.0580, 6.4324, 0.0309),
+            (Self::HammersteinWiener, Quantity::Thrust) => row(8.0221, 0.1431, 14.838, 0.0552),
+            (Self::Nnarx, Quantity::Thrust) => row(7.4271, 0.1466, 17.136, 0.0489),
             (Self::Linear | Self::Arx | Self::HammersteinArx | Self::StaticCubic, _) => return None,
         })
     }
 
     /// The paper's Monte Carlo standard deviation (section 7): rpm for shaft speed, N for thrust.
-    pub fn paper_monte_carlo_std(self, output: PaperOutput) -> Option<f64> {
+    pub fn paper_monte_carlo_std(self, output: Quantity) -> Option<f64> {
         Some(match (self, output) {
-            (Self::GrayBox, PaperOutput::ShaftSpeed) => 6.035,
-            (Self::HammersteinWiener, PaperOutput::ShaftSpeed) => 14.08,
-            (Self::Nnarx, PaperOutput::ShaftSpeed) => 26.5,
-            (Self::GrayBox, PaperOutput::Thrust) => 0.0136,
-            (Self::HammersteinWiener, PaperOutput::Thrust) => 0.0352,
-            (Self::Nnarx, PaperOutput::Thrust) => 0.1064,
+            (Self::GrayBox, Quantity::ShaftSpeed) => 6.035,
+            (Self::HammersteinWiener, Quantity::ShaftSpeed) => 14.08,
+            (Self::Nnarx, Quantity::ShaftSpeed) => 26.5,
+            (Self::GrayBox, Quantity::Thrust) => 0.0136,
+            (Self::HammersteinWiener, Quantity::Thrust) => 0.0352,
+            (Self::Nnarx, Quantity::Thrust) => 0.1064,
             (Self::Linear | Self::Arx | Self::HammersteinArx | Self::StaticCubic, _) => return None,
         })
+    }
+}
+
+impl Ord for ModelKind {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.report_name().cmp(other.report_name())
+    }
+}
+
+impl PartialOrd for ModelKind {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+/// A curve of the chirp comparison: the measured response, or a model's simulation of the chirp
+/// input through the same estimator. Keyed in report.json as "measured" or the model's report name,
+/// and ordered by that name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Curve {
+    Measured,
+    Model(ModelKind),
+}
+
+impl Curve {
+    /// "measured", or the model's report name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Measured => "measured",
+            Self::Model(kind) => kind.report_name(),
+        }
+    }
+
+    /// The name people read: "measured" or the model's label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Measured => "measured",
+            Self::Model(kind) => kind.label(),
+        }
+    }
+}
+
+impl Ord for Curve {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.name().cmp(other.name())
+    }
+}
+
+impl PartialOrd for Curve {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Serialize for Curve {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Curve {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        match name.as_str() {
+            "measured" => Ok(Self::Measured),
+            _ => ModelKind::from_report_name(&name)
+                .map(Self::Model)
+                .ok_or_else(|| serde::de::Error::custom(format!("no model is called '{name}'"))),
+        }
     }
 }
 

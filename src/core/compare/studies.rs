@@ -11,7 +11,7 @@ use crate::core::numerics::spectral::{EmpiricalResponse, LowFrequencyLevel, Welc
 use crate::core::numerics::tf::log_space;
 use crate::core::run::Run;
 
-use super::{ModelKind, OutputModels};
+use super::{Curve, ModelKind, OutputModels};
 
 /// A model's frequency response as the chirp shows it: the same Welch estimate applied to the
 /// model's simulation of the chirp input as to the measurement, so every model (the network too) is
@@ -20,9 +20,9 @@ use super::{ModelKind, OutputModels};
 pub struct FrequencyComparison {
     pub run: String,
     /// −3 dB cut-off of the measured response and of each model's, rad/s (`None`: not reached in band).
-    pub cutoff_rad_s: BTreeMap<String, Option<f64>>,
+    pub cutoff_rad_s: BTreeMap<Curve, Option<f64>>,
     #[serde(skip)]
-    pub responses: BTreeMap<String, EmpiricalResponse>,
+    pub responses: BTreeMap<Curve, EmpiricalResponse>,
 }
 
 /// Lowest frequency of the chirp's response grid, rad/s: below it a chirp of the paper's band
@@ -56,16 +56,16 @@ pub fn frequency_comparison(
     let opts = chirp_welch_options();
     let mut responses = BTreeMap::new();
     let mut cutoff_rad_s = BTreeMap::new();
-    let mut series = vec![("measured".to_owned(), y.clone())];
-    series.extend(models.simulate_all(u).into_iter().map(|(kind, y)| (kind.report_name().to_owned(), y)));
-    for (name, y_model) in series {
+    let mut series = vec![(Curve::Measured, y.clone())];
+    series.extend(models.simulate_all(u).into_iter().map(|(kind, y)| (Curve::Model(kind), y)));
+    for (curve, y_model) in series {
         match welch_response(u, &y_model, chirp.dt_secs, &omegas, &opts) {
             Ok(resp) => {
                 let cut = resp.cutoff_rad_s(LowFrequencyLevel::MeanOfFirst(3)).ok().flatten();
-                cutoff_rad_s.insert(name.clone(), cut);
-                responses.insert(name, resp);
+                cutoff_rad_s.insert(curve, cut);
+                responses.insert(curve, resp);
             }
-            Err(e) => notes.push(format!("frequency response of {name} on '{}': {e}", chirp.name)),
+            Err(e) => notes.push(format!("frequency response of {} on '{}': {e}", curve.name(), chirp.name)),
         }
     }
     Some(FrequencyComparison { run: chirp.name.clone(), cutoff_rad_s, responses })
@@ -76,13 +76,13 @@ pub fn error_boxes(
     models: &OutputModels,
     runs: &[&Run],
     output: &str,
-) -> BTreeMap<String, BTreeMap<String, BoxStats>> {
-    let mut out: BTreeMap<String, BTreeMap<String, BoxStats>> = BTreeMap::new();
+) -> BTreeMap<ModelKind, BTreeMap<String, BoxStats>> {
+    let mut out: BTreeMap<ModelKind, BTreeMap<String, BoxStats>> = BTreeMap::new();
     for run in runs {
         let Some(y) = run.output(output) else { continue };
         for (name, y_hat) in models.simulate_run(run) {
             if let Ok(b) = percentage_error_box(&y.values, &y_hat) {
-                out.entry(name.report_name().to_owned()).or_default().insert(run.name.clone(), b);
+                out.entry(name).or_default().insert(run.name.clone(), b);
             }
         }
     }
@@ -164,12 +164,12 @@ pub fn monte_carlo_all(
     dt_secs: f64,
     noise: &Distribution,
     notes: &mut Vec<String>,
-) -> BTreeMap<String, MonteCarloResult> {
+) -> BTreeMap<ModelKind, MonteCarloResult> {
     let mut out = BTreeMap::new();
     for kind in ModelKind::MONTE_CARLO {
         match monte_carlo_for(models, kind, u0, dt_secs, noise) {
             Some(Ok(r)) => {
-                out.insert(kind.report_name().to_owned(), r);
+                out.insert(kind, r);
             }
             Some(Err(e)) => notes.push(format!("Monte Carlo of {kind}: {e}")),
             None => {}

@@ -38,16 +38,17 @@ impl AmbientCorrection {
 
     /// The correction for an output, chosen from its name: speed → N/√θ, thrust → F/δ.
     pub fn for_output(output: &str) -> Result<Self, EffectError> {
-        let name = output.to_ascii_lowercase();
-        if name.contains("speed") || name.contains("rpm") {
-            Ok(Self { output_theta_exp: 0.5, output_delta_exp: 0.0 })
-        } else if name.contains("thrust") {
-            Ok(Self { output_theta_exp: 0.0, output_delta_exp: 1.0 })
-        } else {
-            Err(EffectError::NotApplicable {
+        match crate::core::run::Quantity::of(output) {
+            Some(crate::core::run::Quantity::ShaftSpeed) => {
+                Ok(Self { output_theta_exp: 0.5, output_delta_exp: 0.0 })
+            }
+            Some(crate::core::run::Quantity::Thrust) => {
+                Ok(Self { output_theta_exp: 0.0, output_delta_exp: 1.0 })
+            }
+            None => Err(EffectError::NotApplicable {
                 effect: <Self as super::Block>::ID.name().to_owned(),
                 reason: format!("no corrected form is known for output '{output}' (only speed and thrust)"),
-            })
+            }),
         }
     }
 

@@ -84,12 +84,10 @@ impl Default for OutputSettings {
 impl OutputSettings {
     /// The paper's orders for the SR-30 outputs: speed 19 poles / 3 zeros, thrust 21 / 19.
     pub fn for_output(name: &str) -> Self {
-        let orders = if name.contains("speed") || name.contains("rpm") {
-            ArxOrders::new(19, 3)
-        } else if name.contains("thrust") {
-            ArxOrders::new(21, 19)
-        } else {
-            ArxOrders::new(10, 2)
+        let orders = match crate::core::run::Quantity::of(name) {
+            Some(crate::core::run::Quantity::ShaftSpeed) => ArxOrders::new(19, 3),
+            Some(crate::core::run::Quantity::Thrust) => ArxOrders::new(21, 19),
+            None => ArxOrders::new(10, 2),
         };
         Self { orders, ..Self::default() }
     }

@@ -1,4 +1,5 @@
 //! `report.json` and `report.md` of `jetid --batch` (CONTRACT.md).
+use crate::core::run::Quantity;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -6,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
-use crate::core::compare::{ModelKind, PaperOutput};
+use crate::core::compare::{Curve, ModelKind};
 use crate::core::diagnose::HistoryStep;
 use crate::core::effects::EffectId;
 use crate::core::numerics::metrics::Metrics;
@@ -48,18 +49,18 @@ fn physics_kind() -> String {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OutputReport {
     pub unit: String,
-    /// model name → run name → metrics.
-    pub models: BTreeMap<String, BTreeMap<String, Metrics>>,
+    /// model → run name → metrics.
+    pub models: BTreeMap<ModelKind, BTreeMap<String, Metrics>>,
     pub identified: IdentSummary,
     pub diagnosis: Vec<DiagnosisEntry>,
     pub effects_applied: Vec<EffectId>,
     pub error_history: Vec<HistoryStep>,
     /// model → run → box-plot statistics of the percentage error 100·(y − ŷ)/y.
     #[serde(default)]
-    pub error_boxes: BTreeMap<String, BTreeMap<String, crate::core::numerics::metrics::BoxStats>>,
+    pub error_boxes: BTreeMap<ModelKind, BTreeMap<String, crate::core::numerics::metrics::BoxStats>>,
     /// −3 dB cut-off on the chirp run (rad/s): "measured" and each model's, from the same estimator.
     #[serde(default)]
-    pub cutoff_rad_s: BTreeMap<String, Option<f64>>,
+    pub cutoff_rad_s: BTreeMap<Curve, Option<f64>>,
     /// Where the final model fails on each scored run.
     #[serde(default)]
     pub residuals: Vec<ResidualReport>,
@@ -78,7 +79,7 @@ pub struct OutputReport {
     pub failing: Vec<String>,
     /// model → run → why it fails there (only failing models).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub failure_reasons: BTreeMap<String, BTreeMap<String, String>>,
+    pub failure_reasons: BTreeMap<ModelKind, BTreeMap<String, String>>,
     /// Operating points across the identified range and at the steady run's plateau, each with
     /// its local linear model.
     #[serde(default)]
@@ -136,8 +137,17 @@ pub fn write_report_json(path: &Path, report: &Report) -> Result<()> {
     write_atomic(path, text.as_bytes())
 }
 
+/// A model's title from its report name (the Monte Carlo summary is kept as JSON).
 fn model_title(name: &str) -> &str {
     ModelKind::from_report_name(name).map_or(name, |kind| kind.title())
+}
+
+/// "measured", or the model's title.
+fn curve_title(curve: Curve) -> &'static str {
+    match curve {
+        Curve::Measured => "measured",
+        Curve::Model(kind) => kind.title(),
+    }
 }
 
 fn metrics_table(out: &mut String, report: &OutputReport) {
@@ -148,7 +158,7 @@ fn metrics_table(out: &mut String, report: &OutputReport) {
             let _ = writeln!(
                 out,
                 "| {} | {run} | {:.4} | {:.4} | {:.4} | {:.2}{} | {:.4} | {:.4} |",
-                model_title(model),
+                model.title(),
                 m.rmspe_pct,
                 m.mape_pct,
                 m.se,
@@ -178,8 +188,8 @@ pub fn failing_models(report: &OutputReport) -> Vec<String> {
             runs.iter().filter_map(move |(run, m)| {
                 let why = report.failure_reasons.get(model).and_then(|r| r.get(run));
                 m.failure().map(|f| match why {
-                    Some(why) => format!("{} on '{run}': {f}: {why}", model_title(model)),
-                    None => format!("{} on '{run}': {f}", model_title(model)),
+                    Some(why) => format!("{} on '{run}': {f}: {why}", model.title()),
+                    None => format!("{} on '{run}': {f}", model.title()),
                 })
             })
         })
@@ -190,11 +200,11 @@ pub fn failing_models(report: &OutputReport) -> Vec<String> {
 fn role_mean(
     report: &Report,
     o: &OutputReport,
-    model: &str,
+    model: ModelKind,
     chirp: bool,
     f: fn(&Metrics) -> f64,
 ) -> Option<f64> {
-    let runs = o.models.get(model)?;
+    let runs = o.models.get(&model)?;
     let vals: Vec<f64> = report
         .runs
         .iter()
@@ -228,11 +238,11 @@ fn table1_section(out: &mut String, report: &Report) {
             ModelKind::HammersteinArx,
             ModelKind::StaticCubic,
         ] {
-            let model = kind.report_name();
-            if !o.models.contains_key(model) {
+            let model = kind;
+            if !o.models.contains_key(&model) {
                 continue;
             }
-            let paper = PaperOutput::of(name).and_then(|p| kind.paper_table1(p));
+            let paper = Quantity::of(name).and_then(|p| kind.paper_table1(p));
             let (pa, pb, pc, pd) = paper.map_or((None, None, None, None), |t| {
                 (Some(t.rmspe_pct), Some(t.se), Some(t.rmspe_chirp_pct), Some(t.se_chirp))
             });
@@ -257,7 +267,7 @@ fn table1_section(out: &mut String, report: &Report) {
                 .map(|(k, v)| {
                     format!(
                         "{} {}",
-                        model_title(k),
+                        curve_title(*k),
                         v.map_or("not reached".to_owned(), |c| format!("{c:.3} rad/s"))
                     )
                 })

@@ -3,7 +3,7 @@
 //! Monte Carlo histograms with their normal fits.
 use egui_plot::{Bar, BarChart, Line, LineStyle, MarkerShape, Plot, PlotPoints, Points};
 
-use crate::core::compare::{FrequencyComparison, ModelKind, OutputComparison};
+use crate::core::compare::{Curve, FrequencyComparison, ModelKind, OutputComparison};
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::ui::theme;
 use crate::ui::views::compare::table::{
@@ -125,13 +125,13 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
     );
     let group = egui::Id::unique(("compare_freq_axis", &comparison.output));
     let models: Vec<ModelKind> =
-        MODELS.iter().copied().filter(|m| freq.responses.contains_key(m.report_name())).collect();
+        MODELS.iter().copied().filter(|m| freq.responses.contains_key(&Curve::Model(*m))).collect();
     // The key sits above the plots, as the traces' does: egui_plot's legend would draw the chirp's
     // diamonds as a dot, and inside a Bode plot every corner has a curve at some ω.
     let key_top = ui.cursor().top();
     ui.horizontal_wrapped(|ui| {
         ui.spacing_mut().item_spacing.x = 4.0;
-        if freq.responses.contains_key("measured") {
+        if freq.responses.contains_key(&Curve::Measured) {
             plot_util::diamond_key_ui(ui, theme::EMPIRICAL, "measured (chirp)");
         }
         for model in &models {
@@ -151,7 +151,7 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
             plot = plot.x_axis_label("ω [rad/s]");
         }
         plot.show(ui, |plot_ui| {
-            if let Some(measured) = freq.responses.get("measured") {
+            if let Some(measured) = freq.responses.get(&Curve::Measured) {
                 let values = if phase { &measured.phase_deg } else { &measured.mag_db };
                 for ((omega, y), coherence) in
                     measured.omega_rad_s.iter().zip(values).zip(&measured.coherence)
@@ -167,7 +167,7 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
             }
             // The gray-box model last, on top.
             for model in models.iter().rev() {
-                let Some(response) = freq.responses.get(model.report_name()) else { continue };
+                let Some(response) = freq.responses.get(&Curve::Model(*model)) else { continue };
                 let values = if phase { &response.phase_deg } else { &response.mag_db };
                 let points: PlotPoints<'_> =
                     response.omega_rad_s.iter().zip(values).map(|(w, y)| [w.log10(), *y]).collect();
@@ -197,7 +197,7 @@ pub fn monte_carlo_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &s
     );
     let shown: Vec<(ModelKind, &MonteCarloResult)> = ModelKind::MONTE_CARLO
         .iter()
-        .filter_map(|m| comparison.monte_carlo.get(m.report_name()).map(|r| (*m, r)))
+        .filter_map(|m| comparison.monte_carlo.get(m).map(|r| (*m, r)))
         .collect();
     ui.columns(shown.len(), |columns| {
         for (ui, (model, result)) in columns.iter_mut().zip(&shown) {

@@ -1,9 +1,10 @@
 //! The Compare view's tables: the paper's Table 1 (RMSPE and SE of every model on every scored run,
 //! the paper's values beside, the best of each column highlighted) and the summary beside it
 //! (−3 dB cut-offs, the input noise used, the Monte Carlo spreads).
+use crate::core::run::Quantity;
 use egui::{Color32, RichText};
 
-use crate::core::compare::{ModelKind, OutputComparison, PaperOutput, PaperRow, RunComparison};
+use crate::core::compare::{Curve, ModelKind, OutputComparison, PaperRow, RunComparison};
 use crate::core::numerics::noise_fit::Distribution;
 use crate::ui::theme;
 
@@ -23,10 +24,10 @@ pub fn model_colour(model: ModelKind) -> Color32 {
 }
 
 /// A curve keyed by report name ("measured" or a model's): its label and colour.
-pub fn curve_style(name: &str) -> (&str, Color32) {
-    match ModelKind::from_report_name(name) {
-        Some(kind) => (kind.label(), model_colour(kind)),
-        None => (name, theme::EMPIRICAL),
+pub fn curve_style(curve: Curve) -> (&'static str, Color32) {
+    match curve {
+        Curve::Model(kind) => (kind.label(), model_colour(kind)),
+        Curve::Measured => (curve.label(), theme::EMPIRICAL),
     }
 }
 
@@ -64,7 +65,7 @@ pub fn table1_columns(comparison: &OutputComparison) -> Vec<Table1Column> {
         });
         columns.push(Table1Column { group, what: "SE", values: MODELS.map(|m| value(m, |x| x.se)) });
     }
-    if let Some(paper_output) = PaperOutput::of(&comparison.output) {
+    if let Some(paper_output) = Quantity::of(&comparison.output) {
         let paper = |model: ModelKind| model.paper_table1(paper_output);
         let picks = [
             ("paper", "RMSPE %", 0),
@@ -146,7 +147,7 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
         // The notes wrap at the table's width: wider, they would push the summary beside the
         // table out of the view.
         ui.set_max_width(grid.response.rect.width());
-        if PaperOutput::of(&comparison.output).is_some() {
+        if Quantity::of(&comparison.output).is_some() {
             crate::ui::widgets::model::hint(
                 ui,
                 "The paper's values are from its SR-30 bench data (a mean over its validation test); ours from \
@@ -184,13 +185,20 @@ fn failures_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
 pub fn summary_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
     if let Some(freq) = &comparison.frequency {
         ui.label(RichText::new(format!("−3 dB cut-off on '{}' [rad/s]", freq.run)).strong());
-        let mut names: Vec<&String> = freq.cutoff_rad_s.keys().collect();
-        names.sort_by_key(|n| (n.as_str() != "measured", ModelKind::from_report_name(n)));
+        // The measurement first, then the models in the order of the tables.
+        let order = |c: &Curve| match c {
+            Curve::Measured => 0,
+            Curve::Model(kind) => {
+                1 + ModelKind::ALL.iter().position(|k| k == kind).unwrap_or(ModelKind::ALL.len())
+            }
+        };
+        let mut curves: Vec<Curve> = freq.cutoff_rad_s.keys().copied().collect();
+        curves.sort_by_key(order);
         ui.horizontal_wrapped(|ui| {
-            for name in names {
-                let cut = freq.cutoff_rad_s.get(name).copied().flatten();
+            for curve in curves {
+                let cut = freq.cutoff_rad_s.get(&curve).copied().flatten();
                 let text = cut.map_or("not in band".to_owned(), |c| format!("{c:.3}"));
-                let (label, colour) = curve_style(name);
+                let (label, colour) = curve_style(curve);
                 ui.label(RichText::new(format!("{label} {text}")).color(colour));
             }
         });
@@ -223,7 +231,7 @@ pub fn summary_ui(ui: &mut egui::Ui, comparison: &OutputComparison) {
 
 /// The paper's Monte Carlo standard deviation for `model` on `output`, when it has one.
 pub fn paper_monte_carlo_std(output: &str, model: ModelKind) -> Option<f64> {
-    model.paper_monte_carlo_std(PaperOutput::of(output)?)
+    model.paper_monte_carlo_std(Quantity::of(output)?)
 }
 
 /// "normal (mean = 5.43, std = 0.00327)".

@@ -1,0 +1,240 @@
+//! One workflow: the batch and the app build the same model from the same project; every
+//! command-line option applies to the runs however they were named, or is refused with the reason;
+//! a failed batch changes nothing in its `--out` folder.
+use std::path::{Path, PathBuf};
+
+use crate::common::{jetid, sample};
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Every file of `dir` with its bytes.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut files: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| {
+            let bytes = std::fs::read(&p).unwrap();
+            (p, bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+// ------------------------------------------------------------------ overrides apply or are refused
+
+#[test]
+fn a_map_on_the_command_line_applies_to_the_projects_runs() {
+    // The default project names its runs in the file; --map must reach them too.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o = jetid(&["--batch", "--map", "input=egt_c", "--output", "shaft_speed_rpm", "--out", path(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let model = read_json(&out.join("model.json"));
+    assert_eq!(model["input"]["name"], "egt_c", "the model is of the mapped input");
+}
+
+#[test]
+fn a_map_that_clashes_with_the_projects_own_is_refused_with_the_columns() {
+    // The JetCat-style project maps aux=egt_c already; mapping it as the input too gives one column
+    // two roles: refused, naming it.
+    let dir = tempfile::tempdir().unwrap();
+    let project = dir.path().join("p.toml");
+    let ident = sample("sr30/ident.csv");
+    let text = format!("ident = '{}'\n[load]\nmap = ['aux=egt_c']\n", path(&ident));
+    std::fs::write(&project, text).unwrap();
+    let o = jetid(&["--batch", path(&project), "--map", "input=egt_c", "--out", path(&dir.path().join("o"))]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("egt_c") && err.contains("two roles"), "{err}");
+    assert!(!dir.path().join("o").exists(), "a refused batch writes nothing");
+}
+
+#[test]
+fn a_sample_time_on_the_command_line_applies_to_the_projects_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let project = sample("hot_day/project.toml");
+    let args = ["--batch", path(&project), "--sample-time", "0.2", "--output", "shaft_speed_rpm"];
+    let o = jetid(&[&args[..], &["--out", path(&out)]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let model = read_json(&out.join("model.json"));
+    assert!((model["dt_secs"].as_f64().unwrap() - 0.2).abs() < 1e-12, "{}", model["dt_secs"]);
+    let report = read_json(&out.join("report.json"));
+    let notes = report["diagnostics"].to_string();
+    assert!(notes.contains("time_s") && notes.contains("sample time is given"), "{notes}");
+}
+
+#[test]
+fn a_sample_time_for_runs_whose_time_column_is_mapped_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let project = dir.path().join("p.toml");
+    let ident = sample("sr30/ident.csv");
+    std::fs::write(&project, format!("ident = '{}'\n[load]\nmap = ['time=time_s']\n", path(&ident))).unwrap();
+    let o = jetid(&["--batch", path(&project), "--sample-time", "0.2", "--out", path(&dir.path().join("o"))]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("time is given twice") && err.contains("time_s"), "{err}");
+}
+
+#[test]
+fn batch_options_without_batch_are_refused() {
+    let o = jetid(&["--ident", path(&sample("sr30/ident.csv")), "--out", "x"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("--ident") && err.contains("--out") && err.contains("--batch"), "{err}");
+    let o = jetid(&["--batch", "--screenshot", "x.png"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--screenshot"), "{}", stderr(&o));
+    let o = jetid(&["--view", "bode"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--screenshot"), "{}", stderr(&o));
+}
+
+// ------------------------------------------------------------------ results as a set
+
+#[test]
+fn a_failed_batch_leaves_the_earlier_results_untouched_and_adds_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mix");
+    let o = jetid(&["--batch", path(&sample("hot_day/project.toml")), "--out", path(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = snapshot(&out);
+    // The same runs, but the speed output's static map of order 0 cannot be fitted: thrust would
+    // succeed, speed fails, so the batch fails as a whole.
+    let project = dir.path().join("bad.toml");
+    let text = format!(
+        "ident = '{}'\nvalidate = ['{}']\n[output.shaft_speed_rpm]\nstatic_order = 0\n",
+        path(&sample("hot_day/ident.csv")),
+        path(&sample("hot_day/validation.csv"))
+    );
+    std::fs::write(&project, text).unwrap();
+    let o = jetid(&["--batch", path(&project), "--out", path(&out)]);
+    assert!(!o.status.success(), "the batch fails");
+    assert_eq!(snapshot(&out), before, "not one file of the earlier results changed, none was added");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers.len(), 2, "no staging folder is left beside the results: {leftovers:?}");
+}
+
+#[test]
+fn a_failed_batch_into_a_new_folder_creates_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("new/results");
+    let project = dir.path().join("bad.toml");
+    std::fs::write(
+        &project,
+        format!("ident = '{}'\n[output.thrust_n]\nstatic_order = 0\n", path(&sample("sr30/ident.csv"))),
+    )
+    .unwrap();
+    let o = jetid(&["--batch", path(&project), "--out", path(&out)]);
+    assert!(!o.status.success());
+    let entries: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(entries, vec![std::ffi::OsString::from("bad.toml")], "nothing but the project");
+}
+
+// ------------------------------------------------------------------ the same model everywhere
+
+/// Every number of `a` and `b` agrees to `tolerance` (relative to the larger magnitude, at least 1)
+/// and every other value is equal; `at` names where they differ.
+fn assert_close(a: &serde_json::Value, b: &serde_json::Value, tolerance: f64, at: &str) {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            let scale = x.abs().max(y.abs()).max(1.0);
+            assert!((x - y).abs() <= tolerance * scale, "{at}: {x} against {y}");
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{at}: lengths");
+            for (i, (x, y)) in x.iter().zip(y).enumerate() {
+                assert_close(x, y, tolerance, &format!("{at}[{i}]"));
+            }
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            let keys = |m: &serde_json::Map<String, Value>| m.keys().cloned().collect::<Vec<_>>();
+            assert_eq!(keys(x), keys(y), "{at}: keys");
+            for (k, v) in x {
+                assert_close(v, &y[k], tolerance, &format!("{at}.{k}"));
+            }
+        }
+        _ => assert_eq!(a, b, "{at}"),
+    }
+}
+
+/// model.json of `project` from the batch, and from the app (File > Open project, every model
+/// finished, File > Export model).
+#[cfg(feature = "gui")]
+fn both_models(project: &Path) -> (serde_json::Value, serde_json::Value) {
+    use jetid::ui::{App, Command, Session};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("batch");
+    let o = jetid(&["--batch", path(project), "--out", path(&out), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut app = App::new(Session::default());
+    app.apply(Command::OpenProject(project.to_owned()));
+    app.settle();
+    let exported = dir.path().join("app.json");
+    app.apply(Command::ExportModel(exported.clone()));
+    assert!(app.view.errors.is_empty(), "{:?}", app.view.errors);
+    (read_json(&out.join("model.json")), read_json(&exported))
+}
+
+/// The batch and the app agree on every number of the model: roots, linear block, static map,
+/// effects and their parameters (1e-9 relative).
+#[cfg(feature = "gui")]
+fn same_model_in_batch_and_app(project: &Path) {
+    let (batch, app) = both_models(project);
+    assert_close(&batch, &app, 1e-9, "model.json");
+}
+
+#[cfg(feature = "gui")]
+#[test]
+fn sr30_gives_the_same_model_in_the_batch_and_the_app() {
+    same_model_in_batch_and_app(&sample("sr30/project.toml"));
+}
+
+#[cfg(feature = "gui")]
+#[test]
+fn hot_day_gives_the_same_model_in_the_batch_and_the_app() {
+    same_model_in_batch_and_app(&sample("hot_day/project.toml"));
+}
+
+#[cfg(feature = "gui")]
+#[test]
+fn soak_with_an_effect_and_the_loop_gives_the_same_model_in_the_batch_and_the_app() {
+    // The soak project with an effect added by hand and one round of the missing-physics loop: the
+    // app runs the same loop as the batch.
+    let dir = tempfile::tempdir().unwrap();
+    let project = dir.path().join("soak.toml");
+    let text = format!(
+        "ident = '{}'\nvalidate = ['{}']\noutputs = ['shaft_speed_rpm']\nadd_effects = ['thermal_soak']\nauto_effects = 1\n",
+        path(&sample("soak/ident.csv")),
+        path(&sample("soak/validation.csv"))
+    );
+    std::fs::write(&project, text).unwrap();
+    let (batch, app) = both_models(&project);
+    let effects = &batch["outputs"][0]["effects"];
+    assert!(effects.as_array().is_some_and(|e| !e.is_empty()), "the model has effects: {effects}");
+    assert_close(&batch, &app, 1e-9, "model.json");
+}
+
+#[cfg(feature = "gui")]
+#[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
+fn the_jetcat_project_with_its_loop_gives_the_same_model_in_the_batch_and_the_app() {
+    let (batch, app) = both_models(&sample("jetcat_p300/project.toml"));
+    let effects = &batch["outputs"][0]["effects"];
+    assert!(effects.as_array().is_some_and(|e| !e.is_empty()), "the loop took effects: {effects}");
+    assert_close(&batch, &app, 1e-9, "model.json");
+}

@@ -36,12 +36,17 @@ pub(super) fn render(plan: &Plan) -> String {
 }
 
 fn filter(f: &Filter) -> String {
-    format!(
-        "{{\"num\": {}, \"den\": {}, \"steady_gain\": {}}}",
-        list(&f.num_zinv, "[", "]"),
-        list(&f.den_zinv, "[", "]"),
-        num(f.steady_gain)
-    )
+    dict(&[
+        ("num", list(&f.num_zinv, "[", "]")),
+        ("den", list(&f.den_zinv, "[", "]")),
+        ("steady_gain", num(f.steady_gain)),
+    ])
+}
+
+/// `{"key": value, …}` on one line.
+fn dict(entries: &[(&str, String)]) -> String {
+    let entries: Vec<String> = entries.iter().map(|(key, value)| format!("{key:?}: {value}")).collect();
+    format!("{{{}}}", entries.join(", "))
 }
 
 fn option(x: Option<String>) -> String {
@@ -94,18 +99,15 @@ fn steps(steps: impl Iterator<Item = Step>) -> String {
 /// A split linear block as a dict; `None` for a direct one.
 fn split(linear: &Linear) -> Option<String> {
     let Linear::Split(s) = linear else { return None };
-    Some(format!(
-        "{{\"dead_time\": {}, \"rest\": {}, \"ln_root\": ({}, {}), \"pair\": {}, \"gain\": {}, \"decel\": {}, \
-         \"schedule\": {}}}",
-        s.dead_time,
-        option(s.rest.as_ref().map(filter)),
-        num(s.ln_root.0),
-        num(s.ln_root.1),
-        if s.pair { "True" } else { "False" },
-        num(s.gain),
-        num(s.decel),
-        option(parts::schedule(s).values().map(|values| tuple(&values))),
-    ))
+    Some(dict(&[
+        ("dead_time", s.dead_time.to_string()),
+        ("rest", option(s.rest.as_ref().map(filter))),
+        ("ln_root", tuple(&[&num(s.ln_root.0), &num(s.ln_root.1)])),
+        ("pair", (if s.pair { "True" } else { "False" }).to_owned()),
+        ("gain", num(s.gain)),
+        ("decel", num(s.decel)),
+        ("schedule", option(parts::schedule(s).values().map(|values| tuple(&values)))),
+    ]))
 }
 
 const USAGE: &str = r#"#

@@ -167,6 +167,25 @@ pub(crate) fn titled_with_legend<'a>(
     Ok(body.split_horizontally(w.saturating_sub(LEGEND_WIDTH)))
 }
 
+/// Draws a standard figure to `path`: the title, then `draw` on the chart area and the legend panel
+/// at its right with the data's `range`; without a range (nothing to draw), a `no_data` note in the
+/// chart area instead.
+pub(crate) fn render_chart<R>(
+    path: &Path,
+    title: &str,
+    range: Option<R>,
+    no_data: &str,
+    draw: impl FnOnce(&Area<'_>, &Area<'_>, R) -> DrawResult,
+) -> Result<(), FigureError> {
+    render(path, FIGURE_SIZE, |root| {
+        let (chart_area, legend_area) = titled_with_legend(root, title)?;
+        match range {
+            Some(range) => draw(&chart_area, &legend_area, range),
+            None => draw_note(&chart_area, no_data),
+        }
+    })
+}
+
 /// A chart builder with the standard margin and label-area sizes.
 pub(crate) fn chart_builder<'a, 'b>(area: &'a Area<'b>) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
     let mut builder = ChartBuilder::on(area);

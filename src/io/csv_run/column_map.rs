@@ -182,6 +182,21 @@ pub(super) struct Layout {
     pub ignored: Vec<usize>,
 }
 
+impl Layout {
+    /// Every column a role reads, and the ones deliberately not read.
+    fn used(&self) -> Vec<usize> {
+        let mut used: Vec<usize> = vec![self.input];
+        used.extend(&self.outputs);
+        used.extend(&self.aux);
+        used.extend(self.quality);
+        used.extend(&self.ignored);
+        if let TimeBase::Column(c) = self.time {
+            used.push(c);
+        }
+        used
+    }
+}
+
 /// Assign each header column a role following `opts` (map, sample time, quality column).
 pub(super) fn resolve_layout(
     file: &Path,
@@ -190,86 +205,105 @@ pub(super) fn resolve_layout(
 ) -> Result<Layout, RunFileError> {
     let map = &opts.map;
     map.check().map_err(|error| RunFileError::BadMap { file: file.to_owned(), error })?;
-    let find = |name: &str| header.iter().position(|h| h == name);
-    let mapped = |role: Role, name: &str| {
-        find(name).ok_or_else(|| RunFileError::MapColumnNotFound {
-            file: file.to_owned(),
+    let h = Header { file, names: header };
+    let (time, ignored) = time_base(&h, opts)?;
+    let input = match &map.input {
+        Some(column) => h.mapped(Role::Input, column)?,
+        None => h.required("input", INPUT_COLUMN)?,
+    };
+    let outputs = output_columns(&h, opts)?;
+    let aux = map.aux.iter().map(|c| h.mapped(Role::Aux, c)).collect::<Result<Vec<_>, _>>()?;
+    let quality = quality_column(&h, opts)?;
+    let mut layout = Layout { time, input, outputs, aux, extras: Vec::new(), quality, ignored };
+    if map.aux.is_empty() {
+        let used = layout.used();
+        layout.extras = (0..header.len())
+            .filter(|i| !used.contains(i) && header.get(*i).is_some_and(|h| !h.is_empty()))
+            .collect();
+    }
+    Ok(layout)
+}
+
+/// A file's header, to find its columns and to name them in errors.
+struct Header<'a> {
+    file: &'a Path,
+    names: &'a [String],
+}
+
+impl Header<'_> {
+    fn find(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|h| h == name)
+    }
+
+    /// The column the map gives `role`: an error when the file has none of that name.
+    fn mapped(&self, role: Role, name: &str) -> Result<usize, RunFileError> {
+        self.find(name).ok_or_else(|| RunFileError::MapColumnNotFound {
+            file: self.file.to_owned(),
             role: role.to_string(),
             column: name.to_owned(),
-            present: present(header),
+            present: present(self.names),
         })
-    };
-    let missing = |role: &str, name: &str| RunFileError::MissingColumn {
-        file: file.to_owned(),
-        role: role.to_owned(),
-        column: name.to_owned(),
-        present: present(header),
-    };
+    }
 
-    let mut ignored = Vec::new();
-    let time = match (&map.time, opts.sample_time_secs) {
-        (Some(column), Some(dt_secs)) => {
-            return Err(RunFileError::TimeGivenTwice {
-                file: file.to_owned(),
-                column: column.clone(),
-                sample_time_secs: dt_secs,
-            });
-        }
-        (Some(column), None) => TimeBase::Column(mapped(Role::Time, column)?),
+    /// A column `role` needs under its default (or given) name: an error when it is missing.
+    fn required(&self, role: &str, name: &str) -> Result<usize, RunFileError> {
+        self.find(name).ok_or_else(|| RunFileError::MissingColumn {
+            file: self.file.to_owned(),
+            role: role.to_owned(),
+            column: name.to_owned(),
+            present: present(self.names),
+        })
+    }
+}
+
+/// Where the time comes from, and the time column left unread when the sample time is given (unless
+/// the map gives it another role).
+fn time_base(h: &Header<'_>, opts: &LoadOptions) -> Result<(TimeBase, Vec<usize>), RunFileError> {
+    let map = &opts.map;
+    match (&map.time, opts.sample_time_secs) {
+        (Some(column), Some(dt_secs)) => Err(RunFileError::TimeGivenTwice {
+            file: h.file.to_owned(),
+            column: column.clone(),
+            sample_time_secs: dt_secs,
+        }),
+        (Some(column), None) => Ok((TimeBase::Column(h.mapped(Role::Time, column)?), Vec::new())),
         (None, Some(dt_secs)) => {
             let mapped_elsewhere = map.entries().iter().any(|(_, c)| *c == TIME_COLUMN);
-            ignored.extend(find(TIME_COLUMN).filter(|_| !mapped_elsewhere));
-            TimeBase::Fixed { dt_secs }
+            let ignored = h.find(TIME_COLUMN).filter(|_| !mapped_elsewhere).into_iter().collect();
+            Ok((TimeBase::Fixed { dt_secs }, ignored))
         }
-        (None, None) => TimeBase::Column(find(TIME_COLUMN).ok_or_else(|| missing("time", TIME_COLUMN))?),
-    };
-    let input = match &map.input {
-        Some(column) => mapped(Role::Input, column)?,
-        None => find(INPUT_COLUMN).ok_or_else(|| missing("input", INPUT_COLUMN))?,
-    };
-    let outputs = if opts.input_only {
-        Vec::new()
-    } else if map.outputs.is_empty() {
-        let found: Vec<usize> = OUTPUT_COLUMNS.iter().filter_map(|name| find(name)).collect();
-        if found.is_empty() {
-            return Err(RunFileError::NoOutput { file: file.to_owned(), present: present(header) });
-        }
-        found
-    } else {
-        map.outputs.iter().map(|c| mapped(Role::Output, c)).collect::<Result<_, _>>()?
-    };
-    let aux = map.aux.iter().map(|c| mapped(Role::Aux, c)).collect::<Result<Vec<_>, _>>()?;
-    let quality = match &opts.quality {
-        Some(column) => {
-            if let Some((role, _)) = map.entries().into_iter().find(|(_, c)| c == column) {
-                let error = ColumnMapError::ColumnInTwoRoles {
-                    column: column.clone(),
-                    first: role.to_string(),
-                    second: "quality".to_owned(),
-                };
-                return Err(RunFileError::BadMap { file: file.to_owned(), error });
-            }
-            Some(find(column).ok_or_else(|| missing("quality", column))?)
-        }
-        None => None,
-    };
-
-    let mut used: Vec<usize> = vec![input];
-    used.extend(&outputs);
-    used.extend(&aux);
-    used.extend(quality);
-    used.extend(&ignored);
-    if let TimeBase::Column(c) = time {
-        used.push(c);
+        (None, None) => Ok((TimeBase::Column(h.required("time", TIME_COLUMN)?), Vec::new())),
     }
-    let extras = if map.aux.is_empty() {
-        (0..header.len())
-            .filter(|i| !used.contains(i) && header.get(*i).is_some_and(|h| !h.is_empty()))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    Ok(Layout { time, input, outputs, aux, extras, quality, ignored })
+}
+
+/// The output columns: none when only the input is read, the mapped ones, or else the canonical
+/// ones the file has (at least one).
+fn output_columns(h: &Header<'_>, opts: &LoadOptions) -> Result<Vec<usize>, RunFileError> {
+    if opts.input_only {
+        return Ok(Vec::new());
+    }
+    if !opts.map.outputs.is_empty() {
+        return opts.map.outputs.iter().map(|c| h.mapped(Role::Output, c)).collect();
+    }
+    let found: Vec<usize> = OUTPUT_COLUMNS.iter().filter_map(|name| h.find(name)).collect();
+    if found.is_empty() {
+        return Err(RunFileError::NoOutput { file: h.file.to_owned(), present: present(h.names) });
+    }
+    Ok(found)
+}
+
+/// The quality column, when one is named; it may not also play a mapped role.
+fn quality_column(h: &Header<'_>, opts: &LoadOptions) -> Result<Option<usize>, RunFileError> {
+    let Some(column) = &opts.quality else { return Ok(None) };
+    if let Some((role, _)) = opts.map.entries().into_iter().find(|(_, c)| c == column) {
+        let error = ColumnMapError::ColumnInTwoRoles {
+            column: column.clone(),
+            first: role.to_string(),
+            second: "quality".to_owned(),
+        };
+        return Err(RunFileError::BadMap { file: h.file.to_owned(), error });
+    }
+    h.required("quality", column).map(Some)
 }
 
 fn present(header: &[String]) -> Vec<String> {

@@ -11,7 +11,7 @@ use super::{
     Window,
 };
 use crate::core::run::{Channel, Run};
-use crate::core::running_window::running_window;
+use crate::core::running_window::{RunningWindow, running_window};
 
 use super::table::{Cell, Source, Table, read_table};
 
@@ -111,6 +111,19 @@ impl Ctx<'_> {
         Ok(values)
     }
 
+    /// The time of every row of `rows`: the time column (repaired), or the row times the sample time.
+    fn time_column(
+        &self,
+        time: TimeBase,
+        rows: Range<usize>,
+        good: &[bool],
+    ) -> Result<Vec<f64>, RunFileError> {
+        match time {
+            TimeBase::Column(col) => self.repaired_column(col, rows, good),
+            TimeBase::Fixed { dt_secs } => Ok(rows.map(|row| row as f64 * dt_secs).collect()),
+        }
+    }
+
     /// The time of a row for selecting a window in seconds; NaN when unreadable.
     fn time_of_row(&self, time: TimeBase, row: usize) -> f64 {
         match time {
@@ -129,83 +142,26 @@ pub(super) fn parse(
     source: Source<'_>,
     opts: &LoadOptions,
 ) -> Result<(Run, LoadNotes), RunFileError> {
-    if let Some(value) = opts.sample_time_secs
-        && !(value.is_finite() && value > 0.0)
-    {
-        return Err(RunFileError::BadSampleTime { file: file.to_owned(), value });
-    }
+    check_sample_time(file, opts)?;
     let table = read_table(file, source)?;
     let layout = resolve_layout(file, &table.header, opts)?;
     let ctx = Ctx { file, table: &table };
     let good = ctx.quality(&layout)?;
     let (window, kept) = select_rows(&ctx, &layout, opts, &good)?;
 
-    let mut t_secs = match layout.time {
-        TimeBase::Column(col) => ctx.repaired_column(col, kept.clone(), &good)?,
-        TimeBase::Fixed { dt_secs } => kept.clone().map(|row| row as f64 * dt_secs).collect(),
-    };
+    let mut t_secs = ctx.time_column(layout.time, kept.clone(), &good)?;
     let Channels { names, mut values, dropped: dropped_columns } =
         read_channels(&ctx, &layout, kept.clone(), &good)?;
     let invalid_samples = mark_invalid(file, &names, &mut values, &opts.invalid)?;
-    let mut outliers = Vec::new();
-    for (name, column) in names.iter().zip(values.iter_mut()) {
-        for (index, value) in mark_outliers(column) {
-            outliers.push((name.clone(), kept.start + index, value));
-        }
-    }
-    let mut resampled = false;
-    let mut merged_repeats = 0;
-    if opts.resample && matches!(layout.time, TimeBase::Column(_)) {
-        merged_repeats = merge_repeated_times(&mut t_secs, &mut values).unwrap_or(0);
-    }
-    let dt_secs = match layout.time {
-        TimeBase::Fixed { dt_secs } => dt_secs,
-        TimeBase::Column(col) => match check_time(&t_secs, TIME_TOLERANCE) {
-            Ok(dt_secs) => dt_secs,
-            Err(TimeProblem::NonUniform { .. }) if opts.resample => {
-                let dt_secs = median_step(&t_secs);
-                t_secs = resample(&t_secs, &mut values, dt_secs);
-                resampled = true;
-                dt_secs
-            }
-            Err(problem) => return Err(time_error(&ctx, col, kept.start, problem)),
-        },
-    };
+    let outliers = mark_all_outliers(&names, &mut values, kept.start);
+    let axis = uniform_time(&ctx, layout.time, opts.resample, kept.start, &mut t_secs, &mut values)?;
     if t_secs.len() < MIN_SAMPLES {
         return Err(too_few_samples(file, t_secs.len()));
     }
 
-    if let Some(channel) = opts.units.keys().find(|c| !names.contains(c)) {
-        return Err(RunFileError::UnknownUnitChannel {
-            file: file.to_owned(),
-            channel: channel.clone(),
-            present: names.clone(),
-        });
-    }
-    let mut channels = names.iter().zip(values).map(|(name, v)| match opts.units.get(name) {
-        Some(unit) => Channel { name: name.clone(), unit: unit.clone(), values: v },
-        None => Channel::new(name, v),
-    });
-    // The input is always the first channel; this branch only keeps indexing out of the code.
-    let Some(input) = channels.next() else {
-        return Err(RunFileError::NoOutput { file: file.to_owned(), present: table.header.clone() });
-    };
-    let mut outputs: Vec<Channel> = channels.by_ref().take(layout.outputs.len()).collect();
-    let mut aux: Vec<Channel> = channels.collect();
-    let mut input = input;
-    let running_window = matches!(opts.window, Some(Window::Running)).then(|| {
-        let ys: Vec<&[f64]> = outputs.iter().map(|c| c.values.as_slice()).collect();
-        let found = running_window(&input.values, &ys, dt_secs, t_secs.first().copied().unwrap_or(0.0));
-        let keep = |v: &mut Vec<f64>| {
-            v.truncate(found.end);
-            v.drain(..found.start);
-        };
-        keep(&mut t_secs);
-        for c in std::iter::once(&mut input).chain(&mut outputs).chain(&mut aux) {
-            keep(&mut c.values);
-        }
-        found
-    });
+    let mut roles = assign_roles(&ctx, &names, values, opts, layout.outputs.len())?;
+    let running_window = matches!(opts.window, Some(Window::Running))
+        .then(|| cut_to_running_window(&mut t_secs, &mut roles, axis.dt_secs));
     if t_secs.len() < MIN_SAMPLES {
         return Err(too_few_samples(file, t_secs.len()));
     }
@@ -220,8 +176,8 @@ pub(super) fn parse(
         repaired_samples: kept.clone().filter(|&row| !good.get(row).copied().unwrap_or(true)).count(),
         trimmed_bad_start: kept.start - window.start,
         trimmed_bad_end: window.end - kept.end,
-        resampled,
-        merged_repeats,
+        resampled: axis.resampled,
+        merged_repeats: axis.merged_repeats,
         invalid_samples,
         dropped_columns,
         running_window,
@@ -229,7 +185,121 @@ pub(super) fn parse(
         latin1_names: table.latin1_names.clone(),
         outliers,
     };
-    Ok((Run { name, dt_secs, t_secs, input, outputs, aux }, notes))
+    let Roles { input, outputs, aux } = roles;
+    Ok((Run { name, dt_secs: axis.dt_secs, t_secs, input, outputs, aux }, notes))
+}
+
+/// A given sample time must be a positive number.
+fn check_sample_time(file: &Path, opts: &LoadOptions) -> Result<(), RunFileError> {
+    match opts.sample_time_secs {
+        Some(value) if !(value.is_finite() && value > 0.0) => {
+            Err(RunFileError::BadSampleTime { file: file.to_owned(), value })
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Interpolate every channel's outliers; returns them as (channel, data row, value), `first_row`
+/// being the data row of the channels' first sample.
+fn mark_all_outliers(
+    names: &[String],
+    values: &mut [Vec<f64>],
+    first_row: usize,
+) -> Vec<(String, usize, f64)> {
+    let mut outliers = Vec::new();
+    for (name, column) in names.iter().zip(values.iter_mut()) {
+        for (index, value) in mark_outliers(column) {
+            outliers.push((name.clone(), first_row + index, value));
+        }
+    }
+    outliers
+}
+
+/// The sample time of a run, and what was done to its time axis to make it uniform.
+struct TimeAxis {
+    dt_secs: f64,
+    resampled: bool,
+    merged_repeats: usize,
+}
+
+/// The sample time: the given one, or the time column's once it is checked uniform. With
+/// `resample`, rows repeating the time stamp before them are merged first and a non-uniform axis
+/// is resampled onto its median step (`t_secs` and `values` replaced); otherwise a non-uniform or
+/// a non-increasing time is an error (`first_row` is the data row of `t_secs[0]`).
+fn uniform_time(
+    ctx: &Ctx<'_>,
+    time: TimeBase,
+    resample_time: bool,
+    first_row: usize,
+    t_secs: &mut Vec<f64>,
+    values: &mut [Vec<f64>],
+) -> Result<TimeAxis, RunFileError> {
+    let col = match time {
+        TimeBase::Fixed { dt_secs } => return Ok(TimeAxis { dt_secs, resampled: false, merged_repeats: 0 }),
+        TimeBase::Column(col) => col,
+    };
+    let merged_repeats = if resample_time { merge_repeated_times(t_secs, values).unwrap_or(0) } else { 0 };
+    match check_time(t_secs, TIME_TOLERANCE) {
+        Ok(dt_secs) => Ok(TimeAxis { dt_secs, resampled: false, merged_repeats }),
+        Err(TimeProblem::NonUniform { .. }) if resample_time => {
+            let dt_secs = median_step(t_secs);
+            *t_secs = resample(t_secs, values, dt_secs);
+            Ok(TimeAxis { dt_secs, resampled: true, merged_repeats })
+        }
+        Err(problem) => Err(time_error(ctx, col, first_row, problem)),
+    }
+}
+
+/// The run's channels by role.
+struct Roles {
+    input: Channel,
+    outputs: Vec<Channel>,
+    aux: Vec<Channel>,
+}
+
+/// The channels (`names[i]` holds `values[i]`) with their units from `opts.units`, which must name
+/// channels of the run, by role: the input first, then `n_outputs` outputs, then the auxiliary ones.
+fn assign_roles(
+    ctx: &Ctx<'_>,
+    names: &[String],
+    values: Vec<Vec<f64>>,
+    opts: &LoadOptions,
+    n_outputs: usize,
+) -> Result<Roles, RunFileError> {
+    if let Some(channel) = opts.units.keys().find(|c| !names.contains(c)) {
+        return Err(RunFileError::UnknownUnitChannel {
+            file: ctx.file.to_owned(),
+            channel: channel.clone(),
+            present: names.to_vec(),
+        });
+    }
+    let mut channels = names.iter().zip(values).map(|(name, v)| match opts.units.get(name) {
+        Some(unit) => Channel { name: name.clone(), unit: unit.clone(), values: v },
+        None => Channel::new(name, v),
+    });
+    // The input is always the first channel; this branch only keeps indexing out of the code.
+    let Some(input) = channels.next() else {
+        return Err(RunFileError::NoOutput { file: ctx.file.to_owned(), present: ctx.table.header.clone() });
+    };
+    let outputs: Vec<Channel> = channels.by_ref().take(n_outputs).collect();
+    let aux: Vec<Channel> = channels.collect();
+    Ok(Roles { input, outputs, aux })
+}
+
+/// Cut the run (`t_secs` and every channel) to its running part, found from the input and the
+/// outputs; returns that part.
+fn cut_to_running_window(t_secs: &mut Vec<f64>, roles: &mut Roles, dt_secs: f64) -> RunningWindow {
+    let ys: Vec<&[f64]> = roles.outputs.iter().map(|c| c.values.as_slice()).collect();
+    let found = running_window(&roles.input.values, &ys, dt_secs, t_secs.first().copied().unwrap_or(0.0));
+    let keep = |v: &mut Vec<f64>| {
+        v.truncate(found.end);
+        v.drain(..found.start);
+    };
+    keep(t_secs);
+    for c in std::iter::once(&mut roles.input).chain(&mut roles.outputs).chain(&mut roles.aux) {
+        keep(&mut c.values);
+    }
+    found
 }
 
 /// Turn every sentinel of `invalid` (channel → values, compared to one part in 10⁹) into a gap and
@@ -354,30 +424,15 @@ fn read_channels(
 }
 
 fn time_error(ctx: &Ctx<'_>, col: usize, first_row: usize, problem: TimeProblem) -> RunFileError {
-    let (file, column) = (ctx.file.to_owned(), ctx.name(col));
+    let row = first_row + problem.index();
+    let (file, line, column) = (ctx.file.to_owned(), ctx.line(row), ctx.name(col));
     match problem {
-        TimeProblem::NonIncreasing { k, previous, value } => {
-            let row = first_row + k;
-            RunFileError::NonIncreasingTime {
-                file,
-                line: ctx.line(row),
-                row: row + 1,
-                column,
-                previous,
-                value,
-            }
+        TimeProblem::NonIncreasing { previous, value, .. } => {
+            RunFileError::NonIncreasingTime { file, line, row: row + 1, column, previous, value }
         }
-        TimeProblem::NonUniform { k, step, expected } => {
-            let row = first_row + k;
-            RunFileError::NonUniformTime {
-                file,
-                line: ctx.line(row),
-                row: row + 1,
-                column,
-                step,
-                expected,
-                tolerance_pct: 100.0 * TIME_TOLERANCE,
-            }
+        TimeProblem::NonUniform { step, expected, .. } => {
+            let tolerance_pct = 100.0 * TIME_TOLERANCE;
+            RunFileError::NonUniformTime { file, line, row: row + 1, column, step, expected, tolerance_pct }
         }
     }
 }

@@ -66,6 +66,15 @@ pub(super) enum TimeProblem {
     NonUniform { k: usize, step: f64, expected: f64 },
 }
 
+impl TimeProblem {
+    /// The index of the offending sample.
+    pub(super) fn index(self) -> usize {
+        match self {
+            TimeProblem::NonIncreasing { k, .. } | TimeProblem::NonUniform { k, .. } => k,
+        }
+    }
+}
+
 /// Check that `t` strictly increases and that every step is within `tolerance` (relative) of the
 /// median step, which is returned. A non-increasing time is reported before any non-uniform step.
 pub(super) fn check_time(t: &[f64], tolerance: f64) -> Result<f64, TimeProblem> {

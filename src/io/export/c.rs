@@ -1,7 +1,8 @@
 //! The C99 rendering of a [`Plan`]: the model's numbers as `static const` parameter structs, a
 //! runtime stepping the same recursions as `core::effects` one sample at a time, `init`/`step`
 //! functions per output, and (unless `JETID_NO_MAIN`) a CSV-to-CSV main.
-use super::plan::{Filter, InputStep, Linear, OutputPlan, OutputStep, Plan};
+use super::parts::{self, Block, Step};
+use super::plan::{Filter, Linear, OutputPlan, Plan, Spool};
 use super::{header, list, num};
 
 pub(super) fn render(plan: &Plan) -> String {
@@ -46,12 +47,33 @@ fn filter_init(prefix: &str, f: &Filter) -> String {
 }
 
 fn output(o: &OutputPlan) -> String {
-    let id = &o.ident;
-    let p = format!("jetid_{id}");
+    let p = format!("jetid_{}", o.ident);
     let mut text = format!("\n/* Output '{}' [{}]. */\n", o.name, o.unit);
     text.push_str(&filter_arrays(&format!("{p}_tf"), &o.tf));
     text.push_str(&format!("static const double {p}_coeffs[] = {};\n", list(&o.map.coeffs_scaled, "{", "}")));
-    let mut fields = vec![
+    let mut fields = base_fields(o, &p);
+    fields.extend(parts::map_blocks(o).iter().filter_map(block_field));
+    fields.extend(steps_field("input", &INPUT_SLOTS, o.input_steps.iter().map(parts::input_step)));
+    if let Linear::Split(s) = &o.linear {
+        if let Some(rest) = &s.rest {
+            text.push_str(&filter_arrays(&format!("{p}_rest"), rest));
+        }
+        fields.extend(split_fields(&p, s));
+    }
+    fields.extend(parts::v_blocks(o).iter().filter_map(block_field));
+    fields.extend(steps_field("output", &OUTPUT_SLOTS, o.output_steps.iter().map(parts::output_step)));
+    text.push_str(&format!(
+        "static const jetid_params {p}_params = {{\n    {}\n}};\n",
+        fields.join(",\n    ")
+    ));
+    text.push_str(&entry_points(&p, o.needs_ambient()));
+    text
+}
+
+/// The fields of `jetid_params` every output has: its name, linear block, offset and static map
+/// (`p` is the output's prefix, `jetid_IDENT`).
+fn base_fields(o: &OutputPlan, p: &str) -> Vec<String> {
+    vec![
         format!(".name = \"{}\"", o.name),
         format!(".tf = {}", filter_init(&format!("{p}_tf"), &o.tf)),
         format!(".offset = {}", num(o.offset)),
@@ -59,91 +81,61 @@ fn output(o: &OutputPlan) -> String {
         format!(".v_scale = {}", num(o.map.v_scale)),
         format!(".n_coeffs = {}", o.map.coeffs_scaled.len()),
         format!(".coeffs = {p}_coeffs"),
-    ];
-    if let Some(k) = &o.kink {
-        fields.push(format!(
-            ".has_kink = 1, .knot_v = {}, .slope_change = {}",
-            num(k.knot_v),
-            num(k.slope_change)
-        ));
+    ]
+}
+
+/// An optional block as `.has_KEY = 1, .field = …`; nothing without it.
+fn block_field(block: &Block) -> Option<String> {
+    let fields = block.fields.as_ref()?;
+    let values: Vec<String> = fields.iter().map(|(name, value)| format!(".{name} = {value}")).collect();
+    Some(format!(".has_{} = 1, {}", block.key, values.join(", ")))
+}
+
+/// The fields of `jetid_input_step` and `jetid_output_step` after `kind`, with the value a step
+/// that has no such number gets.
+const INPUT_SLOTS: [(&str, &str); 2] = [("whole", "0"), ("frac", "0.0")];
+const OUTPUT_SLOTS: [(&str, &str); 5] =
+    [("theta_exp", "0.0"), ("delta_exp", "0.0"), ("freq_hz", "0.0"), ("zeta", "0.0"), ("lag_s", "0.0")];
+
+/// One step as a struct initialiser: its kind's constant, then every slot in order.
+fn step_init(step: &Step, slots: &[(&str, &str)]) -> String {
+    let mut items = vec![format!("JETID_STEP_{}", step.kind.to_ascii_uppercase())];
+    items.extend(slots.iter().map(|(slot, zero)| {
+        let value = step.fields.iter().find(|(name, _)| name == slot).map(|(_, value)| value.as_str());
+        value.unwrap_or(zero).to_owned()
+    }));
+    format!("{{{}}}", items.join(", "))
+}
+
+/// `.n_WHICH_steps = n, .WHICH_steps = {…}`; nothing without steps.
+fn steps_field(which: &str, slots: &[(&str, &str)], steps: impl Iterator<Item = Step>) -> Option<String> {
+    let steps: Vec<String> = steps.map(|s| step_init(&s, slots)).collect();
+    (!steps.is_empty())
+        .then(|| format!(".n_{which}_steps = {}, .{which}_steps = {{{}}}", steps.len(), steps.join(", ")))
+}
+
+/// The fields of a split linear block: the remainder filter, the spool root and its schedule.
+fn split_fields(p: &str, s: &Spool) -> Vec<String> {
+    let mut fields = Vec::new();
+    if let Some(rest) = &s.rest {
+        fields.push(format!(".has_rest = 1, .rest = {}", filter_init(&format!("{p}_rest"), rest)));
     }
-    if let Some(c) = &o.calibration {
-        fields.push(format!(
-            ".has_calibration = 1, .hold_s = {}, .calibration_dc_gain = {}",
-            num(c.hold_s),
-            num(c.dc_gain)
-        ));
-    }
-    let steps: Vec<String> = o
-        .input_steps
-        .iter()
-        .map(|s| match s {
-            InputStep::Delay(d) => format!("{{JETID_STEP_DELAY, {}, {}}}", d.whole, num(d.frac)),
-            InputStep::AmbientInput => "{JETID_STEP_AMBIENT, 0, 0.0}".to_owned(),
-        })
-        .collect();
-    if !steps.is_empty() {
-        fields.push(format!(".n_input_steps = {}, .input_steps = {{{}}}", steps.len(), steps.join(", ")));
-    }
-    if let Linear::Split(s) = &o.linear {
-        if let Some(rest) = &s.rest {
-            text.push_str(&filter_arrays(&format!("{p}_rest"), rest));
-            fields.push(format!(".has_rest = 1, .rest = {}", filter_init(&format!("{p}_rest"), rest)));
-        }
-        fields.push(format!(
-            ".split = 1, .dead_time = {}, .ln_root_re = {}, .ln_root_im = {}, .pair = {}, .gain = {}, .decel = {}",
-            s.dead_time,
-            num(s.ln_root.0),
-            num(s.ln_root.1),
-            i32::from(s.pair),
-            num(s.gain),
-            num(s.decel)
-        ));
-        if let Some(sc) = &s.schedule {
-            fields.push(format!(
-                ".has_schedule = 1, .log_ratio = {}, .state_log_ratio = {}, .ref_input = {}, .input_span = {}",
-                num(sc.log_ratio),
-                num(sc.state_log_ratio),
-                num(sc.ref_input),
-                num(sc.input_span)
-            ));
-        }
-    }
-    if let Some(s) = &o.soak {
-        fields.push(format!(".has_soak = 1, .soak_gain = {}, .soak_tau_s = {}", num(s.gain), num(s.tau_s)));
-    }
-    if let Some(r) = &o.rate_limit {
-        fields.push(format!(
-            ".has_rate_limit = 1, .rise_per_s = {}, .fall_per_s = {}",
-            num(r.rise_per_s),
-            num(r.fall_per_s)
-        ));
-    }
-    let steps: Vec<String> = o
-        .output_steps
-        .iter()
-        .map(|s| match s {
-            OutputStep::AmbientOutput { theta_exp, delta_exp } => {
-                format!("{{JETID_STEP_AMBIENT, {}, {}, 0.0, 0.0, 0.0}}", num(*theta_exp), num(*delta_exp))
-            }
-            OutputStep::Sensor(s) => {
-                format!(
-                    "{{JETID_STEP_SENSOR, 0.0, 0.0, {}, {}, {}}}",
-                    num(s.freq_hz),
-                    num(s.zeta),
-                    num(s.lag_s)
-                )
-            }
-        })
-        .collect();
-    if !steps.is_empty() {
-        fields.push(format!(".n_output_steps = {}, .output_steps = {{{}}}", steps.len(), steps.join(", ")));
-    }
-    text.push_str(&format!(
-        "static const jetid_params {p}_params = {{\n    {}\n}};\n",
-        fields.join(",\n    ")
+    fields.push(format!(
+        ".split = 1, .dead_time = {}, .ln_root_re = {}, .ln_root_im = {}, .pair = {}, .gain = {}, .decel = {}",
+        s.dead_time,
+        num(s.ln_root.0),
+        num(s.ln_root.1),
+        i32::from(s.pair),
+        num(s.gain),
+        num(s.decel)
     ));
-    text.push_str(&format!(
+    fields.extend(block_field(&parts::schedule(s)));
+    fields
+}
+
+/// The output's state type and its `init`, `step` and `calibration_offset` functions.
+fn entry_points(p: &str, needs_ambient: bool) -> String {
+    format!(
         "typedef jetid_state {p}_state;\n\
          /* Start a run: dt is the run's sample time, calibration_offset the input offset of\n \
          * calibration_drift ({p}_calibration_offset; 0 without it). */\n\
@@ -157,9 +149,8 @@ fn output(o: &OutputPlan) -> String {
          double {p}_calibration_offset(const double *u, const double *temp_c, const double *pressure_kpa,\n\
          \x20                                const double *y_measured, size_t n, double dt)\n\
          {{\n    return jetid_calibration_offset(&{p}_params, u, temp_c, pressure_kpa, y_measured, n, dt);\n}}\n",
-        if o.needs_ambient() { "read: the output is corrected for them" } else { "ignored by this output" }
-    ));
-    text
+        if needs_ambient { "read: the output is corrected for them" } else { "ignored by this output" }
+    )
 }
 
 fn outputs_table(plan: &Plan) -> String {
@@ -196,3 +187,31 @@ const USAGE: &str = r#" *
 const RUNTIME: &str = include_str!("c/runtime.c");
 
 const MAIN: &str = include_str!("c/main.c");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::effects::SensorDynamics;
+    use crate::io::export::plan::{Delay, InputStep, OutputStep};
+
+    /// A number without a slot in the C step struct would be dropped from the initialiser.
+    #[test]
+    fn every_number_of_every_step_has_a_slot() {
+        let inputs = [InputStep::Delay(Delay { whole: 3, frac: 0.25 }), InputStep::AmbientInput];
+        let outputs = [
+            OutputStep::AmbientOutput { theta_exp: 0.5, delta_exp: 1.0 },
+            OutputStep::Sensor(SensorDynamics { freq_hz: 2.0, zeta: 0.7, lag_s: 0.1 }),
+        ];
+        let steps = inputs.iter().map(|s| (parts::input_step(s), &INPUT_SLOTS[..]));
+        for (step, slots) in steps.chain(outputs.iter().map(|s| (parts::output_step(s), &OUTPUT_SLOTS[..]))) {
+            for (name, _) in &step.fields {
+                assert!(slots.iter().any(|(slot, _)| slot == name), "{}: {name} has no slot", step.kind);
+            }
+        }
+        assert_eq!(step_init(&parts::input_step(&inputs[0]), &INPUT_SLOTS), "{JETID_STEP_DELAY, 3, 0.25}");
+        assert_eq!(
+            step_init(&parts::output_step(&outputs[1]), &OUTPUT_SLOTS),
+            "{JETID_STEP_SENSOR, 0.0, 0.0, 2.0, 0.7, 0.1}"
+        );
+    }
+}

@@ -2,7 +2,8 @@
 //! does (simulate, the `tf` objects, the local linear model, CSV to CSV), the model's numbers as a
 //! struct, and a runtime of the same recursions as `core::effects`, stage by stage over the run.
 use super::ExportError;
-use super::plan::{Filter, InputStep, Linear, OutputPlan, OutputStep, Plan};
+use super::parts::{self, Block, Step};
+use super::plan::{Filter, Linear, OutputPlan, Plan};
 use super::{header, list, num};
 
 /// Longest MATLAB identifier (`namelengthmax`).
@@ -62,81 +63,58 @@ fn output(o: &OutputPlan) -> String {
         num(o.map.v_scale),
         row(&o.map.coeffs_scaled)
     ));
-    t.push_str(&match &o.kink {
-        Some(k) => format!("o.kink = [{}, {}];\n", num(k.knot_v), num(k.slope_change)),
-        None => "o.kink = [];\n".to_owned(),
-    });
-    t.push_str(&match &o.calibration {
-        Some(c) => format!("o.calibration = [{}, {}];\n", num(c.hold_s), num(c.dc_gain)),
-        None => "o.calibration = [];\n".to_owned(),
-    });
-    let steps: Vec<String> = o
-        .input_steps
-        .iter()
-        .map(|s| match s {
-            InputStep::Delay(d) => {
-                format!("struct('kind', 'delay', 'whole', {}, 'frac', {})", d.whole, num(d.frac))
-            }
-            InputStep::AmbientInput => "struct('kind', 'ambient')".to_owned(),
-        })
-        .collect();
-    t.push_str(&format!("o.input_steps = {{{}}};\n", steps.join(", ")));
-    match &o.linear {
-        Linear::Direct(_) => t.push_str("o.split = [];\n"),
-        Linear::Split(s) => {
-            t.push_str(&format!(
-                "sp = struct();\nsp.dead_time = {};\nsp.ln_root = [{}, {}];\nsp.pair = {};\nsp.gain = {};\nsp.decel = {};\n",
-                s.dead_time,
-                num(s.ln_root.0),
-                num(s.ln_root.1),
-                if s.pair { "true" } else { "false" },
-                num(s.gain),
-                num(s.decel)
-            ));
-            match &s.rest {
-                Some(rest) => t.push_str(&filter("rest", rest)),
-                None => t.push_str("rest = [];\n"),
-            }
-            t.push_str("sp.rest = rest;\n");
-            t.push_str(&match &s.schedule {
-                Some(sc) => format!(
-                    "sp.schedule = [{}, {}, {}, {}];\n",
-                    num(sc.log_ratio),
-                    num(sc.state_log_ratio),
-                    num(sc.ref_input),
-                    num(sc.input_span)
-                ),
-                None => "sp.schedule = [];\n".to_owned(),
-            });
-            t.push_str("o.split = sp;\n");
-        }
+    for block in parts::map_blocks(o) {
+        t.push_str(&assign_block("o", &block));
     }
-    t.push_str(&match &o.soak {
-        Some(s) => format!("o.soak = [{}, {}];\n", num(s.gain), num(s.tau_s)),
-        None => "o.soak = [];\n".to_owned(),
-    });
-    t.push_str(&match &o.rate_limit {
-        Some(r) => format!("o.rate_limit = [{}, {}];\n", num(r.rise_per_s), num(r.fall_per_s)),
-        None => "o.rate_limit = [];\n".to_owned(),
-    });
-    let steps: Vec<String> = o
-        .output_steps
-        .iter()
-        .map(|s| match s {
-            OutputStep::AmbientOutput { theta_exp, delta_exp } => format!(
-                "struct('kind', 'ambient', 'theta_exp', {}, 'delta_exp', {})",
-                num(*theta_exp),
-                num(*delta_exp)
-            ),
-            OutputStep::Sensor(s) => format!(
-                "struct('kind', 'sensor', 'freq_hz', {}, 'zeta', {}, 'lag_s', {})",
-                num(s.freq_hz),
-                num(s.zeta),
-                num(s.lag_s)
-            ),
+    t.push_str(&format!("o.input_steps = {};\n", steps(o.input_steps.iter().map(parts::input_step))));
+    t.push_str(&split(&o.linear));
+    for block in parts::v_blocks(o) {
+        t.push_str(&assign_block("o", &block));
+    }
+    t.push_str(&format!(
+        "o.output_steps = {};\nm.outputs{{end + 1}} = o;\n",
+        steps(o.output_steps.iter().map(parts::output_step))
+    ));
+    t
+}
+
+/// `target.key = [numbers];`, or `= [];` without the block.
+fn assign_block(target: &str, block: &Block) -> String {
+    let values = block.values().map(|values| values.join(", ")).unwrap_or_default();
+    format!("{target}.{} = [{values}];\n", block.key)
+}
+
+/// Steps as a cell array of structs `struct('kind', 'KIND', 'name', number, …)`.
+fn steps(steps: impl Iterator<Item = Step>) -> String {
+    let steps: Vec<String> = steps
+        .map(|s| {
+            let fields: String =
+                s.fields.iter().map(|(name, value)| format!(", '{name}', {value}")).collect();
+            format!("struct('kind', '{}'{fields})", s.kind)
         })
         .collect();
-    t.push_str(&format!("o.output_steps = {{{}}};\nm.outputs{{end + 1}} = o;\n", steps.join(", ")));
+    format!("{{{}}}", steps.join(", "))
+}
+
+/// `o.split`: the struct of a split linear block, or `[]` for a direct one.
+fn split(linear: &Linear) -> String {
+    let Linear::Split(s) = linear else { return "o.split = [];\n".to_owned() };
+    let mut t = format!(
+        "sp = struct();\nsp.dead_time = {};\nsp.ln_root = [{}, {}];\nsp.pair = {};\nsp.gain = {};\nsp.decel = {};\n",
+        s.dead_time,
+        num(s.ln_root.0),
+        num(s.ln_root.1),
+        if s.pair { "true" } else { "false" },
+        num(s.gain),
+        num(s.decel)
+    );
+    match &s.rest {
+        Some(rest) => t.push_str(&filter("rest", rest)),
+        None => t.push_str("rest = [];\n"),
+    }
+    t.push_str("sp.rest = rest;\n");
+    t.push_str(&assign_block("sp", &parts::schedule(s)));
+    t.push_str("o.split = sp;\n");
     t
 }
 

@@ -10,6 +10,7 @@ use crate::io::model_file::ModelFile;
 
 mod c;
 mod matlab;
+mod parts;
 pub mod plan;
 mod python;
 

@@ -5,8 +5,8 @@ use num_complex::Complex64;
 
 use super::ExportError;
 use crate::core::effects::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, ExtendedModel, RateLimit, ScheduledTimeConstant,
-    SensorDynamics, StaticMapOrder, ThermalSoak,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ExtendedModel, RateLimit,
+    ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak,
 };
 use crate::core::identification::static_map::StaticMap;
 use crate::core::numerics::tf::DiscreteTf;
@@ -259,21 +259,51 @@ fn identifier(name: &str) -> String {
 
 fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
     check_name("output", &out.name)?;
-    let err = |source| ExportError::Effect { output: out.name.clone(), source };
-    let model = ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects).map_err(err)?;
+    let model = ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects)
+        .map_err(|source| effect_error(out, source))?;
     let tf = &model.wiener.linear.tf;
-    let bad_linear = |reason: String| ExportError::BadLinearBlock { output: out.name.clone(), reason };
-    let (poles, zeros) = model.roots().map_err(|e| bad_linear(e.to_string()))?;
-    if let Some(p) = poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0) {
-        return Err(bad_linear(format!(
-            "a pole at {:.4}{:+.4}i (|z| = {:.4}) is on or outside the unit circle: the model is unstable and \
-             `jetid predict` refuses it too",
-            p.re,
-            p.im,
-            p.norm()
-        )));
+    let (poles, zeros) = model.roots().map_err(|e| bad_linear(out, e.to_string()))?;
+    check_stable(out, &poles)?;
+    let mut plan = direct_plan(out, &model);
+    let mut split = SplitEffects::default();
+    for effect in &model.effects {
+        add_effect(&mut plan, &mut split, effect, tf);
     }
-    let mut plan = OutputPlan {
+    if split.needed() {
+        plan.linear = Linear::Split(spool(out, tf, &poles, &zeros, split)?);
+    }
+    Ok(plan)
+}
+
+fn effect_error(out: &OutputModel, source: EffectError) -> ExportError {
+    ExportError::Effect { output: out.name.clone(), source }
+}
+
+fn bad_linear(out: &OutputModel, reason: String) -> ExportError {
+    ExportError::BadLinearBlock { output: out.name.clone(), reason }
+}
+
+/// A pole on or outside the unit circle (or not a number) makes the model unstable: refused.
+fn check_stable(out: &OutputModel, poles: &[Complex64]) -> Result<(), ExportError> {
+    match poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0) {
+        Some(p) => Err(bad_linear(
+            out,
+            format!(
+                "a pole at {:.4}{:+.4}i (|z| = {:.4}) is on or outside the unit circle: the model is unstable and \
+                 `jetid predict` refuses it too",
+                p.re,
+                p.im,
+                p.norm()
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The plan of the model without its effects: the linear block simulated directly, no steps.
+fn direct_plan(out: &OutputModel, model: &ExtendedModel) -> OutputPlan {
+    let tf = &model.wiener.linear.tf;
+    OutputPlan {
         name: out.name.clone(),
         ident: identifier(&out.name),
         unit: out.unit.clone(),
@@ -288,57 +318,73 @@ fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
         rate_limit: None,
         output_steps: Vec::new(),
         effect_dynamics: {
-            let (num_zinv, den_zinv) = crate::core::control::effect_dynamics(&model);
+            let (num_zinv, den_zinv) = crate::core::control::effect_dynamics(model);
             Filter { num_zinv, den_zinv, steady_gain: 1.0 }
         },
         effects: model.effects.iter().map(|e| e.id().name()).collect(),
-    };
-    let (mut decel, mut schedule, mut split) = (None, None, false);
-    for effect in &model.effects {
-        match effect {
-            EffectBlock::CalibrationDrift(c) => {
-                plan.calibration = tf.dc_gain().ok().map(|dc_gain| Calibration { hold_s: c.hold_s, dc_gain });
-            }
-            EffectBlock::TransportDelay(d) => {
-                let whole = d.delay_samples.floor();
-                plan.input_steps
-                    .push(InputStep::Delay(Delay { whole: whole as usize, frac: d.delay_samples - whole }));
-            }
-            EffectBlock::ThermalSoak(s) => plan.soak = Some(s.clone()),
-            EffectBlock::RateLimit(r) => plan.rate_limit = Some(r.clone()),
-            EffectBlock::AmbientCorrection(AmbientCorrection { output_theta_exp, output_delta_exp }) => {
-                plan.input_steps.push(InputStep::AmbientInput);
-                plan.output_steps.push(OutputStep::AmbientOutput {
-                    theta_exp: *output_theta_exp,
-                    delta_exp: *output_delta_exp,
-                });
-            }
-            EffectBlock::AsymmetricDynamics(a) => {
-                decel = Some(a.decel_factor);
-                split = true;
-            }
-            EffectBlock::ScheduledTimeConstant(s) => {
-                schedule = Some(s.clone());
-                split = true;
-            }
-            EffectBlock::SensorDynamics(s) => plan.output_steps.push(OutputStep::Sensor(s.clone())),
-            EffectBlock::StaticMapOrder(k) => plan.kink = Some(k.clone()),
+    }
+}
+
+/// What asymmetric and scheduled dynamics ask of the linear block, which either splits.
+#[derive(Default)]
+struct SplitEffects {
+    decel: Option<f64>,
+    schedule: Option<ScheduledTimeConstant>,
+}
+
+impl SplitEffects {
+    fn needed(&self) -> bool {
+        self.decel.is_some() || self.schedule.is_some()
+    }
+}
+
+/// Puts `effect` into its place in `plan` (or, for the split's effects, into `split`).
+fn add_effect(plan: &mut OutputPlan, split: &mut SplitEffects, effect: &EffectBlock, tf: &DiscreteTf) {
+    match effect {
+        EffectBlock::CalibrationDrift(c) => {
+            plan.calibration = tf.dc_gain().ok().map(|dc_gain| Calibration { hold_s: c.hold_s, dc_gain });
         }
+        EffectBlock::TransportDelay(d) => {
+            let whole = d.delay_samples.floor();
+            plan.input_steps
+                .push(InputStep::Delay(Delay { whole: whole as usize, frac: d.delay_samples - whole }));
+        }
+        EffectBlock::ThermalSoak(s) => plan.soak = Some(s.clone()),
+        EffectBlock::RateLimit(r) => plan.rate_limit = Some(r.clone()),
+        EffectBlock::AmbientCorrection(AmbientCorrection { output_theta_exp, output_delta_exp }) => {
+            plan.input_steps.push(InputStep::AmbientInput);
+            plan.output_steps.push(OutputStep::AmbientOutput {
+                theta_exp: *output_theta_exp,
+                delta_exp: *output_delta_exp,
+            });
+        }
+        EffectBlock::AsymmetricDynamics(a) => split.decel = Some(a.decel_factor),
+        EffectBlock::ScheduledTimeConstant(s) => split.schedule = Some(s.clone()),
+        EffectBlock::SensorDynamics(s) => plan.output_steps.push(OutputStep::Sensor(s.clone())),
+        EffectBlock::StaticMapOrder(k) => plan.kink = Some(k.clone()),
     }
-    if split {
-        let shape = AsymmetricDynamics::split(&poles, &zeros, tf.dt_secs).map_err(err)?;
-        let gain = tf.dc_gain().map_err(|e| bad_linear(e.to_string()))?;
-        let ln_root: Complex64 =
-            Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
-        plan.linear = Linear::Split(Spool {
-            dead_time: tf.input_delay(),
-            rest: shape.rest.as_ref().map(Filter::of),
-            ln_root: (ln_root.re, ln_root.im),
-            pair: shape.is_pair(),
-            gain,
-            decel: decel.unwrap_or(1.0),
-            schedule,
-        });
-    }
-    Ok(plan)
+}
+
+/// The linear block with its spool root split off, for `split`'s effects.
+fn spool(
+    out: &OutputModel,
+    tf: &DiscreteTf,
+    poles: &[Complex64],
+    zeros: &[Complex64],
+    split: SplitEffects,
+) -> Result<Spool, ExportError> {
+    let shape =
+        AsymmetricDynamics::split(poles, zeros, tf.dt_secs).map_err(|source| effect_error(out, source))?;
+    let gain = tf.dc_gain().map_err(|e| bad_linear(out, e.to_string()))?;
+    let ln_root: Complex64 =
+        Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
+    Ok(Spool {
+        dead_time: tf.input_delay(),
+        rest: shape.rest.as_ref().map(Filter::of),
+        ln_root: (ln_root.re, ln_root.im),
+        pair: shape.is_pair(),
+        gain,
+        decel: split.decel.unwrap_or(1.0),
+        schedule: split.schedule,
+    })
 }

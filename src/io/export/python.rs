@@ -1,6 +1,7 @@
 //! The Python rendering of a [`Plan`]: the model's numbers as dicts, its linear blocks as
 //! `control.TransferFunction`s, and a runtime stepping the same recursions as `core::effects`.
-use super::plan::{Filter, InputStep, Linear, OutputPlan, OutputStep, Plan};
+use super::parts::{self, Block, Step};
+use super::plan::{Filter, Linear, OutputPlan, Plan};
 use super::{header, list, num};
 
 pub(super) fn render(plan: &Plan) -> String {
@@ -35,12 +36,17 @@ pub(super) fn render(plan: &Plan) -> String {
 }
 
 fn filter(f: &Filter) -> String {
-    format!(
-        "{{\"num\": {}, \"den\": {}, \"steady_gain\": {}}}",
-        list(&f.num_zinv, "[", "]"),
-        list(&f.den_zinv, "[", "]"),
-        num(f.steady_gain)
-    )
+    dict(&[
+        ("num", list(&f.num_zinv, "[", "]")),
+        ("den", list(&f.den_zinv, "[", "]")),
+        ("steady_gain", num(f.steady_gain)),
+    ])
+}
+
+/// `{"key": value, …}` on one line.
+fn dict(entries: &[(&str, String)]) -> String {
+    let entries: Vec<String> = entries.iter().map(|(key, value)| format!("{key:?}: {value}")).collect();
+    format!("{{{}}}", entries.join(", "))
 }
 
 fn option(x: Option<String>) -> String {
@@ -48,73 +54,60 @@ fn option(x: Option<String>) -> String {
 }
 
 fn output(o: &OutputPlan) -> String {
-    let input_steps: Vec<String> = o
-        .input_steps
-        .iter()
-        .map(|s| match s {
-            InputStep::Delay(d) => format!("(\"delay\", {}, {})", d.whole, num(d.frac)),
-            InputStep::AmbientInput => "(\"ambient\",)".to_owned(),
-        })
-        .collect();
-    let output_steps: Vec<String> = o
-        .output_steps
-        .iter()
-        .map(|s| match s {
-            OutputStep::AmbientOutput { theta_exp, delta_exp } => {
-                format!("(\"ambient\", {}, {})", num(*theta_exp), num(*delta_exp))
-            }
-            OutputStep::Sensor(s) => {
-                format!("(\"sensor\", {}, {}, {})", num(s.freq_hz), num(s.zeta), num(s.lag_s))
-            }
-        })
-        .collect();
-    let split = match &o.linear {
-        Linear::Direct(_) => None,
-        Linear::Split(s) => Some(format!(
-            "{{\"dead_time\": {}, \"rest\": {}, \"ln_root\": ({}, {}), \"pair\": {}, \"gain\": {}, \"decel\": {}, \
-             \"schedule\": {}}}",
-            s.dead_time,
-            option(s.rest.as_ref().map(filter)),
-            num(s.ln_root.0),
-            num(s.ln_root.1),
-            if s.pair { "True" } else { "False" },
-            num(s.gain),
-            num(s.decel),
-            option(s.schedule.as_ref().map(|s| format!(
-                "({}, {}, {}, {})",
-                num(s.log_ratio),
-                num(s.state_log_ratio),
-                num(s.ref_input),
-                num(s.input_span)
-            ))),
-        )),
-    };
-    let fields = [
-        ("tf", filter(&o.tf)),
-        ("offset", num(o.offset)),
-        (
-            "map",
-            format!(
-                "({}, {}, {})",
-                num(o.map.v_center),
-                num(o.map.v_scale),
-                list(&o.map.coeffs_scaled, "[", "]")
-            ),
-        ),
-        ("kink", option(o.kink.as_ref().map(|k| format!("({}, {})", num(k.knot_v), num(k.slope_change))))),
-        ("calibration", option(o.calibration.map(|c| format!("({}, {})", num(c.hold_s), num(c.dc_gain))))),
-        ("input_steps", format!("[{}]", input_steps.join(", "))),
-        ("split", option(split)),
-        ("soak", option(o.soak.as_ref().map(|s| format!("({}, {})", num(s.gain), num(s.tau_s))))),
-        (
-            "rate_limit",
-            option(o.rate_limit.as_ref().map(|r| format!("({}, {})", num(r.rise_per_s), num(r.fall_per_s)))),
-        ),
-        ("output_steps", format!("[{}]", output_steps.join(", "))),
-        ("effect_dynamics", filter(&o.effect_dynamics)),
-    ];
+    let mut fields = vec![("tf", filter(&o.tf)), ("offset", num(o.offset)), ("map", static_map(o))];
+    fields.extend(parts::map_blocks(o).iter().map(block_entry));
+    fields.push(("input_steps", steps(o.input_steps.iter().map(parts::input_step))));
+    fields.push(("split", option(split(&o.linear))));
+    fields.extend(parts::v_blocks(o).iter().map(block_entry));
+    fields.push(("output_steps", steps(o.output_steps.iter().map(parts::output_step))));
+    fields.push(("effect_dynamics", filter(&o.effect_dynamics)));
     let body: Vec<String> = fields.iter().map(|(k, v)| format!("\n        {k:?}: {v}")).collect();
     format!("{{{},\n    }}", body.join(","))
+}
+
+/// `(items)`, with the trailing comma a one-element tuple needs.
+fn tuple(items: &[&str]) -> String {
+    match items {
+        [one] => format!("({one},)"),
+        _ => format!("({})", items.join(", ")),
+    }
+}
+
+/// The static map as `(v_center, v_scale, [coefficients])`.
+fn static_map(o: &OutputPlan) -> String {
+    format!("({}, {}, {})", num(o.map.v_center), num(o.map.v_scale), list(&o.map.coeffs_scaled, "[", "]"))
+}
+
+/// An optional block as a dict entry: its numbers as a tuple, or `None`.
+fn block_entry(block: &Block) -> (&'static str, String) {
+    (block.key, option(block.values().map(|values| tuple(&values))))
+}
+
+/// Steps as a list of tuples `("kind", numbers…)`.
+fn steps(steps: impl Iterator<Item = Step>) -> String {
+    let steps: Vec<String> = steps
+        .map(|s| {
+            let kind = format!("{:?}", s.kind);
+            let mut items = vec![kind.as_str()];
+            items.extend(s.fields.iter().map(|(_, value)| value.as_str()));
+            tuple(&items)
+        })
+        .collect();
+    format!("[{}]", steps.join(", "))
+}
+
+/// A split linear block as a dict; `None` for a direct one.
+fn split(linear: &Linear) -> Option<String> {
+    let Linear::Split(s) = linear else { return None };
+    Some(dict(&[
+        ("dead_time", s.dead_time.to_string()),
+        ("rest", option(s.rest.as_ref().map(filter))),
+        ("ln_root", tuple(&[&num(s.ln_root.0), &num(s.ln_root.1)])),
+        ("pair", (if s.pair { "True" } else { "False" }).to_owned()),
+        ("gain", num(s.gain)),
+        ("decel", num(s.decel)),
+        ("schedule", option(parts::schedule(s).values().map(|values| tuple(&values)))),
+    ]))
 }
 
 const USAGE: &str = r#"#

@@ -6,8 +6,7 @@ use plotters::prelude::*;
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, DrawResult, FIGURE_SIZE, FigureError, chart_builder, check_len, draw_note, house_style,
-    padded_range, palette, render, titled_with_legend,
+    Area, DrawResult, FigureError, chart_builder, check_len, house_style, padded_range, palette, render_chart,
 };
 use crate::core::numerics::tf::BodePoint;
 
@@ -87,18 +86,19 @@ pub fn bode_png(
         .chain(empirical.iter().flat_map(|e| e.omega_rad_s.iter().copied()))
         .filter(|w| *w > 0.0);
     let omega_range = log_range(omegas);
-    render(path, FIGURE_SIZE, |root| {
-        let (chart_area, legend_area) = titled_with_legend(root, title)?;
-        let Some((w_lo, w_hi)) = omega_range else {
-            draw_note(&chart_area, "no frequency response data")?;
-            return Ok(());
-        };
-        let (_, h) = chart_area.dim_in_pixel();
-        let (top, bottom) = chart_area.split_vertically(h / 2);
-        draw_panel(&top, Panel::Magnitude, (w_lo, w_hi), curves, empirical)?;
-        draw_panel(&bottom, Panel::Phase, (w_lo, w_hi), curves, empirical)?;
-        draw_legend(&legend_area, &legend_entries(curves, empirical))
-    })
+    render_chart(
+        path,
+        title,
+        omega_range,
+        "no frequency response data",
+        |chart_area, legend_area, (w_lo, w_hi)| {
+            let (_, h) = chart_area.dim_in_pixel();
+            let (top, bottom) = chart_area.split_vertically(h / 2);
+            draw_panel(&top, Panel::Magnitude, (w_lo, w_hi), curves, empirical)?;
+            draw_panel(&bottom, Panel::Phase, (w_lo, w_hi), curves, empirical)?;
+            draw_legend(legend_area, &legend_entries(curves, empirical))
+        },
+    )
 }
 
 /// The positive finite range of `omegas`, widened to whole decades when it is a single value.

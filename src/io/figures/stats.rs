@@ -9,8 +9,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, desc_font, draw_note, font, house_style,
-    label_font, padded_range, palette, render, sig, tick_label, titled_with_legend,
+    FigureError, LIGHT_LINES, chart_builder, desc_font, font, house_style, label_font, padded_range, palette,
+    render_chart, sig, tick_label,
 };
 use crate::core::numerics::metrics::BoxStats;
 
@@ -36,12 +36,7 @@ pub fn histogram_png(
     let samples: Vec<f64> = samples.iter().copied().filter(|v| v.is_finite()).collect();
     let normal = fitted_normal.filter(|(m, s)| m.is_finite() && s.is_finite() && *s > 0.0);
     let sample_range = padded_range(samples.iter().copied(), 0.0);
-    render(path, FIGURE_SIZE, |root| {
-        let (chart_area, legend_area) = titled_with_legend(root, title)?;
-        let Some((lo, hi)) = sample_range else {
-            draw_note(&chart_area, "no samples")?;
-            return Ok(());
-        };
+    render_chart(path, title, sample_range, "no samples", |chart_area, legend_area, (lo, hi)| {
         let width = (hi - lo) / bins as f64;
         let mut counts = vec![0usize; bins];
         for v in &samples {
@@ -56,7 +51,7 @@ pub fn histogram_png(
             [lo, hi].into_iter().chain(normal.into_iter().flat_map(|(m, s)| [m - 3.0 * s, m + 3.0 * s]));
         let (x_lo, x_hi) = padded_range(x_values, 0.03).unwrap_or((lo, hi));
         let peak = counts.iter().map(|c| *c as f64).chain(curve.iter().map(|p| p.1)).fold(1.0, f64::max);
-        let mut chart = chart_builder(&chart_area).build_cartesian_2d(x_lo..x_hi, 0.0..1.08 * peak)?;
+        let mut chart = chart_builder(chart_area).build_cartesian_2d(x_lo..x_hi, 0.0..1.08 * peak)?;
         house_style(chart.configure_mesh().x_desc(x_label).y_desc("count")).draw()?;
         let bars = counts.iter().enumerate().map(|(i, c)| {
             let x0 = lo + i as f64 * width;
@@ -72,7 +67,7 @@ pub fn histogram_png(
             entries.push(LegendEntry::text(format!("  mean = {}", sig(m, 4))));
             entries.push(LegendEntry::text(format!("  std = {}", sig(s, 3))));
         }
-        draw_legend(&legend_area, &entries)
+        draw_legend(legend_area, &entries)
     })
 }
 
@@ -131,14 +126,9 @@ pub fn boxplot_png(
     let values =
         boxes.iter().flat_map(|(_, b)| [b.min, b.max, b.whisker_lo, b.whisker_hi, b.q1, b.q3, b.median]);
     let y_range = padded_range(values, 0.08);
-    render(path, FIGURE_SIZE, |root| {
-        let (chart_area, legend_area) = titled_with_legend(root, title)?;
-        let Some((y_lo, y_hi)) = y_range else {
-            draw_note(&chart_area, "no data")?;
-            return Ok(());
-        };
+    render_chart(path, title, y_range, "no data", |chart_area, legend_area, (y_lo, y_hi)| {
         let axis = CategoryAxis { names: boxes.iter().map(|(n, _)| n.clone()).collect() };
-        let mut chart = chart_builder(&chart_area).build_cartesian_2d(axis, y_lo..y_hi)?;
+        let mut chart = chart_builder(chart_area).build_cartesian_2d(axis, y_lo..y_hi)?;
         chart
             .configure_mesh()
             .disable_x_mesh()
@@ -185,6 +175,6 @@ pub fn boxplot_png(
             LegendEntry::text("n outside: points beyond"),
             LegendEntry::text("  the whiskers"),
         ];
-        draw_legend(&legend_area, &entries)
+        draw_legend(legend_area, &entries)
     })
 }

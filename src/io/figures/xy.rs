@@ -5,8 +5,8 @@ use plotters::prelude::*;
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, DrawResult, FIGURE_SIZE, FigureError, chart_builder, check_len, draw_note, house_style,
-    padded_range, palette, render, titled_with_legend,
+    Area, DrawResult, FigureError, chart_builder, check_len, draw_note, house_style, padded_range, palette,
+    render_chart,
 };
 
 /// Share of the traces figure's height given to the traces; the residual panel gets the rest.
@@ -30,22 +30,26 @@ pub fn static_map_png(
     curve.sort_by(|a, b| a.0.total_cmp(&b.0));
     let all = || points.iter().chain(&curve);
     let ranges = padded_range(all().map(|p| p.0), 0.04).zip(padded_range(all().map(|p| p.1), 0.06));
-    render(path, FIGURE_SIZE, |root| {
-        let (chart_area, legend_area) = titled_with_legend(root, title)?;
-        let Some(((x_lo, x_hi), (y_lo, y_hi))) = ranges else {
-            draw_note(&chart_area, "no steady-state data")?;
-            return Ok(());
-        };
-        let mut chart = chart_builder(&chart_area).build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
-        house_style(chart.configure_mesh().x_desc(x_label).y_desc(y_label)).draw()?;
-        chart.draw_series(points.iter().map(|p| Circle::new(*p, 5, palette::MEASURED.filled())))?;
-        chart.draw_series(LineSeries::new(curve.iter().copied(), palette::FIT.stroke_width(3)))?;
-        let entries = [
-            LegendEntry::new(format!("steady state (n = {})", points.len()), Swatch::Dot(palette::MEASURED)),
-            LegendEntry::line("fitted static map", palette::FIT, 3),
-        ];
-        draw_legend(&legend_area, &entries)
-    })
+    render_chart(
+        path,
+        title,
+        ranges,
+        "no steady-state data",
+        |chart_area, legend_area, ((x_lo, x_hi), (y_lo, y_hi))| {
+            let mut chart = chart_builder(chart_area).build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)?;
+            house_style(chart.configure_mesh().x_desc(x_label).y_desc(y_label)).draw()?;
+            chart.draw_series(points.iter().map(|p| Circle::new(*p, 5, palette::MEASURED.filled())))?;
+            chart.draw_series(LineSeries::new(curve.iter().copied(), palette::FIT.stroke_width(3)))?;
+            let entries = [
+                LegendEntry::new(
+                    format!("steady state (n = {})", points.len()),
+                    Swatch::Dot(palette::MEASURED),
+                ),
+                LegendEntry::line("fitted static map", palette::FIT, 3),
+            ];
+            draw_legend(legend_area, &entries)
+        },
+    )
 }
 
 /// Draws the measured trace with the model traces over it and, below, the residual of the first
@@ -66,12 +70,7 @@ pub fn traces_png(
     let residual: Option<(&str, Vec<f64>)> =
         models.first().map(|(name, y)| (name.as_str(), measured.iter().zip(y).map(|(m, y)| m - y).collect()));
     let t_range = padded_range(t_secs.iter().copied(), 0.0);
-    render(path, FIGURE_SIZE, |root| {
-        let (chart_area, legend_area) = titled_with_legend(root, title)?;
-        let Some(t_range) = t_range else {
-            draw_note(&chart_area, "no samples")?;
-            return Ok(());
-        };
+    render_chart(path, title, t_range, "no samples", |chart_area, legend_area, t_range| {
         let (_, h) = chart_area.dim_in_pixel();
         let (top, bottom) = chart_area.split_vertically((TRACE_SHARE * h as f64) as u32);
         let mut series: Vec<(&[f64], RGBColor, u32)> = vec![(measured, palette::MEASURED, MEASURED_PX)];
@@ -104,7 +103,7 @@ pub fn traces_png(
             }
             None => draw_note(&bottom, "no model trace: no residual")?,
         }
-        draw_legend(&legend_area, &entries)
+        draw_legend(legend_area, &entries)
     })
 }
 

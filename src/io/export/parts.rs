@@ -1,0 +1,104 @@
+//! The steps and optional blocks of an [`OutputPlan`] as every rendering lists them: what each one
+//! is called and its numbers, named and in order, spelled once for the three languages. A language
+//! module only arranges them (a C initialiser, a Python tuple, a MATLAB struct or row).
+use super::num;
+use super::plan::{InputStep, OutputPlan, OutputStep, Spool};
+
+/// One number of a step or block: its name in the runtimes (the fields of the C parameter and step
+/// structs, of the MATLAB step structs) and its text ([`num`]; counts as integers).
+pub(super) type Field = (&'static str, String);
+
+/// One step of an input or output stage.
+pub(super) struct Step {
+    /// The step's kind as the runtimes name it: `delay`, `ambient`, `sensor`.
+    pub kind: &'static str,
+    pub fields: Vec<Field>,
+}
+
+/// An optional block: its key, and its numbers when the model has it.
+pub(super) struct Block {
+    pub key: &'static str,
+    pub fields: Option<Vec<Field>>,
+}
+
+impl Block {
+    /// The numbers alone, in order (`None` without the block).
+    pub fn values(&self) -> Option<Vec<&str>> {
+        self.fields.as_ref().map(|fields| fields.iter().map(|(_, value)| value.as_str()).collect())
+    }
+}
+
+pub(super) fn input_step(step: &InputStep) -> Step {
+    match step {
+        InputStep::Delay(d) => {
+            Step { kind: "delay", fields: vec![("whole", d.whole.to_string()), ("frac", num(d.frac))] }
+        }
+        InputStep::AmbientInput => Step { kind: "ambient", fields: Vec::new() },
+    }
+}
+
+pub(super) fn output_step(step: &OutputStep) -> Step {
+    match step {
+        OutputStep::AmbientOutput { theta_exp, delta_exp } => Step {
+            kind: "ambient",
+            fields: vec![("theta_exp", num(*theta_exp)), ("delta_exp", num(*delta_exp))],
+        },
+        OutputStep::Sensor(s) => Step {
+            kind: "sensor",
+            fields: vec![("freq_hz", num(s.freq_hz)), ("zeta", num(s.zeta)), ("lag_s", num(s.lag_s))],
+        },
+    }
+}
+
+/// The blocks the static map and the calibration read (kink, calibration), which every rendering
+/// lists before the input steps.
+pub(super) fn map_blocks(o: &OutputPlan) -> [Block; 2] {
+    [
+        Block {
+            key: "kink",
+            fields: o
+                .kink
+                .as_ref()
+                .map(|k| vec![("knot_v", num(k.knot_v)), ("slope_change", num(k.slope_change))]),
+        },
+        Block {
+            key: "calibration",
+            fields: o
+                .calibration
+                .map(|c| vec![("hold_s", num(c.hold_s)), ("calibration_dc_gain", num(c.dc_gain))]),
+        },
+    ]
+}
+
+/// The blocks acting on `v` after the linear block (soak, then rate limit), which every rendering
+/// lists after it.
+pub(super) fn v_blocks(o: &OutputPlan) -> [Block; 2] {
+    [
+        Block {
+            key: "soak",
+            fields: o.soak.as_ref().map(|s| vec![("soak_gain", num(s.gain)), ("soak_tau_s", num(s.tau_s))]),
+        },
+        Block {
+            key: "rate_limit",
+            fields: o
+                .rate_limit
+                .as_ref()
+                .map(|r| vec![("rise_per_s", num(r.rise_per_s)), ("fall_per_s", num(r.fall_per_s))]),
+        },
+    ]
+}
+
+/// The time-constant schedule of a split linear block.
+pub(super) fn schedule(s: &Spool) -> Block {
+    Block {
+        key: "schedule",
+        fields: s.schedule.as_ref().map(|sc| {
+            vec![
+                ("log_ratio", num(sc.log_ratio)),
+                ("state_log_ratio", num(sc.state_log_ratio)),
+                ("ref_input", num(sc.ref_input)),
+                ("input_span", num(sc.input_span)),
+            ]
+        }),
+    }
+}

@@ -129,6 +129,10 @@ fn named_paths(code: String) -> Vec<Vec<String>> {
     let bytes = code.as_bytes();
     let mut i = 0;
     while i < bytes.len() {
+        if !code.is_char_boundary(i) {
+            i += 1;
+            continue;
+        }
         let at_word =
             i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_' || bytes[i - 1] == b':');
         let head = ["crate::", "super::", "self::"].into_iter().find(|h| code[i..].starts_with(h));

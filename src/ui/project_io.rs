@@ -45,8 +45,11 @@ pub fn project_text(session: &Session, project_path: &Path) -> Result<(String, V
         session.runs.iter().filter(|r| r.role == RunRole::Validation).map(|r| run_entry(r, base)).collect();
     let outputs: Vec<String> = session
         .ident_run()
-        .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
-        .unwrap_or_default();
+        .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect::<Vec<_>>())
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|name| session.setup.is_modelled(name))
+        .collect();
     let add_effects = shared_effects(&session.setup, &outputs, &mut notes);
     let auto_effects = shared_rounds(&session.setup, &outputs, &mut notes);
     let names: BTreeSet<&String> = outputs.iter().chain(session.setup.outputs.keys()).collect();
@@ -164,6 +167,7 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
         }
     }
     session.setup.segments = project.segments.values().next().cloned();
+    session.setup.modelled = project.outputs.clone();
     session.setup.steps_from = project.steps_from.clone();
     let sections = project.settings.keys().chain(project.clusters.keys()).chain(project.segments.keys());
     let names: BTreeSet<&String> = sections.collect();

@@ -86,6 +86,7 @@ impl IdentCache {
         let outputs = run
             .outputs
             .iter()
+            .filter(|channel| session.setup.is_modelled(&channel.name))
             .map(|channel| {
                 let mut cache = match old_outputs.iter().position(|o| o.name == channel.name) {
                     Some(i) => old_outputs.swap_remove(i),

@@ -22,6 +22,9 @@ pub struct ModelSetup {
     pub steps_from: Option<String>,
     /// By output column name. An output without an entry uses [`OutputSetup::for_output`].
     pub outputs: BTreeMap<String, OutputSetup>,
+    /// The outputs to model (a project's `outputs`); empty: every output of the identification run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub modelled: Vec<String>,
 }
 
 /// What the user decided for one output.
@@ -67,6 +70,11 @@ impl ModelSetup {
     /// The setup of an output (its defaults when the user has not changed anything).
     pub fn output(&self, name: &str) -> OutputSetup {
         self.outputs.get(name).cloned().unwrap_or_else(|| OutputSetup::for_output(name))
+    }
+
+    /// Whether the output `name` is modelled (the project's `outputs`, else every output).
+    pub fn is_modelled(&self, name: &str) -> bool {
+        self.modelled.is_empty() || self.modelled.iter().any(|o| o == name)
     }
 
     /// The setup of an output, to change it.

@@ -239,57 +239,100 @@ pub fn diagnose_with_progress(
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<DiagnosisReport, DiagnoseError> {
     let steps = (EffectId::CATALOG.len() + StructuralChange::ALL.len()) as f64 + 1.0;
-    if !progress(0.0) {
-        return Err(DiagnoseError::Cancelled);
-    }
+    let mut done = 0.0;
+    let mut tick = |progress: &mut dyn FnMut(f64) -> bool| {
+        let go_on = progress(done / steps);
+        done += 1.0;
+        if go_on { Ok(()) } else { Err(DiagnoseError::Cancelled) }
+    };
+    tick(progress)?;
     if validation.is_empty() {
         return Err(DiagnoseError::NoValidationRuns);
     }
     let data = FitData::new(ident, fits, settings)?;
     let before = pct_errors(current, validation, settings.initial_state)?;
-    let rmspe_before_pct = mean_rmspe(&before);
     let reference = refit(current, &data)?;
     let folds = HeldOut::of(&data, current);
     let mut yardstick = Scores::of(&reference, validation, settings.initial_state)?;
     yardstick.cross_validate(Recipe::Current, folds.as_ref());
-    let rmspe_refit_pct = mean_rmspe(&yardstick.validation);
-    let traces = residual_traces(current, &data, validation, settings.initial_state)?;
-    let lateness = crate::core::effects::transport_delay::lateness(&traces);
-    let all_runs: Vec<&Run> = std::iter::once(ident).chain(validation.iter().copied()).collect();
-    let judge = Judge { yardstick: &yardstick, rmspe_before_pct };
-    let mut entries = Vec::new();
-    let mut skipped = Vec::new();
-    let mut done = 0.0;
+    let bench = Bench {
+        current,
+        reference: &reference,
+        data: &data,
+        validation,
+        all_runs: std::iter::once(ident).chain(validation.iter().copied()).collect(),
+        initial: settings.initial_state,
+        folds: folds.as_ref(),
+        judge: Judge { yardstick: &yardstick, rmspe_before_pct: mean_rmspe(&before) },
+        traces: residual_traces(current, &data, validation, settings.initial_state)?,
+    };
+    let mut trials = Trials::default();
     // Structure first: what the model's own linear block and map can still do.
-    let mut rival: Option<(StructureRival, Scores, Recipe)> = None;
     for change in StructuralChange::ALL {
-        done += 1.0;
-        if !progress(done / steps) {
-            return Err(DiagnoseError::Cancelled);
-        }
-        let trial = refine_structure(&reference, change, &data).map_err(DiagnoseError::from).and_then(
-            |(model, words)| {
-                let mut after = Scores::of(&model, validation, settings.initial_state)?;
-                judge.consult(&mut after, Recipe::Structure(change), folds.as_ref());
+        tick(progress)?;
+        bench.try_structure(change, &mut trials);
+    }
+    for id in EffectId::CATALOG {
+        tick(progress)?;
+        bench.try_effect(id, &mut trials);
+    }
+    progress(1.0);
+    Ok(trials.into_report(&bench))
+}
+
+/// What every trial of one diagnosis is judged against.
+struct Bench<'a> {
+    current: &'a ExtendedModel,
+    /// The current model refitted on the identification data as it is: every trial starts here.
+    reference: &'a ExtendedModel,
+    data: &'a FitData,
+    validation: &'a [&'a Run],
+    /// The identification run, then the validation runs (where an effect's channels are checked).
+    all_runs: Vec<&'a Run>,
+    initial: InitialState,
+    folds: Option<&'a HeldOut>,
+    judge: Judge<'a>,
+    /// The current model's residuals (the evidence is read from them).
+    traces: Vec<ResidualTrace>,
+}
+
+/// The trials so far, and the best structural refinement a physical effect must beat.
+#[derive(Default)]
+struct Trials {
+    entries: Vec<Diagnosis>,
+    skipped: Vec<SkippedEffect>,
+    rival: Option<(StructureRival, Scores, Recipe)>,
+}
+
+impl Bench<'_> {
+    /// One structural refinement, refitted, scored and judged; the best becomes the rival.
+    fn try_structure(&self, change: StructuralChange, trials: &mut Trials) {
+        let trial = refine_structure(self.reference, change, self.data)
+            .map_err(DiagnoseError::from)
+            .and_then(|(model, words)| {
+                let mut after = Scores::of(&model, self.validation, self.initial)?;
+                self.judge.consult(&mut after, Recipe::Structure(change), self.folds);
                 Ok((model, words, after))
-            },
-        );
+            });
         let (model, words, after) = match trial {
             Ok(t) => t,
             Err(e) => {
-                skipped.push(SkippedEffect { effect: TrialId::Structure(change), reason: e.to_string() });
-                continue;
+                trials
+                    .skipped
+                    .push(SkippedEffect { effect: TrialId::Structure(change), reason: e.to_string() });
+                return;
             }
         };
-        let Verdict { test, rmspe_after_pct, significant } = judge.verdict(&after);
+        let Verdict { test, rmspe_after_pct, significant } = self.judge.verdict(&after);
+        let rmspe_before_pct = self.judge.rmspe_before_pct;
         let evidence = format!(
             "{words}: with it the validation error goes from {rmspe_before_pct:.3} % to {rmspe_after_pct:.3} %"
         );
-        if rival.as_ref().is_none_or(|(r, ..)| rmspe_after_pct < r.rmspe_pct) {
+        if trials.rival.as_ref().is_none_or(|(r, ..)| rmspe_after_pct < r.rmspe_pct) {
             let r = StructureRival { id: change, rmspe_pct: rmspe_after_pct, test };
-            rival = Some((r, after.clone(), Recipe::Structure(change)));
+            trials.rival = Some((r, after.clone(), Recipe::Structure(change)));
         }
-        entries.push(Diagnosis {
+        trials.entries.push(Diagnosis {
             effect: TrialId::Structure(change),
             kind: DiagnosisKind::Structure,
             physics: change.meaning().to_owned(),
@@ -302,52 +345,45 @@ pub fn diagnose_with_progress(
             rival: None,
         });
     }
-    for id in EffectId::CATALOG {
-        done += 1.0;
-        if !progress(done / steps) {
-            return Err(DiagnoseError::Cancelled);
+
+    /// One effect of the catalog, refitted, scored and judged against the current model and the
+    /// best structural refinement.
+    fn try_effect(&self, id: EffectId, trials: &mut Trials) {
+        if let Some(reason) = not_applicable(id, self.current, &self.all_runs) {
+            trials.skipped.push(SkippedEffect { effect: TrialId::Effect(id), reason });
+            return;
         }
-        if let Some(reason) = not_applicable(id, current, &all_runs) {
-            skipped.push(SkippedEffect { effect: TrialId::Effect(id), reason });
-            continue;
-        }
-        let trial = apply_effect(&reference, id, &data).map_err(DiagnoseError::from).and_then(|model| {
-            let mut after = Scores::of(&model, validation, settings.initial_state)?;
-            judge.consult(&mut after, Recipe::Effect(id), folds.as_ref());
-            Ok((model, after))
-        });
+        let trial =
+            apply_effect(self.reference, id, self.data).map_err(DiagnoseError::from).and_then(|model| {
+                let mut after = Scores::of(&model, self.validation, self.initial)?;
+                self.judge.consult(&mut after, Recipe::Effect(id), self.folds);
+                Ok((model, after))
+            });
         let (model, after) = match trial {
             Ok(t) => t,
             Err(e) => {
-                skipped.push(SkippedEffect { effect: TrialId::Effect(id), reason: e.to_string() });
-                continue;
+                trials.skipped.push(SkippedEffect { effect: TrialId::Effect(id), reason: e.to_string() });
+                return;
             }
         };
-        let Verdict { test, rmspe_after_pct, significant: beats_current } = judge.verdict(&after);
-        let evidence = id.evidence(&traces);
-        // A physical effect must also beat the best structural refinement, by the same rule; the
-        // refinement's held-out errors are computed when an effect that could count needs them.
-        if let Some((_, errors, recipe)) = rival.as_mut().filter(|_| beats_current && evidence.supports) {
-            errors.cross_validate(*recipe, folds.as_ref());
-        }
-        let held = rival.as_ref().map(|(r, errors, _)| StructureRival {
-            test: Comparison::of(errors, &after, &yardstick),
-            ..r.clone()
-        });
+        let Verdict { test, rmspe_after_pct, significant: beats_current } = self.judge.verdict(&after);
+        let evidence = id.evidence(&self.traces);
+        let held = self.held_against_rival(trials, &after, beats_current && evidence.supports);
         // The ranking follows the evidence where a lag and a dead time compete: when the whole
         // response is shifted late (not only its later part), a dead time that fits better than the
         // best structural refinement is credited even if the refinement comes close: a pole placed
         // to mimic a dead time is no evidence against one.
-        let evidence_says_dead_time = id == EffectId::TransportDelay && lateness.whole_response_late();
+        let evidence_says_dead_time = id == EffectId::TransportDelay
+            && crate::core::effects::transport_delay::lateness(&self.traces).whole_response_late();
         let beats_structure = held
             .as_ref()
             .is_none_or(|r| r.test.passes() || (evidence_says_dead_time && r.test.reduction > 0.0));
-        entries.push(Diagnosis {
+        trials.entries.push(Diagnosis {
             effect: TrialId::Effect(id),
             kind: DiagnosisKind::Physics,
             physics: id.physics().to_owned(),
             significant: beats_current && beats_structure && evidence.supports,
-            rmspe_before_pct,
+            rmspe_before_pct: self.judge.rmspe_before_pct,
             rmspe_after_pct,
             test,
             evidence: evidence.sentence,
@@ -355,20 +391,44 @@ pub fn diagnose_with_progress(
             rival: held,
         });
     }
-    entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
-    let structure_note = entries
-        .iter()
-        .find(|d| d.kind == DiagnosisKind::Structure && d.significant)
-        .map(|d| format!("structure is the missing piece: {}", d.evidence));
-    progress(1.0);
-    Ok(DiagnosisReport {
-        output: current.output.clone(),
-        rmspe_current_pct: rmspe_before_pct,
-        rmspe_refit_pct,
-        held_out_refit_pct: yardstick.held_out_rmspe(),
-        held_out_segments: folds.as_ref().map_or(0, HeldOut::segments),
-        entries,
-        skipped,
-        structure_note,
-    })
+
+    /// The best structural refinement with the test of the effect `after` against it; its held-out
+    /// errors are computed when an effect that could count (`could_count`) needs them.
+    fn held_against_rival(
+        &self,
+        trials: &mut Trials,
+        after: &Scores,
+        could_count: bool,
+    ) -> Option<StructureRival> {
+        if let Some((_, errors, recipe)) = trials.rival.as_mut().filter(|_| could_count) {
+            errors.cross_validate(*recipe, self.folds);
+        }
+        trials.rival.as_ref().map(|(r, errors, _)| StructureRival {
+            test: Comparison::of(errors, after, self.judge.yardstick),
+            ..r.clone()
+        })
+    }
+}
+
+impl Trials {
+    /// The report: the trials ranked by validation RMSPE, and what the structure needs in words.
+    fn into_report(mut self, bench: &Bench<'_>) -> DiagnosisReport {
+        self.entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
+        let structure_note = self
+            .entries
+            .iter()
+            .find(|d| d.kind == DiagnosisKind::Structure && d.significant)
+            .map(|d| format!("structure is the missing piece: {}", d.evidence));
+        let yardstick = bench.judge.yardstick;
+        DiagnosisReport {
+            output: bench.current.output.clone(),
+            rmspe_current_pct: bench.judge.rmspe_before_pct,
+            rmspe_refit_pct: mean_rmspe(&yardstick.validation),
+            held_out_refit_pct: yardstick.held_out_rmspe(),
+            held_out_segments: bench.folds.map_or(0, HeldOut::segments),
+            entries: self.entries,
+            skipped: self.skipped,
+            structure_note,
+        }
+    }
 }

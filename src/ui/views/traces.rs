@@ -5,7 +5,9 @@
 use egui::RichText;
 use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints};
 
+use crate::core::identification::pipeline::RunPrediction;
 use crate::ui::derived::Derived;
+use crate::ui::derived::live_model::ScoredRun;
 use crate::ui::state::session::Session;
 use crate::ui::theme;
 use crate::ui::widgets::model as model_ui;
@@ -90,12 +92,38 @@ pub fn traces_ui(
     });
     let shown = state.run.and_then(|i| live.runs.iter().find(|r| r.index == i)).or(live.runs.first());
     let Some(scored) = shown else { return };
+    controls_ui(ui, state, &live.runs, scored);
+    if let Some(err) = &scored.effects_error {
+        model_ui::error_ui(ui, &format!("The model's effects cannot be simulated on this run: {err}"));
+    }
+    let Some(entry) = session.runs.get(scored.index) else { return };
+    let Some(measured) = entry.run.output(output) else { return };
+    let shown = Shown {
+        t: &entry.run.t_secs,
+        measured: &measured.values,
+        scored,
+        linear: scored.linear.as_ref().ok().filter(|_| state.show_linear),
+        without: scored.without_effects.as_ref().filter(|_| state.show_without_effects),
+        model_name: if scored.without_effects.is_some() { "gray-box + effects" } else { "gray-box model" },
+        focus: state.focus_window.filter(|_| state.focus_pending),
+        reset: std::mem::take(&mut state.reset_pending),
+    };
+    state.focus_pending = false;
+    let spacing = ui.spacing().item_spacing.y;
+    let available = ui.available_height() - spacing;
+    let group = egui::Id::unique(("traces_time_axis", output, scored.index));
+    output_plot_ui(ui, &shown, (output, &view.output.label()), group, (available * 0.65).max(140.0));
+    residual_plot_ui(ui, &shown, (output, &view.output.unit), group, (available * 0.35).max(100.0));
+}
+
+/// The run chooser, the extra curves and the zoom.
+fn controls_ui(ui: &mut egui::Ui, state: &mut TracesViewState, runs: &[ScoredRun], scored: &ScoredRun) {
     ui.horizontal(|ui| {
         let label = ui.label("Run:");
         egui::ComboBox::from_id_salt("traces_run")
             .selected_text(scored.label())
             .show_ui(ui, |ui| {
-                for run in &live.runs {
+                for run in runs {
                     if ui.selectable_label(run.index == scored.index, run.label()).clicked() {
                         state.run = Some(run.index);
                     }
@@ -114,92 +142,117 @@ pub fn traces_ui(
             }
         }
     });
-    if let Some(err) = &scored.effects_error {
-        model_ui::error_ui(ui, &format!("The model's effects cannot be simulated on this run: {err}"));
+}
+
+/// What both plots of one run draw.
+struct Shown<'a> {
+    t: &'a [f64],
+    measured: &'a [f64],
+    scored: &'a ScoredRun,
+    linear: Option<&'a RunPrediction>,
+    without: Option<&'a RunPrediction>,
+    model_name: &'static str,
+    /// The window to zoom to on this frame.
+    focus: Option<(f64, f64)>,
+    /// Show the whole run again on this frame.
+    reset: bool,
+}
+
+impl Shown<'_> {
+    fn residual_of(&self, y_hat: &[f64]) -> Vec<f64> {
+        self.measured.iter().zip(y_hat).map(|(y, yh)| y - yh).collect()
     }
-    let Some(entry) = session.runs.get(scored.index) else { return };
-    let Some(measured) = entry.run.output(output) else { return };
-    let t = &entry.run.t_secs;
-    let linear = scored.linear.as_ref().ok().filter(|_| state.show_linear);
-    let without = scored.without_effects.as_ref().filter(|_| state.show_without_effects);
-    let model_name = if scored.without_effects.is_some() { "gray-box + effects" } else { "gray-box model" };
-    let focus = state.focus_window.filter(|_| state.focus_pending);
-    let reset = std::mem::take(&mut state.reset_pending);
-    state.focus_pending = false;
-    let residual_of =
-        |y_hat: &[f64]| -> Vec<f64> { measured.values.iter().zip(y_hat).map(|(y, yh)| y - yh).collect() };
-    let model_residual = residual_of(&scored.gray_box.y_hat);
-    let spacing = ui.spacing().item_spacing.y;
-    let available = ui.available_height() - spacing;
-    let group = egui::Id::unique(("traces_time_axis", output, scored.index));
+}
+
+/// The measured output with the model (and the extra curves) over time.
+fn output_plot_ui(
+    ui: &mut egui::Ui,
+    shown: &Shown<'_>,
+    (output, label): (&str, &str),
+    group: egui::Id,
+    height: f32,
+) {
+    let (t, scored) = (shown.t, shown.scored);
     Plot::new(("traces_output", output, scored.index))
-        .height((available * 0.65).max(140.0))
+        .height(height)
         .link_axis(group, [true, false])
         .link_cursor(group, [true, false])
-        .y_axis_label(view.output.label())
+        .y_axis_label(label)
         .y_axis_min_width(Y_AXIS_WIDTH)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
         .show_axes([false, true])
         .legend(Legend::default().position(egui_plot::Corner::LeftTop).follow_insertion_order(true))
-        .reset_if(reset)
+        .reset_if(shown.reset)
         .show(ui, |plot_ui| {
-            if let Some(window) = focus {
+            if let Some(window) = shown.focus {
                 plot_ui.set_plot_bounds_x(window.0..=window.1);
-                let both = measured.values.iter().chain(&scored.gray_box.y_hat).copied();
+                let both = shown.measured.iter().chain(&scored.gray_box.y_hat).copied();
                 let t_twice: Vec<f64> = t.iter().chain(t).copied().collect();
                 if let Some((lo, hi)) = range_in_window(&t_twice, both, window) {
                     plot_ui.set_plot_bounds_y(lo..=hi);
                 }
             }
             plot_ui.line(
-                Line::new("measured", series(t, measured.values.iter().copied()))
+                Line::new("measured", series(t, shown.measured.iter().copied()))
                     .color(theme::MEASURED)
                     .width(1.5),
             );
-            if let Some(linear) = linear {
+            if let Some(linear) = shown.linear {
                 let line = Line::new("linear block", series(t, linear.y_hat.iter().copied()));
                 plot_ui.line(line.color(theme::LINEAR).width(1.2).style(LineStyle::Dashed { length: 8.0 }));
             }
-            if let Some(without) = without {
+            if let Some(without) = shown.without {
                 let line = Line::new("without effects", series(t, without.y_hat.iter().copied()));
                 plot_ui.line(
                     line.color(theme::WITHOUT_EFFECTS).width(1.2).style(LineStyle::Dashed { length: 6.0 }),
                 );
             }
-            let gray = Line::new(model_name, series(t, scored.gray_box.y_hat.iter().copied()));
+            let gray = Line::new(shown.model_name, series(t, scored.gray_box.y_hat.iter().copied()));
             plot_ui.line(gray.color(theme::MODEL).width(1.5));
         });
+}
+
+/// The residual of the model (and of the extra curves) over time.
+fn residual_plot_ui(
+    ui: &mut egui::Ui,
+    shown: &Shown<'_>,
+    (output, unit): (&str, &str),
+    group: egui::Id,
+    height: f32,
+) {
+    let (t, scored) = (shown.t, shown.scored);
+    let model_residual = shown.residual_of(&scored.gray_box.y_hat);
     Plot::new(("traces_residual", output, scored.index))
-        .height((available * 0.35).max(100.0))
+        .height(height)
         .link_axis(group, [true, false])
         .link_cursor(group, [true, false])
         .x_axis_label("time [s]")
-        .y_axis_label(format!("residual y − ŷ{}", crate::core::run::bracketed_unit(&view.output.unit)))
+        .y_axis_label(format!("residual y − ŷ{}", crate::core::run::bracketed_unit(unit)))
         .y_axis_min_width(Y_AXIS_WIDTH)
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
-        .reset_if(reset)
+        .reset_if(shown.reset)
         .show(ui, |plot_ui| {
-            if let Some(window) = focus {
+            if let Some(window) = shown.focus {
                 plot_ui.set_plot_bounds_x(window.0..=window.1);
                 if let Some((lo, hi)) = range_in_window(t, model_residual.iter().copied(), window) {
                     plot_ui.set_plot_bounds_y(lo..=hi);
                 }
             }
-            let residual = |y_hat: &[f64]| series(t, residual_of(y_hat).into_iter());
-            if let Some(without) = without {
+            let residual = |y_hat: &[f64]| series(t, shown.residual_of(y_hat).into_iter());
+            if let Some(without) = shown.without {
                 let line = Line::new("without effects", residual(&without.y_hat));
                 plot_ui.line(
                     line.color(theme::WITHOUT_EFFECTS).width(1.0).style(LineStyle::Dashed { length: 6.0 }),
                 );
             }
-            if let Some(linear) = linear {
+            if let Some(linear) = shown.linear {
                 let line = Line::new("linear block", residual(&linear.y_hat));
                 plot_ui.line(line.color(theme::LINEAR).width(1.0).style(LineStyle::Dashed { length: 8.0 }));
             }
             plot_ui.line(
-                Line::new(model_name, series(t, model_residual.iter().copied()))
+                Line::new(shown.model_name, series(t, model_residual.iter().copied()))
                     .color(theme::MODEL)
                     .width(1.2),
             );

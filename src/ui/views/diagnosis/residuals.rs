@@ -8,7 +8,7 @@
 use egui::RichText;
 use egui_plot::{Bar, BarChart, HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
 
-use crate::core::residuals::{ChannelCorrelation, Regime, ResidualAnalysis, summary_sentences};
+use crate::core::residuals::{ChannelCorrelation, Regime, RegimeRow, ResidualAnalysis, summary_sentences};
 use crate::core::run::Run;
 use crate::ui::derived::model_cache::LiveModel;
 pub use crate::ui::derived::residuals::{Analyses, RunAnalysis};
@@ -202,86 +202,98 @@ fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize)
 
 /// The regime table, a bar picture of its RMSPE column, and the whole-run error of every run.
 fn regimes_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, all: &Analyses) {
-    let rows = &a.regimes.rows;
     ui.horizontal_top(|ui| {
         ui.vertical(|ui| {
-            egui::Grid::new("diagnosis_regimes").striped(true).num_columns(6).show(ui, |ui| {
-                for title in ["regime", "samples", "RMSE", "RMSPE [%]", "mean error", "share of e² [%]"] {
-                    ui.label(RichText::new(title).strong());
-                }
-                ui.end_row();
-                let opt = |v: Option<f64>, d: usize| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.d$}"));
-                for row in rows {
-                    ui.label(row.regime.label());
-                    ui.label(format!("{} ({:.0} %)", row.samples, row.share_of_samples_pct));
-                    ui.label(RichText::new(opt(row.rmse, 3)).monospace());
-                    ui.label(RichText::new(opt(row.rmspe_pct, 3)).monospace());
-                    ui.label(RichText::new(opt(row.mean_error, 3)).monospace());
-                    ui.label(RichText::new(format!("{:.1}", row.share_of_squared_error_pct)).monospace());
-                    ui.end_row();
-                }
-            });
+            regime_table_ui(ui, &a.regimes.rows);
             ui.add_space(8.0);
             ui.label(RichText::new("Per run (whole run)").strong());
-            egui::Grid::new("diagnosis_regimes_runs").striped(true).num_columns(3).show(ui, |ui| {
-                for title in ["run", "RMSPE [%]", "outside the noise band [%]"] {
-                    ui.label(RichText::new(title).strong());
-                }
-                ui.end_row();
-                for run in &all.runs {
-                    let Ok(analysis) = &run.analysis else { continue };
-                    let whole = analysis.regimes.row(Regime::Run).and_then(|r| r.rmspe_pct);
-                    ui.label(&run.label);
-                    ui.label(RichText::new(whole.map_or("–".into(), |v| format!("{v:.3}"))).monospace());
-                    ui.label(
-                        RichText::new(format!("{:.1}", 100.0 * analysis.band.outside_fraction)).monospace(),
-                    );
-                    ui.end_row();
-                }
-            });
+            runs_table_ui(ui, all);
         });
-        let labels: Vec<&'static str> = rows.iter().map(|r| short_label(r.regime)).collect();
-        let values: Vec<(f64, f64)> =
-            rows.iter().enumerate().filter_map(|(i, r)| Some((i as f64, r.rmspe_pct?))).collect();
-        let top = values.iter().map(|(_, v)| *v).fold(0.0, f64::max);
-        let bars: Vec<Bar> = rows
-            .iter()
-            .enumerate()
-            .filter_map(|(i, r)| Some(Bar::new(i as f64, r.rmspe_pct?).width(0.7).name(r.regime.label())))
-            .collect();
-        Plot::new(("diagnosis_regime_bars", &a.run))
-            .height(300.0)
-            .width(ui.available_width().max(300.0))
-            .allow_drag(false)
-            .allow_zoom(false)
-            .allow_scroll(false)
-            .include_y(0.0)
-            .include_y(top * 1.15)
-            .show_grid([false, true])
-            .y_axis_label("RMSPE [%]")
-            .x_grid_spacer(|input| {
-                let (lo, hi) = input.bounds;
-                let first = lo.ceil().max(0.0) as usize;
-                let last = hi.floor().max(0.0) as usize;
-                (first..=last).map(|i| egui_plot::GridMark { value: i as f64, step_size: 1.0 }).collect()
-            })
-            .x_axis_formatter(move |mark, _| {
-                let i = mark.value.round();
-                if (mark.value - i).abs() > 1e-6 || i < 0.0 {
-                    return String::new();
-                }
-                labels.get(i as usize).map(|l| (*l).to_owned()).unwrap_or_default()
-            })
-            .show(ui, |plot_ui| {
-                plot_ui.bar_chart(BarChart::new("RMSPE by regime", bars).color(theme::MODEL));
-                for (x, v) in values {
-                    let at = egui_plot::PlotPoint::new(x, v + 0.02 * top);
-                    let text = egui_plot::Text::new("value", at, RichText::new(format!("{v:.2}")).strong())
-                        .anchor(egui::Align2::CENTER_BOTTOM);
-                    plot_ui.text(text);
-                }
-            });
+        regime_bars_ui(ui, &a.run, &a.regimes.rows);
     });
+}
+
+/// The error of one run by regime.
+fn regime_table_ui(ui: &mut egui::Ui, rows: &[RegimeRow]) {
+    egui::Grid::new("diagnosis_regimes").striped(true).num_columns(6).show(ui, |ui| {
+        for title in ["regime", "samples", "RMSE", "RMSPE [%]", "mean error", "share of e² [%]"] {
+            ui.label(RichText::new(title).strong());
+        }
+        ui.end_row();
+        let opt = |v: Option<f64>, d: usize| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.d$}"));
+        for row in rows {
+            ui.label(row.regime.label());
+            ui.label(format!("{} ({:.0} %)", row.samples, row.share_of_samples_pct));
+            ui.label(RichText::new(opt(row.rmse, 3)).monospace());
+            ui.label(RichText::new(opt(row.rmspe_pct, 3)).monospace());
+            ui.label(RichText::new(opt(row.mean_error, 3)).monospace());
+            ui.label(RichText::new(format!("{:.1}", row.share_of_squared_error_pct)).monospace());
+            ui.end_row();
+        }
+    });
+}
+
+/// The whole-run error of every run and its share outside the noise band.
+fn runs_table_ui(ui: &mut egui::Ui, all: &Analyses) {
+    egui::Grid::new("diagnosis_regimes_runs").striped(true).num_columns(3).show(ui, |ui| {
+        for title in ["run", "RMSPE [%]", "outside the noise band [%]"] {
+            ui.label(RichText::new(title).strong());
+        }
+        ui.end_row();
+        for run in &all.runs {
+            let Ok(analysis) = &run.analysis else { continue };
+            let whole = analysis.regimes.row(Regime::Run).and_then(|r| r.rmspe_pct);
+            ui.label(&run.label);
+            ui.label(RichText::new(whole.map_or("–".into(), |v| format!("{v:.3}"))).monospace());
+            ui.label(RichText::new(format!("{:.1}", 100.0 * analysis.band.outside_fraction)).monospace());
+            ui.end_row();
+        }
+    });
+}
+
+/// Bars of the RMSPE by regime, each labelled with its value.
+fn regime_bars_ui(ui: &mut egui::Ui, run: &str, rows: &[RegimeRow]) {
+    let labels: Vec<&'static str> = rows.iter().map(|r| short_label(r.regime)).collect();
+    let values: Vec<(f64, f64)> =
+        rows.iter().enumerate().filter_map(|(i, r)| Some((i as f64, r.rmspe_pct?))).collect();
+    let top = values.iter().map(|(_, v)| *v).fold(0.0, f64::max);
+    let bars: Vec<Bar> = rows
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| Some(Bar::new(i as f64, r.rmspe_pct?).width(0.7).name(r.regime.label())))
+        .collect();
+    Plot::new(("diagnosis_regime_bars", run))
+        .height(300.0)
+        .width(ui.available_width().max(300.0))
+        .allow_drag(false)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .include_y(0.0)
+        .include_y(top * 1.15)
+        .show_grid([false, true])
+        .y_axis_label("RMSPE [%]")
+        .x_grid_spacer(|input| {
+            let (lo, hi) = input.bounds;
+            let first = lo.ceil().max(0.0) as usize;
+            let last = hi.floor().max(0.0) as usize;
+            (first..=last).map(|i| egui_plot::GridMark { value: i as f64, step_size: 1.0 }).collect()
+        })
+        .x_axis_formatter(move |mark, _| {
+            let i = mark.value.round();
+            if (mark.value - i).abs() > 1e-6 || i < 0.0 {
+                return String::new();
+            }
+            labels.get(i as usize).map(|l| (*l).to_owned()).unwrap_or_default()
+        })
+        .show(ui, |plot_ui| {
+            plot_ui.bar_chart(BarChart::new("RMSPE by regime", bars).color(theme::MODEL));
+            for (x, v) in values {
+                let at = egui_plot::PlotPoint::new(x, v + 0.02 * top);
+                let text = egui_plot::Text::new("value", at, RichText::new(format!("{v:.2}")).strong())
+                    .anchor(egui::Align2::CENTER_BOTTOM);
+                plot_ui.text(text);
+            }
+        });
 }
 
 /// A regime in a word, for the bar picture's axis.

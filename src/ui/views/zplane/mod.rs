@@ -71,53 +71,8 @@ fn toolbar_ui(
     state: &mut ZPlaneViewState,
 ) -> Vec<Command> {
     let mut commands = Vec::new();
-    let set =
-        |clusters: Vec<Cluster>| Command::SetClusters { output: output.to_owned(), clusters: Some(clusters) };
-    let zoom = *state.zoom.entry(output.to_owned()).or_insert_with(|| fit_view(view));
     ui.horizontal_wrapped(|ui| {
-        for (label, kind) in [("+ Pole cluster", RootKind::Pole), ("+ Zero cluster", RootKind::Zero)] {
-            if ui.button(label).on_hover_text("Add a cluster in the middle of the view").clicked() {
-                let mut clusters = view.clusters.to_vec();
-                let centre = Complex64::new(zoom.centre[0], zoom.centre[1]);
-                clusters.push(Cluster::new(kind, centre, 0.08 * zoom.half_width));
-                state.selected = Some(clusters.len() - 1);
-                commands.push(set(clusters));
-            }
-        }
-        let delete_key =
-            ui.input(|i| i.key_pressed(egui::Key::Delete)) && !ui.ctx().egui_wants_keyboard_input();
-        let delete = ui
-            .add_enabled(state.selected.is_some(), egui::Button::new("Delete"))
-            .on_hover_text("Delete the selected cluster (Del)");
-        if (delete.clicked() || delete_key)
-            && let Some(i) = state.selected.filter(|i| *i < view.clusters.len())
-        {
-            let mut clusters = view.clusters.to_vec();
-            clusters.remove(i);
-            state.selected = None;
-            commands.push(set(clusters));
-        }
-        let automatic = view.output.setup.clusters.is_none();
-        let accept = ui
-            .add_enabled(!automatic, egui::Button::new("Accept automatic proposal"))
-            .on_hover_text(match &view.output.proposal {
-                Proposed::Ready(proposal) if proposal.direct.is_some() => {
-                    "Replace the clusters by the automatic proposal: roots fitted directly (no cluster \
-                     met the aggregation condition)"
-                        .to_owned()
-                }
-                Proposed::Ready(proposal) => format!(
-                    "Replace the clusters by the {} proposed from the segment roots, with the proposal's \
-                     dead time",
-                    proposal.clusters.len()
-                ),
-                Proposed::Running(_) => "The automatic proposal is being computed".to_owned(),
-                Proposed::Failed(err) => format!("The proposal failed: {err}"),
-            });
-        if accept.clicked() {
-            state.selected = None;
-            commands.push(Command::SetClusters { output: output.to_owned(), clusters: None });
-        }
+        commands.extend(cluster_buttons_ui(ui, output, view, state));
         ui.separator();
         if ui.add_enabled(history.can_undo(), egui::Button::new("Undo")).on_hover_text("Ctrl+Z").clicked() {
             commands.push(Command::Undo);
@@ -137,18 +92,7 @@ fn toolbar_ui(
             state.zoom.insert(output.to_owned(), ZoomView::WHOLE);
         }
         ui.separator();
-        let mut refine = view.output.setup.settings.refine;
-        let polish = ui.checkbox(&mut refine, "Polish centroids").on_hover_text(
-            "After a change, move the reduced roots to lower the simulation error on the identification run \
-             (not while dragging)",
-        );
-        if polish.changed() {
-            let settings = crate::core::identification::pipeline::OutputSettings {
-                refine,
-                ..view.output.setup.settings.clone()
-            };
-            commands.push(Command::SetOutputSettings { output: output.to_owned(), settings });
-        }
+        commands.extend(polish_checkbox_ui(ui, output, view));
     });
     ui.horizontal_wrapped(|ui| {
         let source = if view.output.setup.clusters.is_none() { "automatic proposal" } else { "edited" };
@@ -160,6 +104,83 @@ fn toolbar_ui(
         );
     });
     commands
+}
+
+/// Add a pole or zero cluster, delete the selected one, accept the automatic proposal.
+fn cluster_buttons_ui(
+    ui: &mut egui::Ui,
+    output: &str,
+    view: &LiveView<'_>,
+    state: &mut ZPlaneViewState,
+) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let set =
+        |clusters: Vec<Cluster>| Command::SetClusters { output: output.to_owned(), clusters: Some(clusters) };
+    let zoom = *state.zoom.entry(output.to_owned()).or_insert_with(|| fit_view(view));
+    for (label, kind) in [("+ Pole cluster", RootKind::Pole), ("+ Zero cluster", RootKind::Zero)] {
+        if ui.button(label).on_hover_text("Add a cluster in the middle of the view").clicked() {
+            let mut clusters = view.clusters.to_vec();
+            let centre = Complex64::new(zoom.centre[0], zoom.centre[1]);
+            clusters.push(Cluster::new(kind, centre, 0.08 * zoom.half_width));
+            state.selected = Some(clusters.len() - 1);
+            commands.push(set(clusters));
+        }
+    }
+    let delete_key = ui.input(|i| i.key_pressed(egui::Key::Delete)) && !ui.ctx().egui_wants_keyboard_input();
+    let delete = ui
+        .add_enabled(state.selected.is_some(), egui::Button::new("Delete"))
+        .on_hover_text("Delete the selected cluster (Del)");
+    if (delete.clicked() || delete_key)
+        && let Some(i) = state.selected.filter(|i| *i < view.clusters.len())
+    {
+        let mut clusters = view.clusters.to_vec();
+        clusters.remove(i);
+        state.selected = None;
+        commands.push(set(clusters));
+    }
+    let automatic = view.output.setup.clusters.is_none();
+    let accept = ui
+        .add_enabled(!automatic, egui::Button::new("Accept automatic proposal"))
+        .on_hover_text(proposal_hint(&view.output.proposal));
+    if accept.clicked() {
+        state.selected = None;
+        commands.push(Command::SetClusters { output: output.to_owned(), clusters: None });
+    }
+    commands
+}
+
+/// What accepting the automatic proposal would do, in words.
+fn proposal_hint(proposal: &Proposed) -> String {
+    match proposal {
+        Proposed::Ready(proposal) if proposal.direct.is_some() => {
+            "Replace the clusters by the automatic proposal: roots fitted directly (no cluster \
+             met the aggregation condition)"
+                .to_owned()
+        }
+        Proposed::Ready(proposal) => format!(
+            "Replace the clusters by the {} proposed from the segment roots, with the proposal's \
+             dead time",
+            proposal.clusters.len()
+        ),
+        Proposed::Running(_) => "The automatic proposal is being computed".to_owned(),
+        Proposed::Failed(err) => format!("The proposal failed: {err}"),
+    }
+}
+
+/// Polish the centroids after a change, or not.
+fn polish_checkbox_ui(ui: &mut egui::Ui, output: &str, view: &LiveView<'_>) -> Option<Command> {
+    let mut refine = view.output.setup.settings.refine;
+    let polish = ui.checkbox(&mut refine, "Polish centroids").on_hover_text(
+        "After a change, move the reduced roots to lower the simulation error on the identification run \
+         (not while dragging)",
+    );
+    polish.changed().then(|| {
+        let settings = crate::core::identification::pipeline::OutputSettings {
+            refine,
+            ..view.output.setup.settings.clone()
+        };
+        Command::SetOutputSettings { output: output.to_owned(), settings }
+    })
 }
 
 /// What the marks on the z-plane are.

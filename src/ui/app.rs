@@ -2,8 +2,7 @@
 //! one place where commands change the session.
 use std::time::Instant;
 
-use crate::core::diagnose::TrialId;
-
+use crate::io::csv_run::LoadOptions;
 use crate::ui::derived::Derived;
 use crate::ui::derived::model_cache::IdentCache;
 use crate::ui::file_dialog::{self, PickPurpose};
@@ -88,53 +87,12 @@ impl App {
     /// untouched and are shown.
     pub fn apply(&mut self, command: Command) {
         match command {
-            Command::LoadRun { path, role, options } => match SessionRun::load(&path, role, options) {
-                Ok(run) => {
-                    self.view.status = Some(format!(
-                        "Loaded {} ({} samples) as {}",
-                        file_label(&path),
-                        run.run.len(),
-                        role.label()
-                    ));
-                    self.view.failures.retain(|f| !(f.existing.is_none() && f.path == path));
-                    self.session.runs.push(run);
-                    self.view.selected_run = Some(self.session.runs.len() - 1);
-                    self.session.revision += 1;
-                }
-                Err(failure) => self.push_failure(*failure),
-            },
+            Command::LoadRun { path, role, options } => self.load_run(&path, role, options),
             Command::ReloadRun { index, options } => self.reload_run(index, options),
-            Command::RemoveRun(index) => {
-                if index < self.session.runs.len() {
-                    let removed = self.session.runs.remove(index);
-                    self.view.status = Some(format!("Removed {}", file_label(&removed.path)));
-                    self.after_remove(index);
-                    self.session.revision += 1;
-                }
-            }
-            Command::SetRole(index, role) => {
-                if let Some(run) = self.session.runs.get_mut(index)
-                    && run.role != role
-                {
-                    run.role = role;
-                    self.session.revision += 1;
-                }
-            }
-            Command::SetSegments(segments) => {
-                let status = if segments.is_some() { "Segments changed" } else { "Segments detected again" };
-                // The Data view's segments are every output's from now on.
-                self.edit_setup(status, |setup| {
-                    setup.segments = segments;
-                    setup.outputs.values_mut().for_each(|o| o.segments = None);
-                });
-            }
-            Command::SetClusters { output, clusters } => {
-                let status = Self::clusters_status(&output, clusters.as_ref().map(Vec::len));
-                let proposed = self.cache.output(&output).and_then(|o| o.proposal.dead_time_samples());
-                self.edit_setup(&status, |setup| {
-                    carry_dead_time(setup.output_mut(&output), clusters, proposed)
-                });
-            }
+            Command::RemoveRun(index) => self.remove_run(index),
+            Command::SetRole(index, role) => self.set_role(index, role),
+            Command::SetSegments(segments) => self.set_segments(segments),
+            Command::SetClusters { output, clusters } => self.set_clusters(&output, clusters),
             Command::SetOutputSettings { output, settings } => {
                 let status = format!("{output}: settings changed");
                 self.edit_setup(&status, |setup| setup.output_mut(&output).settings = settings);
@@ -144,13 +102,7 @@ impl App {
                 let status = format!("{output}: effect {effect} removed");
                 self.edit_setup(&status, |setup| setup.output_mut(&output).effects.retain(|e| *e != effect));
             }
-            Command::SetAutoEffects { output, rounds } => {
-                let status = match rounds {
-                    0 => format!("{output}: the missing-physics loop is off"),
-                    n => format!("{output}: the missing-physics loop runs {n} round(s)"),
-                };
-                self.edit_setup(&status, |setup| setup.output_mut(&output).auto_effects = rounds);
-            }
+            Command::SetAutoEffects { output, rounds } => self.set_auto_effects(&output, rounds),
             Command::Undo => self.undo(),
             Command::Redo => self.redo(),
             Command::StartFresh => self.start_fresh(),
@@ -161,43 +113,17 @@ impl App {
             Command::OpenRunDialog => self.view.dialog_requested = Some(PickPurpose::Runs),
             Command::ChooseFile(action) => self.view.dialog_requested = Some(PickPurpose::File(action)),
             Command::SubmitPath => self.submit_path(),
-            Command::ClosePathPrompt => {
-                self.view.path_prompt = None;
-                self.view.status = None;
-            }
-            Command::DismissError(index) => {
-                if index < self.view.errors.len() {
-                    self.view.errors.remove(index);
-                }
-            }
+            Command::ClosePathPrompt => (self.view.path_prompt, self.view.status) = (None, None),
+            Command::DismissError(index) => remove_at(&mut self.view.errors, index),
             Command::SelectOutput(name) => {
                 // Cluster indices belong to one output.
                 self.view.views.zplane.selected = None;
                 self.view.output = Some(name);
             }
-            Command::MapColumnsOfRun(index) => {
-                if let Some(run) = self.session.runs.get(index) {
-                    let target = MappingTarget::Existing { index, path: run.path.clone() };
-                    self.view.mapping = Some(MappingDialog::new(target, &run.options));
-                }
-            }
-            Command::MapColumnsOfFailure(index) => {
-                if let Some(failure) = self.view.failures.get(index) {
-                    let target = match failure.existing {
-                        Some(existing) => {
-                            MappingTarget::Existing { index: existing, path: failure.path.clone() }
-                        }
-                        None => MappingTarget::New { path: failure.path.clone(), role: failure.role },
-                    };
-                    self.view.mapping = Some(MappingDialog::new(target, &failure.options));
-                }
-            }
+            Command::MapColumnsOfRun(index) => self.map_columns_of_run(index),
+            Command::MapColumnsOfFailure(index) => self.map_columns_of_failure(index),
             Command::CloseMappingDialog => self.view.mapping = None,
-            Command::DismissFailure(index) => {
-                if index < self.view.failures.len() {
-                    self.view.failures.remove(index);
-                }
-            }
+            Command::DismissFailure(index) => remove_at(&mut self.view.failures, index),
             Command::DismissAllFailures => self.view.failures.clear(),
             Command::DismissRestoreNotice => self.view.restored_runs = None,
             Command::SelectRun(index) => {
@@ -211,6 +137,59 @@ impl App {
                 self.view.tab = Tab::Traces;
             }
             Command::Quit => self.view.quit_requested = true,
+        }
+    }
+
+    fn load_run(&mut self, path: &std::path::Path, role: crate::core::run::RunRole, options: LoadOptions) {
+        match SessionRun::load(path, role, options) {
+            Ok(run) => {
+                self.view.status = Some(format!(
+                    "Loaded {} ({} samples) as {}",
+                    file_label(path),
+                    run.run.len(),
+                    role.label()
+                ));
+                self.view.failures.retain(|f| !(f.existing.is_none() && f.path == path));
+                self.session.runs.push(run);
+                self.view.selected_run = Some(self.session.runs.len() - 1);
+                self.session.revision += 1;
+            }
+            Err(failure) => self.push_failure(*failure),
+        }
+    }
+
+    fn remove_run(&mut self, index: usize) {
+        if index < self.session.runs.len() {
+            let removed = self.session.runs.remove(index);
+            self.view.status = Some(format!("Removed {}", file_label(&removed.path)));
+            self.after_remove(index);
+            self.session.revision += 1;
+        }
+    }
+
+    fn set_role(&mut self, index: usize, role: crate::core::run::RunRole) {
+        if let Some(run) = self.session.runs.get_mut(index)
+            && run.role != role
+        {
+            run.role = role;
+            self.session.revision += 1;
+        }
+    }
+
+    fn map_columns_of_run(&mut self, index: usize) {
+        if let Some(run) = self.session.runs.get(index) {
+            let target = MappingTarget::Existing { index, path: run.path.clone() };
+            self.view.mapping = Some(MappingDialog::new(target, &run.options));
+        }
+    }
+
+    fn map_columns_of_failure(&mut self, index: usize) {
+        if let Some(failure) = self.view.failures.get(index) {
+            let target = match failure.existing {
+                Some(existing) => MappingTarget::Existing { index: existing, path: failure.path.clone() },
+                None => MappingTarget::New { path: failure.path.clone(), role: failure.role },
+            };
+            self.view.mapping = Some(MappingDialog::new(target, &failure.options));
         }
     }
 
@@ -228,25 +207,6 @@ impl App {
         };
         fresh.view.status = Some(format!("Started fresh on {what}"));
         *self = fresh;
-    }
-
-    /// Add what a trial adds to an output's setup (undoable): its catalog effect. A refinement
-    /// of the linear block or the map is no block: it is an error shown, with where to make it.
-    fn apply_effect(&mut self, output: &str, trial: TrialId) {
-        let Some(effect) = trial.as_effect() else {
-            let err = anyhow::anyhow!(
-                "{trial} changes the linear block or the static map itself: add or move a cluster on the \
-                 z-plane, or raise the map's order in the output's settings"
-            );
-            return self.push_error(&err.context(format!("adding {trial} to {output}")));
-        };
-        let status = format!("{output}: effect {effect} applied");
-        self.edit_setup(&status, |setup| {
-            let effects = &mut setup.output_mut(output).effects;
-            if !effects.contains(&effect) {
-                effects.push(effect);
-            }
-        });
     }
 
     fn reload_run(&mut self, index: usize, options: crate::io::csv_run::LoadOptions) {
@@ -446,23 +406,9 @@ const PROPOSAL_POLL: std::time::Duration = std::time::Duration::from_millis(100)
 /// follows the release with no visible wait (an idle frame costs well under a millisecond).
 const FINISH_POLL: std::time::Duration = std::time::Duration::from_millis(16);
 
-/// Set an output's clusters. Leaving the automatic proposal for edited clusters carries the
-/// proposal's dead time into the settings (unless one is set), so the edited model keeps the delay
-/// the proposal found and the saved project builds the same model in the batch; going back to the
-/// proposal drops a dead time that came from it.
-fn carry_dead_time(
-    setup: &mut crate::ui::state::setup::OutputSetup,
-    clusters: Option<Vec<crate::core::identification::cluster::Cluster>>,
-    proposed: Option<usize>,
-) {
-    match (&setup.clusters, &clusters) {
-        (None, Some(_)) if setup.settings.dead_time_samples.is_none() => {
-            setup.settings.dead_time_samples = proposed;
-        }
-        (Some(_), None) if setup.settings.dead_time_samples == proposed => {
-            setup.settings.dead_time_samples = None;
-        }
-        _ => {}
+/// Remove item `index` of `items`, when there is one.
+fn remove_at<T>(items: &mut Vec<T>, index: usize) {
+    if index < items.len() {
+        items.remove(index);
     }
-    setup.clusters = clusters;
 }

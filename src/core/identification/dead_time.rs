@@ -4,10 +4,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::identification::arx;
 use crate::core::identification::cluster::RootKind;
-use crate::core::identification::cross_validation::fitted;
-use crate::core::identification::pipeline::MAX_DEAD_TIME_SECS;
+use crate::core::identification::cross_validation::{REFINED_GUESSES, fitted};
+use crate::core::identification::fits::MAX_DEAD_TIME_SECS;
 use crate::core::identification::reduce::{Assembled, IdentData, Polished, RootGroup, assemble_groups};
-use crate::core::identification::structure::REFINED_GUESSES;
 use crate::core::numerics::stats::mean;
 
 /// The input dead time the reduced model may carry (a fuel line and valve delay), as a candidate of

@@ -23,8 +23,10 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::identification::cluster::{ClusterEval, RootKind, natural_freq_and_damping};
-use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits, output_values};
+use crate::core::identification::error::PipelineError;
+use crate::core::identification::fits::{SegmentFits, output_values};
 use crate::core::identification::refine::Refinement;
+use crate::core::identification::settings::{OutputSettings, PolishRegion};
 use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
 use crate::core::identification::wiener::{WienerModel, fit_linear_block_excluding};
 use crate::core::numerics::lm::{
@@ -91,10 +93,10 @@ impl RootGroup {
     }
 
     /// The group with its circle dropped when the polish may move it freely.
-    pub fn within(self, region: crate::core::identification::pipeline::PolishRegion) -> Self {
+    pub fn within(self, region: PolishRegion) -> Self {
         match region {
-            crate::core::identification::pipeline::PolishRegion::WithinClusters => self,
-            crate::core::identification::pipeline::PolishRegion::Free => Self { region: None, ..self },
+            PolishRegion::WithinClusters => self,
+            PolishRegion::Free => Self { region: None, ..self },
         }
     }
 

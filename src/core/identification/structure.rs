@@ -13,51 +13,36 @@
 //! trial that lowers the held-out error most is kept when it passes the parsimony rule below; this
 //! repeats until none passes. A zero is only tried while the model has more poles than zeros.
 //!
-//! **Parsimony rule.** A root enters the model when (1) it lowers the held-out error by more than
-//! one standard error of the per-segment improvements — the one-standard-error rule of
-//! cross-validated model choice (Breiman et al.; Hastie, Tibshirani & Friedman §7.10): the segments
-//! are J separate experiments, and a root that only fits noise in some of them does not predict the
-//! others — and (2) it removes at least [`MIN_RELATIVE_REDUCTION`] (10 %) of the held-out model
-//! error: the RMS error above the measurement noise (σ read from the data, see
-//! [`IdentData::noise_sigma`]), which no structure can remove — on a thrust channel whose noise is
-//! most of the error a faint but real pole pair would otherwise never count. Ten percent is the
-//! share the diagnosis asks of a physical effect, so that a root and an effect are judged alike;
-//! smaller gains come from roots that only shave an error dominated by what a Wiener model cannot
-//! do (a speed-dependent time constant), which a controller designer would not want to carry. The
-//! held-out error is used rather than the fit to all the data because every extra root lowers the
-//! latter.
+//! **Parsimony rule.** A root enters the model only when it beats the simpler model by enough,
+//! beyond noise: see `core::identification::parsimony`.
 //!
 //! **No dead ends.** When no candidate cluster gives a model (no pole gathers in a majority of the
 //! segments), the reduced model is fitted directly: output-error Wiener fit of free roots, grown one
 //! real pole or pole pair at a time from a grid of time constants and natural frequencies, under the
-//! same parsimony rule, up to [`MAX_DIRECT_POLES`] poles (a low-order model, as the method intends).
-//! The proposal says so in words.
-use num_complex::Complex64;
+//! same parsimony rule, up to `MAX_DIRECT_POLES` poles (a low-order model, as the method intends;
+//! see `core::identification::direct_fit`). The proposal says so in words.
 use serde::{Deserialize, Serialize};
 
 use crate::core::identification::cluster::{self, Cluster, ClusterEval, RootKind};
 use crate::core::identification::cluster_proposal::propose_clusters;
-use crate::core::identification::cross_validation::{
-    Gain, Noise, cross_validate, fitted, fmt_error, model_error_reduction,
-};
+use crate::core::identification::cross_validation::{cross_validate, fitted};
 pub use crate::core::identification::dead_time::DeadTimeVerdict;
 use crate::core::identification::dead_time::{apparent_nk, group_delay_secs, with_dead_time};
 use crate::core::identification::direct_fit::{DirectFit, direct_fit};
-use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits};
+use crate::core::identification::error::PipelineError;
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::parsimony::{
+    Gain, Noise, model_error_reduction, pooled, too_little_to_cross_validate,
+};
+pub use crate::core::identification::parsimony::{MIN_RELATIVE_REDUCTION, MIN_STANDARD_ERRORS};
 use crate::core::identification::reduce::{IdentData, Polished, RootGroup, count_of};
+use crate::core::identification::settings::OutputSettings;
+use crate::core::identification::words::fmt_error;
+pub use crate::core::identification::words::root_words;
 use crate::core::run::Run;
 
-/// Smallest share of the held-out RMS error a root must remove to enter the model.
-pub const MIN_RELATIVE_REDUCTION: f64 = 0.10;
-/// Standard errors by which the held-out improvement must exceed zero (the one-standard-error rule).
-pub const MIN_STANDARD_ERRORS: f64 = 1.0;
 /// Trials cross-validated per round: the best few by their fit on all the data.
 const CROSS_VALIDATED_TRIALS: usize = 3;
-/// A trial is cross-validated only when its fit on all the data removes at least this share of
-/// [`MIN_RELATIVE_REDUCTION`]: held-out improvements run below in-sample ones.
-const SCREEN_SHARE: f64 = 0.5;
-/// Starting points kept after screening a grid, to be polished.
-pub(super) const REFINED_GUESSES: usize = 2;
 
 /// What became of one candidate cluster, in words and numbers.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -112,17 +97,6 @@ impl Proposal {
         out.push(self.dead_time.sentence());
         out.extend(self.direct.as_ref().map(|d| d.note.clone()));
         out
-    }
-}
-
-/// "pair near 2.31 rad/s (ζ 0.60)" or "real root 0.936 (τ 1.72 s)".
-pub fn root_words(z: Complex64, pair: bool, omega_rad_s: f64, zeta: f64) -> String {
-    if pair {
-        format!("pair near {omega_rad_s:.2} rad/s (ζ {zeta:.2})")
-    } else if z.re > 0.0 && z.re < 1.0 && omega_rad_s > 0.0 {
-        format!("real root at {:.3} (τ {:.2} s)", z.re, 1.0 / omega_rad_s)
-    } else {
-        format!("real root at {:.3}", z.re)
     }
 }
 
@@ -249,8 +223,7 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
         for (rank, (which, trial, d)) in trials.into_iter().enumerate() {
             let without = current.assembled.rms();
             let in_sample = model_error_reduction(without.powi(2), trial.assembled.rms().powi(2), noise_var);
-            let screened_out =
-                rank >= CROSS_VALIDATED_TRIALS || in_sample < SCREEN_SHARE * MIN_RELATIVE_REDUCTION;
+            let screened_out = rank >= CROSS_VALIDATED_TRIALS || too_little_to_cross_validate(in_sample);
             let cv = if screened_out {
                 None
             } else {
@@ -259,7 +232,7 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             let reason = match (cv.as_deref(), current_cv.as_deref()) {
                 (Some(cv), Some(cur)) => {
                     let gain = Gain::of(cur, cv, noise_var);
-                    let words = format!("dropped: beside the kept roots, {}", gain.words());
+                    let words = format!("dropped: beside the kept roots, {gain}");
                     if best.as_ref().is_none_or(|b| gain.reduction > b.4.reduction) {
                         best = Some((which, trial.clone(), d, cv.to_vec(), gain));
                     }
@@ -308,17 +281,15 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
                     Some(cv) => {
                         let gain = Gain::of(cur, &cv, noise_var);
                         let beats_root = best.as_ref().is_none_or(|b| {
-                            let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
                             model_error_reduction(pooled(&b.3), pooled(&cv), noise_var)
                                 >= MIN_RELATIVE_REDUCTION
                         });
                         dead_time.reason = if gain.passes() && !beats_root {
                             format!(
-                                "dropped: {}, but a root of the segment models does as well (roots are preferred)",
-                                gain.words()
+                                "dropped: {gain}, but a root of the segment models does as well (roots are preferred)"
                             )
                         } else {
-                            format!("dropped: beside the kept roots, {}", gain.words())
+                            format!("dropped: beside the kept roots, {gain}")
                         };
                         if gain.passes() && beats_root {
                             best = Some((Trial::DeadTime, trial, d, cv, gain));
@@ -329,7 +300,7 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             }
         }
         let Some((which, trial, d, cv, gain)) = best else { break };
-        let words = format!("kept: {}", gain.words());
+        let words = format!("kept: {gain}");
         match which {
             Trial::Cluster(i) => {
                 verdicts[i].kept = true;
@@ -377,7 +348,6 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             let removed = &current.groups[index];
             let lag_secs = group_delay_secs(removed, data.fits.dt_secs);
             let longer = d.saturating_sub(1) as f64 * data.fits.dt_secs >= 2.0 * lag_secs;
-            let pooled = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
             if longer && pooled(&cv) <= pooled(&cur) {
                 let gain = Gain::of(&cur, &cv, noise_var);
                 verdicts[i].kept = false;
@@ -420,8 +390,7 @@ fn select(data: &IdentData, evals: &[ClusterEval], verdicts: &mut [CandidateVerd
             if !gain.passes() {
                 verdicts[i].kept = false;
                 verdicts[i].reason = format!(
-                    "dropped once the dead time was kept: it only stood in for it; with the dead time, {}",
-                    gain.words()
+                    "dropped once the dead time was kept: it only stood in for it; with the dead time, {gain}"
                 );
                 kept.retain(|k| *k != i);
                 current = without;

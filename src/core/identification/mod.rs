@@ -7,8 +7,9 @@
 //! - the reduced model: `reduce` (root groups, the one assembly, the polish inside the clusters);
 //! - the automatic proposal: `words` (how its numbers read), `parsimony` (when a candidate beats
 //!   the simpler model), `cross_validation` (held-out errors across segments), `dead_time` (the
-//!   input delay as a candidate), `direct_fit` (free roots when no cluster gives a model) and
-//!   `structure` (the forward selection and the proposal);
+//!   input delay as a candidate), `direct_fit` (free roots when no cluster gives a model),
+//!   `verdict` (what became of each candidate), `selection` (the forward selection) and
+//!   `structure` (the proposal);
 //! - `pipeline`: the chain for one output and the live path.
 pub mod arx;
 pub mod cluster;
@@ -29,7 +30,9 @@ pub mod cross_validation;
 pub mod dead_time;
 pub mod direct_fit;
 pub mod parsimony;
+pub mod selection;
 pub mod structure;
+pub mod verdict;
 pub mod words;
 
 pub mod pipeline;

@@ -167,7 +167,7 @@ fn reasons_ui(ui: &mut egui::Ui, proposal: &Proposal) {
             verdict.damping,
         );
         let what = format!("{kind} {what}, {}/{} segments", verdict.segments_found, verdict.segments_total);
-        reason_ui(ui, verdict.kept, &what, &verdict.reason);
+        reason_ui(ui, verdict.kept(), &what, &verdict.verdict.to_string());
     }
     let dead_time = &proposal.dead_time;
     let what = format!(
@@ -175,7 +175,7 @@ fn reasons_ui(ui: &mut egui::Ui, proposal: &Proposal) {
         dead_time.samples as f64 * dead_time.dt_secs,
         dead_time.samples
     );
-    reason_ui(ui, dead_time.kept, &what, &dead_time.reason);
+    reason_ui(ui, dead_time.kept(), &what, &dead_time.decision.to_string());
     if let Some(direct) = &proposal.direct {
         ui.add(egui::Label::new(RichText::new(&direct.note).color(theme::WARNING)).wrap());
     }

@@ -185,3 +185,56 @@ pub(super) fn apparent_nk(data: &IdentData, assembled: &Assembled) -> usize {
     let max = ((MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).clamp(1, 50);
     arx::estimate_dead_time(&deviations, data.settings.orders.na, max).map_or(1, |d| d.nk)
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use num_complex::Complex64;
+
+    use super::*;
+    use crate::core::identification::test_system::TestSystem;
+
+    /// The model of the system's pole as the segment models show it, without dead time, and the late
+    /// start it leaves unexplained: the segment models' delay less the model's own.
+    fn late_start(sys: &TestSystem) -> (IdentData<'_>, RootGroup, Polished, usize) {
+        let eval = sys.candidate(RootKind::Pole, Complex64::new(0.9, 0.0), 0.03);
+        assert!(eval.valid, "{eval:?}");
+        let data = IdentData::new(&sys.fits, &sys.run, &sys.settings).unwrap();
+        let group = RootGroup::of_cluster(0, &eval);
+        let without = fitted(&data, std::slice::from_ref(&group)).unwrap();
+        let excess = sys.fits.nk().saturating_sub(apparent_nk(&data, &without.assembled));
+        (data, group, without, excess)
+    }
+
+    #[test]
+    fn the_dead_time_step_finds_a_known_input_delay() {
+        let sys = TestSystem::new(&[0.9], 5, 0.02, 9);
+        let (data, group, without, excess) = late_start(&sys);
+        assert!(excess >= 1, "segment models {} samples late", sys.fits.nk());
+        let (with, samples) = with_dead_time(&data, std::slice::from_ref(&group), excess).unwrap();
+        assert_eq!(samples, 5);
+        assert!(with.assembled.rms() < 0.5 * without.assembled.rms());
+        // How late the model itself starts: its own lag (one sample for a first-order block) and the
+        // dead time on top.
+        let own = apparent_nk(&data, &without.assembled);
+        assert_eq!(apparent_nk(&data.with_delay(samples), &with.assembled), own + samples);
+    }
+
+    #[test]
+    fn no_dead_time_is_found_on_a_system_without_one() {
+        let sys = TestSystem::new(&[0.9], 0, 0.02, 9);
+        let (_, _, _, excess) = late_start(&sys);
+        assert_eq!(excess, 0, "segment models {} samples late", sys.fits.nk());
+    }
+
+    #[test]
+    fn a_pole_pair_delays_by_twice_its_damping_over_its_frequency() {
+        let dt = 0.1;
+        let s = Complex64::new(-0.6 * 2.0, 2.0 * (1.0 - 0.36_f64).sqrt());
+        let pair = RootGroup::free_pair(RootKind::Pole, (s * dt).exp());
+        assert!((group_delay_secs(&pair, dt) - 2.0 * 0.6 / 2.0).abs() < 1e-9);
+        let real = RootGroup::free_real(RootKind::Pole, (-dt / 1.5_f64).exp());
+        assert!((group_delay_secs(&real, dt) - 1.5).abs() < 1e-9);
+        assert_eq!(group_delay_secs(&RootGroup::free_real(RootKind::Zero, 0.5), dt), 0.0);
+    }
+}

@@ -36,3 +36,6 @@ pub mod verdict;
 pub mod words;
 
 pub mod pipeline;
+
+#[cfg(test)]
+mod test_system;

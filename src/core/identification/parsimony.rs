@@ -131,3 +131,30 @@ pub fn model_error_reduction(without_mse: f64, with_mse: f64, noise: Noise) -> f
     let left = (with_mse - noise.var).max(0.0);
     1.0 - (left / excess).sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_trial_passes_only_when_it_removes_enough_error_above_noise_across_segments() {
+        let noise = Noise { var: 1.0, uncertainty: 0.1 };
+        let without = [5.0, 6.0, 5.5, 4.5];
+        // Every segment's error above the noise shrinks to a third.
+        let better: Vec<f64> = without.iter().map(|w| 1.0 + (w - 1.0) / 3.0).collect();
+        let gain = Gain::of(&without, &better, noise);
+        assert!(gain.passes() && gain.wins == 4 && gain.folds == 4 && gain.reduction > 0.4, "{gain:?}");
+        // Two percent off every segment: consistent, but too little.
+        let slight: Vec<f64> = without.iter().map(|w| 0.98 * w).collect();
+        let gain = Gain::of(&without, &slight, noise);
+        assert!(gain.standard_errors > MIN_STANDARD_ERRORS && gain.reduction < MIN_RELATIVE_REDUCTION);
+        assert!(!gain.passes());
+        // Enough on average, but from one segment while the others get worse: not beyond noise.
+        let one = [1.0, 6.1, 5.6, 4.6];
+        let gain = Gain::of(&without, &one, noise);
+        assert!(gain.reduction >= MIN_RELATIVE_REDUCTION && gain.standard_errors < MIN_STANDARD_ERRORS);
+        assert!(!gain.passes() && gain.wins == 1, "{gain:?}");
+        // At the noise level nothing is left that a root could remove.
+        assert_eq!(model_error_reduction(1.05, 0.5, noise), 0.0);
+    }
+}

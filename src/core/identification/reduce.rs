@@ -437,6 +437,7 @@ pub fn polish_with(
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+    use crate::core::identification::test_system::TestSystem;
 
     fn region(re: f64, im: f64, radius: f64) -> Option<Region> {
         Some(Region { centre: Complex64::new(re, im), radius })
@@ -473,6 +474,40 @@ mod tests {
         let touching = RootGroup { region: region(0.9, 0.02, 0.02), ..real.clone() };
         assert_eq!(touching.n_params(), 0);
         assert!((touching.decode(&[]).unwrap().root.re - 0.9).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_polish_lowers_the_error_and_keeps_roots_inside_their_circles() {
+        let sys = TestSystem::new(&[0.9, 0.7], 0, 0.02, 7);
+        let data = IdentData::new(&sys.fits, &sys.run, &sys.settings).unwrap();
+        // Circles off the truth: the slow pole's stops just short of 0.9, the fast pole's holds 0.7.
+        let circles = [(0.86, 0.02), (0.66, 0.08)];
+        let groups = |polish: PolishRegion| -> Vec<RootGroup> {
+            circles
+                .iter()
+                .enumerate()
+                .map(|(i, &(centre, radius))| {
+                    let centre = Complex64::new(centre, 0.0);
+                    let region = Some(Region { centre, radius });
+                    RootGroup { kind: RootKind::Pole, root: centre, pair: false, region, cluster: Some(i) }
+                        .within(polish)
+                })
+                .collect()
+        };
+        let order = sys.settings.static_order.unwrap();
+        let within = polish(&data, &groups(PolishRegion::WithinClusters), order).unwrap();
+        let r = &within.refinement;
+        assert!(r.rms_after < 0.8 * r.rms_before, "{r:?}");
+        assert!((within.assembled.rms() - r.rms_after).abs() < 1e-12);
+        for (g, (centre, radius)) in within.groups.iter().zip(circles) {
+            assert!((g.root - Complex64::new(centre, 0.0)).norm() <= radius + 1e-12, "{g:?}");
+        }
+        // The data pull the slow pole out of its circle; the circle holds it on the rim.
+        assert!(within.groups[0].at_rim(), "{:?}", within.groups[0]);
+        // Free, the same start leaves the circle towards the truth and fits better.
+        let free = polish(&data, &groups(PolishRegion::Free), order).unwrap();
+        assert!(free.groups[0].root.re > 0.88, "{:?}", free.groups[0]);
+        assert!(free.refinement.rms_after < r.rms_after, "{:?} vs {r:?}", free.refinement);
     }
 
     #[test]

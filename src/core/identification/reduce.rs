@@ -3,7 +3,7 @@
 //!
 //! **Root groups.** The reduced linear block is a list of [`RootGroup`]s: one real root, or one
 //! conjugate pair, each taken from a valid cluster (its centroid) or free (the direct output-error
-//! fit of `core::identification::structure`). For given roots the Wiener model is [`assemble`]d the one way the
+//! fit of `core::identification::direct_fit`). For given roots the Wiener model is [`assemble`]d the one way the
 //! whole crate uses: the unit-gain response is simulated, gain and offset come from least squares
 //! on the identification range, and the static map is fitted to the steady-state points (the
 //! pre-step baseline and the settled tail of every segment), its order chosen by leave-one-out

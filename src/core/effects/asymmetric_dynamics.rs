@@ -20,7 +20,8 @@ pub struct AsymmetricDynamics {
 }
 
 impl AsymmetricDynamics {
-    /// Split off the spool (see [`SplitShape::of`]).
+    /// Split off the spool: the slowest real pole in (0, 1), or when there is none the slowest
+    /// complex pair, and the unit-gain rest (see `SplitShape::of`).
     pub fn split(poles: &[Complex64], zeros: &[Complex64], dt_secs: f64) -> Result<SplitShape, EffectError> {
         SplitShape::of(poles, zeros, dt_secs, <Self as super::Block>::ID)
     }

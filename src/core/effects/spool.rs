@@ -11,7 +11,7 @@ use crate::core::numerics::tf::DiscreteTf;
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplitShape {
     /// The spool: a real pole in (0, 1), or the upper root of the slowest complex pair when the
-    /// linear block has no real pole there (see [`SplitShape::of`]).
+    /// linear block has no real pole there (see `SplitShape::of`).
     pub spool: Complex64,
     /// Unit-gain remainder; `None` when the spool is the only root (group).
     pub rest: Option<DiscreteTf>,

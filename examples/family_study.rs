@@ -66,7 +66,7 @@ fn main() -> Result<()> {
             let kept: Vec<String> = identified
                 .proposal
                 .iter()
-                .flat_map(|p| p.verdicts.iter().filter(|v| v.kept))
+                .flat_map(|p| p.verdicts.iter().filter(|v| v.kept()))
                 .map(|v| {
                     format!(
                         "{:.3}{:+.3}j {}/{}",

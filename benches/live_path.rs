@@ -4,10 +4,10 @@
 //! Run: `cargo bench --bench live_path --no-default-features`.
 use std::path::Path;
 
-use jetid::core::identification::pipeline::{
-    OutputSettings, fit_segments_for, live_update, propose, segments_for,
-};
+use jetid::core::identification::fits::{fit_segments_for, segments_for};
+use jetid::core::identification::pipeline::{live_update, propose};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::tf::log_space;
 use jetid::core::run::Run;
 use jetid::io::csv_run::{LoadOptions, load_run};

@@ -8,10 +8,10 @@
 use jetid::core::diagnose::diagnose;
 use jetid::core::effects::{ExtendedModel, FitData, refit};
 use jetid::core::identification::arx::ArxOrders;
-use jetid::core::identification::pipeline::{
-    OutputSettings, SegmentFits, fit_segments_for, identify_output, segments_for,
-};
+use jetid::core::identification::fits::{SegmentFits, fit_segments_for, segments_for};
+use jetid::core::identification::pipeline::identify_output;
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::run::Run;
 use jetid::sim::{Effect, SensorNoise, SimConfig, SimOutput, TestKind, simulate};
 

@@ -9,8 +9,10 @@
 //! `cargo run --release --example effect_share [SPEC...]`
 use jetid::core::diagnose::diagnose;
 use jetid::core::effects::ExtendedModel;
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::identify_output;
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
 use jetid::core::run::Run;
 use jetid::sim::{Effect, SimConfig, SimOutput, TestKind, simulate};
@@ -26,7 +28,7 @@ fn run(kind: TestKind, seed: u64, effects: &[Effect]) -> SimOutput {
 }
 
 /// The pipeline's speed model on the runs of `seed` with `effects`.
-fn model(ident: &Run) -> (ExtendedModel, jetid::core::identification::pipeline::SegmentFits, OutputSettings) {
+fn model(ident: &Run) -> (ExtendedModel, jetid::core::identification::fits::SegmentFits, OutputSettings) {
     let settings = OutputSettings::for_output(SPEED);
     let segments = segments_for(ident, None, &SegmentSettings::default()).unwrap_or_else(|e| panic!("{e}"));
     let identified =

@@ -6,8 +6,10 @@
 use anyhow::{Context, Result};
 use jetid::core::diagnose::{DiagnosisKind, diagnose};
 use jetid::core::effects::ExtendedModel;
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::identify_output;
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::sim::{Effect, EngineFamily, SimConfig, TestKind, simulate};
 
 fn main() -> Result<()> {

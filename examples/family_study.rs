@@ -7,9 +7,11 @@
 use anyhow::{Context, Result};
 use jetid::core::identification::cluster::RootKind;
 use jetid::core::identification::direct_fit::direct_fit_of_order;
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::{identify_output, predict_wiener};
 use jetid::core::identification::reduce::{IdentData, count_of};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
 use jetid::sim::{EngineFamily, SimConfig, TestKind, simulate};
 
@@ -66,7 +68,7 @@ fn main() -> Result<()> {
             let kept: Vec<String> = identified
                 .proposal
                 .iter()
-                .flat_map(|p| p.verdicts.iter().filter(|v| v.kept))
+                .flat_map(|p| p.verdicts.iter().filter(|v| v.kept()))
                 .map(|v| {
                     format!(
                         "{:.3}{:+.3}j {}/{}",

@@ -7,8 +7,10 @@
 //!
 //! `cargo run --release --example wiener_floor`
 use anyhow::{Context, Result};
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::{identify_output, predict_wiener};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::identification::static_map::fit_static_map;
 use jetid::core::identification::wiener::fit_linear_block;
 use jetid::core::numerics::lm::{

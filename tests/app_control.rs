@@ -33,7 +33,7 @@ fn the_control_view_schedules_the_model_and_follows_it() {
     // A linear static map makes the gain the same everywhere: the view follows the model.
     let settings =
         harness.state().cache.output("thrust_n").expect("thrust is identified").setup.settings.clone();
-    let linear = jetid::core::identification::pipeline::OutputSettings { static_order: Some(1), ..settings };
+    let linear = jetid::core::identification::settings::OutputSettings { static_order: Some(1), ..settings };
     harness.state_mut().apply(Command::SetOutputSettings { output: "thrust_n".into(), settings: linear });
     harness.state_mut().settle();
     harness.run();

@@ -458,9 +458,9 @@ fn the_proposal_runs_off_the_ui_thread_and_the_table_shows_the_models_roots_and_
     // Each candidate's verdict is said in words.
     harness.get_by_label("Why the automatic proposal chose these");
     for verdict in &proposal.verdicts {
-        harness.get_by_label(&verdict.reason);
+        harness.get_by_label(&verdict.verdict.to_string());
     }
-    harness.get_by_label(&proposal.dead_time.reason);
+    harness.get_by_label(&proposal.dead_time.decision.to_string());
 }
 
 #[test]

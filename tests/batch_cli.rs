@@ -5,8 +5,10 @@ use crate::common::jetid;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::identify_output;
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::io::csv_run::{LoadOptions, load_run};
 
 fn samples() -> PathBuf {

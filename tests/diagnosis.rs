@@ -17,10 +17,10 @@ use jetid::core::diagnose::{DiagnoseError, DiagnosisKind, DiagnosisReport, apply
 use jetid::core::effects::{
     AmbientCorrection, EffectBlock, EffectError, EffectId, ExtendedModel, FitData, refit,
 };
-use jetid::core::identification::pipeline::{
-    OutputSettings, SegmentFits, build_gray_box, fit_segments, identify_output, segments_for,
-};
+use jetid::core::identification::fits::{SegmentFits, fit_segments, segments_for};
+use jetid::core::identification::pipeline::{build_gray_box, identify_output};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
 use jetid::core::run::Run;
 use jetid::sim::{Effect, SimConfig, SimOutput, TestKind, simulate};

@@ -20,11 +20,11 @@ use jetid::core::diagnose::{DiagnosisKind, DiagnosisReport, diagnose};
 use jetid::core::effects::ExtendedModel;
 use jetid::core::identification::cluster::RootKind;
 use jetid::core::identification::direct_fit::direct_fit_of_order;
-use jetid::core::identification::pipeline::{
-    Identified, OutputSettings, identify_output, predict_wiener, segments_for,
-};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::{Identified, identify_output, predict_wiener};
 use jetid::core::identification::reduce::{IdentData, count_of};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
 use jetid::core::run::Run;
 use jetid::sim::{DrawnEngine, Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};

@@ -2,8 +2,10 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use jetid::core::identification::cluster::RootKind;
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::{identify_output, predict_wiener};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
 use jetid::core::numerics::tf::DiscreteTf;
 use jetid::core::run::{Channel, Run};

@@ -5,8 +5,10 @@
 
 use std::sync::OnceLock;
 
-use jetid::core::identification::pipeline::{OutputSettings, identify_output, predict_wiener, segments_for};
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::{identify_output, predict_wiener};
 use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
 use jetid::core::identification::wiener::WienerModel;
 use jetid::core::residuals::{
     ExclusionReason, OperatingBands, Regime, ResidualAnalysis, ResidualError, ResidualSettings, SigmaSource,

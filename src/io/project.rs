@@ -37,8 +37,8 @@ use crate::core::effects::EffectId;
 use crate::core::identification::arx::ArxOrders;
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::initial_state::InitialState;
-use crate::core::identification::pipeline::{OutputSettings, PolishRegion};
 use crate::core::identification::segment::{Segment, segment_label};
+use crate::core::identification::settings::{OutputSettings, PolishRegion};
 use crate::io::csv_run::LoadOptions;
 
 /// How to read runs: the command line's `--map`, `--sample-time`, `--window`, `--quality`, `--resample`.

@@ -5,10 +5,11 @@
 use crate::core::diagnose::{self, AutoRound, DiagnoseError, EffectSequence};
 use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::cluster::Cluster;
-use crate::core::identification::pipeline::{
-    self, GrayBoxModel, Identified, OutputSettings, PipelineError, SegmentFits,
-};
+use crate::core::identification::error::PipelineError;
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::pipeline::{self, GrayBoxModel, Identified};
 use crate::core::identification::segment::Segment;
+use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::structure::Proposal;
 use crate::core::run::Run;
 use crate::io::project::Project;
@@ -82,7 +83,7 @@ pub fn fit_segments(
     segments: &[Segment],
     settings: &OutputSettings,
 ) -> Result<SegmentFits, PipelineError> {
-    pipeline::fit_segments_for(ident, output, segments, settings)
+    crate::core::identification::fits::fit_segments_for(ident, output, segments, settings)
 }
 
 /// The automatic proposal for these fits: which candidate clusters the model keeps, and why.

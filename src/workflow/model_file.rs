@@ -74,6 +74,6 @@ pub fn take_saved_clusters(project: &mut Project, dt_secs: f64, outputs: &[Strin
 }
 
 /// The settings an output gets when the project has none for it.
-fn project_settings(output: &str) -> crate::core::identification::pipeline::OutputSettings {
-    crate::core::identification::pipeline::OutputSettings::for_output(output)
+fn project_settings(output: &str) -> crate::core::identification::settings::OutputSettings {
+    crate::core::identification::settings::OutputSettings::for_output(output)
 }

@@ -7,7 +7,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, bail};
 
-use crate::core::identification::pipeline::{PipelineError, segments_for, step_signal};
+use crate::core::identification::error::PipelineError;
+use crate::core::identification::fits::{segments_for, step_signal};
 use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
 use crate::core::run::{Run, RunError, RunRole, join_runs};
 use crate::io::csv_run::load_run_with_notes;

@@ -351,8 +351,6 @@ fn several_equilibria(shape: MlpShape, w: &[f64], u_n: &[f64], opts: &NnarxOptio
         .collect()
 }
 
-/// Train an NNARX model on `y` driven by `u` (see the module docs for the algorithm). `progress`
-/// receives the fraction done; returning `false` cancels.
 /// Train one network from each start, on two threads (the restarts are independent): the calling
 /// thread trains every other restart and reports progress over all of them; the helper stops when
 /// the caller cancels. Outcomes in the order of `starts`.
@@ -408,6 +406,45 @@ fn train_restarts(
     all.into_iter().map(|(_, out)| out).collect()
 }
 
+/// The regressor rows and targets the network is trained on, from the normalised signals.
+fn training_data(u_n: &[f64], y_n: &[f64], shape: MlpShape, opts: &NnarxOptions) -> TrainData {
+    let mut data = TrainData { x: Vec::new(), t: Vec::new() };
+    let mut x = Vec::with_capacity(shape.n_inputs);
+    for (k, t) in y_n.iter().enumerate().skip(opts.first_row()) {
+        regressor(&mut x, u_n, y_n, k, opts.nu, opts.ny, (0.0, 0.0));
+        data.x.extend_from_slice(&x);
+        data.t.push(*t);
+    }
+    data
+}
+
+/// One trained restart's figures (errors in output units, `output_scale` per normalised unit), and
+/// the normalised inputs at which it has several equilibria.
+fn summarise_restart(
+    shape: MlpShape,
+    out: &TrainOutcome,
+    data: &TrainData,
+    (u_n, y_n): (&[f64], &[f64]),
+    opts: &NnarxOptions,
+    output_scale: f64,
+) -> (RestartSummary, Vec<f64>) {
+    let several = several_equilibria(shape, &out.weights, u_n, opts);
+    let one_step: Vec<f64> =
+        data.x.chunks_exact(shape.n_inputs).map(|x| shape.output(&out.weights, x)).collect();
+    let oe_rms = rms_error(&simulate_normalised(shape, &out.weights, u_n, opts.nu, opts.ny), y_n);
+    let summary = RestartSummary {
+        iterations: out.iterations,
+        log_evidence: out.log_evidence,
+        gamma: out.gamma,
+        one_step_rms: rms_error(&one_step, &data.t) * output_scale,
+        oe_rms: if oe_rms.is_finite() { oe_rms * output_scale } else { f64::INFINITY },
+        several_equilibria: several.len(),
+    };
+    (summary, several)
+}
+
+/// Train an NNARX model on `y` driven by `u` (see the module docs for the algorithm). `progress`
+/// receives the fraction done; returning `false` cancels.
 pub fn fit_nnarx(
     u: &[f64],
     y: &[f64],
@@ -420,13 +457,7 @@ pub fn fit_nnarx(
     let output_scaling = Scaling::standardise(y).ok_or(BaselineError::ConstantSignal { what: "output" })?;
     let (u_n, y_n) = (input_scaling.normalise_all(u), output_scaling.normalise_all(y));
     let shape = opts.shape();
-    let mut data = TrainData { x: Vec::new(), t: Vec::new() };
-    let mut x = Vec::with_capacity(shape.n_inputs);
-    for (k, t) in y_n.iter().enumerate().skip(opts.first_row()) {
-        regressor(&mut x, &u_n, &y_n, k, opts.nu, opts.ny, (0.0, 0.0));
-        data.x.extend_from_slice(&x);
-        data.t.push(*t);
-    }
+    let data = training_data(&u_n, &y_n, shape, opts);
     report(progress, 0.0)?;
 
     // Every restart's start is drawn first, in order, so the result does not depend on how the
@@ -438,18 +469,9 @@ pub fn fit_nnarx(
     let mut summaries = Vec::with_capacity(opts.restarts);
     let mut equilibria_checks = Vec::with_capacity(opts.restarts);
     for out in trained {
-        let several = several_equilibria(shape, &out.weights, &u_n, opts);
-        let one_step: Vec<f64> =
-            data.x.chunks_exact(shape.n_inputs).map(|x| shape.output(&out.weights, x)).collect();
-        let oe_rms = rms_error(&simulate_normalised(shape, &out.weights, &u_n, opts.nu, opts.ny), &y_n);
-        summaries.push(RestartSummary {
-            iterations: out.iterations,
-            log_evidence: out.log_evidence,
-            gamma: out.gamma,
-            one_step_rms: rms_error(&one_step, &data.t) * output_scaling.scale,
-            oe_rms: if oe_rms.is_finite() { oe_rms * output_scaling.scale } else { f64::INFINITY },
-            several_equilibria: several.len(),
-        });
+        let (summary, several) =
+            summarise_restart(shape, &out, &data, (&u_n, &y_n), opts, output_scaling.scale);
+        summaries.push(summary);
         outcomes.push(out);
         equilibria_checks.push(several);
     }

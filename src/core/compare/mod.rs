@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use crate::core::control::identified_range;
 use crate::core::effects::ExtendedModel;
+use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::initial_state::InitialState;
-use crate::core::identification::pipeline::SegmentFits;
 use crate::core::identification::wiener::WienerModel;
 use crate::core::monte_carlo::{MonteCarloError, MonteCarloResult};
 use crate::core::numerics::metrics::{Metrics, metrics};

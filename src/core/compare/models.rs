@@ -6,8 +6,9 @@ use crate::core::baselines::hammerstein_wiener::{HwModel, HwOptions, HwOrders, f
 use crate::core::baselines::nnarx::{NnarxModel, NnarxOptions, fit_nnarx};
 use crate::core::baselines::references::References;
 use crate::core::effects::ExtendedModel;
+use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::initial_state::InitialState;
-use crate::core::identification::pipeline::{Identified, SegmentFits};
+use crate::core::identification::pipeline::Identified;
 use crate::core::identification::wiener::WienerModel;
 use crate::core::run::Run;
 

@@ -1,7 +1,8 @@
 //! Effects added or removed by hand (the app's Apply and Remove, the batch's `--add-effect`).
 use super::DiagnoseError;
 use crate::core::effects::{EffectId, ExtendedModel, FitData, apply_effect, refit};
-use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
 /// Add the effect `id` to `current` and refit on the identification data of `fits`.

@@ -3,7 +3,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::core::effects::{EffectId, ExtendedModel};
-use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
 use super::{

@@ -62,8 +62,9 @@ use crate::core::effects::{
     AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FOLDS, FitData, MIN_HELD_OUT_SEGMENTS,
     StructuralChange, apply_effect, refine_structure, refit,
 };
+use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::initial_state::InitialState;
-use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
 mod edit;

@@ -2,12 +2,12 @@
 use num_complex::Complex64;
 
 use super::Evidence;
+use super::spool;
+use super::spool::SplitShape;
 use super::stats::{ResidualTrace, diff};
 use super::wording::lags_or_leads;
 use super::{EffectError, ParamSpec};
-use crate::core::identification::wiener::unit_gain_tf;
 use crate::core::numerics::lstsq::solve_lstsq;
-use crate::core::numerics::tf::DiscreteTf;
 
 /// Acceleration and deceleration differ (acceleration schedule, combustor): the slowest real pole
 /// of G(z), the spool, has its time constant multiplied by `decel_factor` while the response falls.
@@ -19,70 +19,16 @@ pub struct AsymmetricDynamics {
     pub decel_factor: f64,
 }
 
-/// The unit-gain linear block split into the spool's root and the rest.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SplitShape {
-    /// The spool: a real pole in (0, 1), or the upper root of the slowest complex pair when the
-    /// linear block has no real pole there (see [`AsymmetricDynamics::split`]).
-    pub spool: Complex64,
-    /// Unit-gain remainder; `None` when the spool is the only root (group).
-    pub rest: Option<DiscreteTf>,
-}
-
-impl SplitShape {
-    /// Whether the spool is a complex pair rather than a real pole.
-    pub fn is_pair(&self) -> bool {
-        self.spool.im.abs() > 1e-9
-    }
-}
-
 impl AsymmetricDynamics {
-    /// Split off the spool: the slowest real pole in (0, 1); when there is none, the slowest
-    /// complex pair. A spool identified from closed-loop data (an ECU that overshoots its fuel
-    /// command at every set-point change) or behind a fast actuator often shows as a damped pair
-    /// rather than one real pole; its time scale follows the operating point by the same power
-    /// balance, so the whole pair is what is scheduled (both its roots' time constants scale
-    /// together, `p → p^(1/factor)`, which keeps its damping ratio).
+    /// Split off the spool: the slowest real pole in (0, 1), or when there is none the slowest
+    /// complex pair, and the unit-gain rest (see `SplitShape::of`).
     pub fn split(poles: &[Complex64], zeros: &[Complex64], dt_secs: f64) -> Result<SplitShape, EffectError> {
-        let not_applicable = |reason: &str| EffectError::NotApplicable {
-            effect: <Self as super::Block>::ID.name().to_owned(),
-            reason: reason.to_owned(),
-        };
-        let slowest = |pick: &dyn Fn(&Complex64) -> bool| {
-            poles.iter().filter(|p| pick(p)).max_by(|a, b| a.norm().total_cmp(&b.norm())).copied()
-        };
-        let real = slowest(&|p| p.im.abs() <= 1e-9 && p.re > 0.0 && p.re < 1.0);
-        let spool = real.or_else(|| slowest(&|p| p.im > 1e-9 && p.norm() < 1.0)).ok_or_else(|| {
-            not_applicable("the linear block has neither a real pole between 0 and 1 nor a complex pair")
-        })?;
-        let is_spool = |p: &Complex64| (p - spool).norm() <= 1e-12 || (p - spool.conj()).norm() <= 1e-12;
-        let mut others: Vec<Complex64> = Vec::with_capacity(poles.len());
-        let mut taken = 0;
-        let group = if real.is_some() { 1 } else { 2 };
-        for p in poles {
-            if taken < group && is_spool(p) {
-                taken += 1;
-            } else {
-                others.push(*p);
-            }
-        }
-        if zeros.len() > others.len() {
-            return Err(not_applicable("the linear block has as many zeros as poles"));
-        }
-        let rest = if others.is_empty() {
-            None
-        } else {
-            Some(
-                unit_gain_tf(&others, zeros, dt_secs)
-                    .map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?,
-            )
-        };
-        Ok(SplitShape { spool, rest })
+        SplitShape::of(poles, zeros, dt_secs, <Self as super::Block>::ID)
     }
 
     /// Unit-gain response of the split block to `u`, from the steady state of `u[0]`.
     pub fn respond(&self, shape: &SplitShape, u: &[f64]) -> Vec<f64> {
-        super::scheduled_time_constant::respond(shape, u, Some(self), None)
+        spool::respond(shape, u, self.decel_factor, |_, _| 1.0)
     }
 
     pub(super) fn free_params(&self) -> Vec<f64> {
@@ -182,6 +128,7 @@ block_impl!(
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+    use crate::core::identification::wiener::unit_gain_tf;
 
     #[test]
     fn a_negative_lag_reads_as_a_lead() {

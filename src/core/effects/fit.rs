@@ -15,7 +15,8 @@ use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{AsymmetricDynamics, EffectBlock, EffectError};
-use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
 use crate::core::numerics::tf::DiscreteTf;
 use crate::core::run::{Channel, Run};

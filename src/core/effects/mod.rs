@@ -52,6 +52,7 @@ mod model;
 mod rate_limit;
 mod scheduled_time_constant;
 mod sensor_dynamics;
+mod spool;
 mod static_map_order;
 pub mod stats;
 mod structural;

@@ -2,7 +2,7 @@
 use num_complex::Complex64;
 
 use super::ambient_correction::Conditions;
-use super::asymmetric_dynamics::SplitShape;
+use super::spool::SplitShape;
 use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, RateLimit,
     SensorDynamics, TransportDelay,

@@ -1,10 +1,9 @@
 //! `scheduled_time_constant`: the spool's time constant follows the operating point it is heading for.
 use super::Evidence;
-use super::asymmetric_dynamics::SplitShape;
+use super::spool::{self, SplitShape};
 use super::stats::ResidualTrace;
 use super::stats::mean;
 use super::{AsymmetricDynamics, ParamSpec};
-use num_complex::Complex64;
 
 /// A turbojet's spool is slower at low speed. Its power balance J ω ω̇ = P_t(w) − P_c(N), with
 /// compressor power ∝ N³, linearised at speed N gives a time constant τ ∝ 1/N; over a large step
@@ -84,36 +83,8 @@ pub fn respond(
     asymmetric: Option<&AsymmetricDynamics>,
     scheduled: Option<&ScheduledTimeConstant>,
 ) -> Vec<f64> {
-    let r = match &shape.rest {
-        Some(tf) => tf.simulate_from_steady(u),
-        None => u.to_vec(),
-    };
-    // The spool's root as a continuous-time rate: scaling the time constant by `factor` divides it.
-    let ln_root = Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
-    let pair = shape.is_pair();
     let decel = asymmetric.map_or(1.0, |a| a.decel_factor);
-    let start = r.first().copied().unwrap_or(0.0);
-    // State: the section's output now and one sample ago; its input one and two samples ago.
-    let (mut x, mut x_old, mut prev, mut prev_old) = (start, start, start, start);
-    r.iter()
-        .map(|rk| {
-            let mut factor = scheduled.map_or(1.0, |s| s.factor(x, prev));
-            if prev < x {
-                factor *= decel;
-            }
-            let root = (ln_root / factor.max(f64::MIN_POSITIVE)).exp();
-            let next = if pair {
-                // Unit-gain pair (1 − a₁ + a₂) z⁻² / (1 − a₁ z⁻¹ + a₂ z⁻²), as `unit_gain_tf` builds it.
-                let (a1, a2) = (2.0 * root.re, root.norm_sqr());
-                a1 * x - a2 * x_old + (1.0 - a1 + a2) * prev_old
-            } else {
-                root.re * x + (1.0 - root.re) * prev
-            };
-            (x_old, x) = (x, next);
-            (prev_old, prev) = (prev, *rk);
-            x
-        })
-        .collect()
+    spool::respond(shape, u, decel, |x, r| scheduled.map_or(1.0, |s| s.factor(x, r)))
 }
 
 block_impl!(

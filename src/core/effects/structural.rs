@@ -17,7 +17,7 @@ use super::fit::{Assembled, REFINED_STARTS, Structure, assemble, refine};
 use super::{EffectBlock, EffectError, EffectId, ExtendedModel, FitData, apply_effect};
 use crate::core::identification::cluster::natural_freq_and_damping;
 use crate::core::identification::direct_fit::{pair_guesses, real_pole_guesses};
-use crate::core::identification::structure::root_words;
+use crate::core::identification::words::root_words;
 
 /// Real zeros a new zero is started from: a lead (0.9, 0.6), none (0), a lag (−0.5) — the span of
 /// what one zero beside the poles can do to a step response.

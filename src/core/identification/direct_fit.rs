@@ -5,10 +5,12 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::identification::cluster::{RootKind, SegmentRoots, natural_freq_and_damping};
-use crate::core::identification::cross_validation::{Gain, Noise, cross_validate, fitted, fmt_error};
-use crate::core::identification::pipeline::{PipelineError, SegmentFits};
+use crate::core::identification::cross_validation::{REFINED_GUESSES, cross_validate, fitted};
+use crate::core::identification::error::PipelineError;
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::parsimony::{Gain, Noise};
 use crate::core::identification::reduce::{IdentData, Polished, RootGroup, assemble_groups, count_of};
-use crate::core::identification::structure::{REFINED_GUESSES, root_words};
+use crate::core::identification::words::{fmt_error, root_words};
 
 /// Most poles the direct fit grows to.
 pub const MAX_DIRECT_POLES: usize = 4;
@@ -103,7 +105,7 @@ pub(super) fn direct_fit(data: &IdentData, roots: &[SegmentRoots]) -> Result<Dir
             let (omega, zeta) = natural_freq_and_damping(g.root, data.fits.dt_secs);
             root_words(g.root, g.pair, omega, zeta)
         });
-        steps.push(format!("+ {added}: {}", gain.words()));
+        steps.push(format!("+ {added}: {gain}"));
         current = trial;
         current_cv = Some(cv);
     }

@@ -1,20 +1,41 @@
-//! The identification chain, in the order the data flow through it: segments of the
-//! identification run → one high-order ARX model per segment (`arx`) → candidate clusters of their
-//! roots (`cluster`, `cluster_proposal`) and the automatic proposal (`structure`) → the reduced
-//! linear block (`reduce`, polished by `refine`) → the static map (`static_map`) → the Wiener model
-//! (`wiener`). `pipeline` runs the chain for one output; `initial_state` is where a scored
-//! simulation starts.
+//! The identification chain, in the order the data flow through it; every step imports only the
+//! steps before it, and none imports `pipeline`, which runs the chain:
+//! - the building blocks: `segment`, `arx`, `cluster`, `cluster_proposal`, `static_map`,
+//!   `initial_state`, `wiener`, `refine`;
+//! - the chain's vocabulary: `settings` (how an output is identified), `error`, `fits` (the
+//!   segments and their ARX models);
+//! - the reduced model: `reduce` (root groups, the one assembly, the polish inside the clusters);
+//! - the automatic proposal: `words` (how its numbers read), `parsimony` (when a candidate beats
+//!   the simpler model), `cross_validation` (held-out errors across segments), `dead_time` (the
+//!   input delay as a candidate), `direct_fit` (free roots when no cluster gives a model),
+//!   `verdict` (what became of each candidate), `selection` (the forward selection) and
+//!   `structure` (the proposal);
+//! - `pipeline`: the chain for one output and the live path.
 pub mod arx;
 pub mod cluster;
 pub mod cluster_proposal;
-pub mod cross_validation;
-pub mod dead_time;
-pub mod direct_fit;
 pub mod initial_state;
-pub mod pipeline;
-pub mod reduce;
 pub mod refine;
 pub mod segment;
 pub mod static_map;
-pub mod structure;
 pub mod wiener;
+
+pub mod error;
+pub mod fits;
+pub mod settings;
+
+pub mod reduce;
+
+pub mod cross_validation;
+pub mod dead_time;
+pub mod direct_fit;
+pub mod parsimony;
+pub mod selection;
+pub mod structure;
+pub mod verdict;
+pub mod words;
+
+pub mod pipeline;
+
+#[cfg(test)]
+mod test_system;

@@ -1,7 +1,7 @@
 //! The −3 dB cut-off of a magnitude curve: measured or model, from its low-frequency level.
 use serde::{Deserialize, Serialize};
 
-use crate::core::numerics::spectral::{SpectralError, check_grid};
+use crate::core::numerics::spectral_error::{SpectralError, check_grid};
 use crate::core::numerics::tf::BodePoint;
 
 /// The level a cut-off is measured from.

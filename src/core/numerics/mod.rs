@@ -1,8 +1,9 @@
 //! Numerical building blocks with no knowledge of engines: least squares (`lstsq`), polynomials
 //! and their roots (`poly`), discrete transfer functions (`tf`), Levenberg–Marquardt (`lm`), the
-//! paper's metrics (`metrics`), spectral estimates (`spectral`) and their −3 dB cut-offs (`cutoff`),
-//! noise distributions (`noise_fit`, with the special functions in `special`) and small statistics
-//! (`stats`).
+//! paper's metrics (`metrics`), spectral estimates (`spectral`) and their −3 dB cut-offs (`cutoff`)
+//! with the error and grid check both use (`spectral_error`; `spectral` imports `cutoff`, not the
+//! other way), noise distributions (`noise_fit`, with the special functions in `special`) and small
+//! statistics (`stats`).
 pub mod cutoff;
 pub mod lm;
 pub mod lstsq;
@@ -11,5 +12,6 @@ pub mod noise_fit;
 pub mod poly;
 pub mod special;
 pub mod spectral;
+pub mod spectral_error;
 pub mod stats;
 pub mod tf;

@@ -9,10 +9,9 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 pub use crate::core::numerics::cutoff::{LowFrequencyLevel, bode_cutoff_rad_s, cutoff_rad_s};
+use crate::core::numerics::spectral_error::check_grid;
+pub use crate::core::numerics::spectral_error::{MIN_SEGMENT_LEN, SpectralError};
 use crate::core::numerics::stats::{hann, mean};
-
-/// The shortest segment Welch's method will use.
-pub const MIN_SEGMENT_LEN: usize = 16;
 
 /// What is subtracted from `u` and `y` before the spectra are taken.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -116,39 +115,6 @@ pub struct EmpiricalResponse {
     /// Frequency spacing of one segment's DFT, 2π/(L·T): points closer than ~2 of these to zero are
     /// smeared by the window.
     pub resolution_rad_s: f64,
-}
-
-/// Why a record, grid, option or curve cannot be used.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SpectralError {
-    #[error("the input has {u} samples but the output has {y}")]
-    LengthMismatch { u: usize, y: usize },
-    #[error("the record has {found} samples; Welch's method needs at least {needed}")]
-    TooFewSamples { found: usize, needed: usize },
-    #[error("the {signal} is not finite at sample {index}")]
-    NonFinite { signal: &'static str, index: usize },
-    #[error("sample time must be positive and finite, got {dt_secs}")]
-    BadSampleTime { dt_secs: f64 },
-    #[error("the frequency grid is empty")]
-    EmptyGrid,
-    #[error("grid frequency {index} ({omega_rad_s} rad/s) is not in (0, Nyquist = {nyquist_rad_s}]")]
-    FrequencyOutOfRange { index: usize, omega_rad_s: f64, nyquist_rad_s: f64 },
-    #[error("the frequency grid must increase; it does not at index {index}")]
-    GridNotIncreasing { index: usize },
-    #[error("segment length {segment_len} must be between {MIN_SEGMENT_LEN} and the record length {samples}")]
-    BadSegmentLength { segment_len: usize, samples: usize },
-    #[error("overlap fraction must be in [0, 1), got {overlap_fraction}")]
-    BadOverlap { overlap_fraction: f64 },
-    #[error("the minimum number of periods must be positive and finite, got {min_periods}")]
-    BadMinPeriods { min_periods: f64 },
-    #[error("the excited-band threshold must be in [0, 1], got {threshold}")]
-    BadThreshold { threshold: f64 },
-    #[error("the input has no power at {omega_rad_s} rad/s (is it constant?)")]
-    NoInputPower { omega_rad_s: f64 },
-    #[error("the magnitude has {mag} values for {omega} frequencies")]
-    CurveLengthMismatch { omega: usize, mag: usize },
-    #[error("the low-frequency level needs at least one point, got {count}")]
-    BadLevelCount { count: usize },
 }
 
 /// Welch estimate of the frequency response from `u` to `y` at the increasing grid `omegas_rad_s`.
@@ -269,22 +235,6 @@ fn check_record(u: &[f64], y: &[f64], dt_secs: f64) -> Result<(), SpectralError>
         }
     }
     Ok(())
-}
-
-/// The grid is non-empty, increasing and within (0, `nyquist_rad_s`].
-pub(super) fn check_grid(omegas_rad_s: &[f64], nyquist_rad_s: f64) -> Result<(), SpectralError> {
-    if omegas_rad_s.is_empty() {
-        return Err(SpectralError::EmptyGrid);
-    }
-    for (index, &omega_rad_s) in omegas_rad_s.iter().enumerate() {
-        if !(omega_rad_s.is_finite() && omega_rad_s > 0.0 && omega_rad_s <= nyquist_rad_s) {
-            return Err(SpectralError::FrequencyOutOfRange { index, omega_rad_s, nyquist_rad_s });
-        }
-    }
-    match omegas_rad_s.windows(2).position(|p| p[1] <= p[0]) {
-        Some(index) => Err(SpectralError::GridNotIncreasing { index: index + 1 }),
-        None => Ok(()),
-    }
 }
 
 fn remove_record_offset(u: &[f64], y: &[f64], offset: Offset) -> (Vec<f64>, Vec<f64>) {

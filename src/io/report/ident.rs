@@ -158,8 +158,8 @@ impl IdentSummary {
                     segments_total: v.segments_total,
                     natural_freq_rad_s: v.natural_freq_rad_s,
                     damping: v.damping,
-                    kept: v.kept,
-                    reason: v.reason.clone(),
+                    kept: v.kept(),
+                    reason: v.verdict.to_string(),
                     rms_without: v.rms_without,
                     rms_with: v.rms_with,
                     standard_errors: v.standard_errors,
@@ -232,51 +232,9 @@ pub(super) fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
         let _ = writeln!(out, "**Fitted directly:** {note}\n");
     }
     if !id.clusters.is_empty() {
-        let _ = writeln!(
-            out,
-            "Clusters in use, with the root the model has in each (polished inside the circle):\n\n\
-             | cluster | centre | radius | members | valid | centroid | model root | ωn (rad/s) | ζ | τ (s) |\n\
-             |---|---|---|---|---|---|---|---|---|---|"
-        );
-        for (i, c) in id.clusters.iter().enumerate() {
-            let (root, omega, zeta, tau) = match &c.model_root {
-                Some(r) => (
-                    format!("{}{}", fmt_root(r), if r.at_rim { " (on the rim)" } else { "" }),
-                    format!("{:.3}", r.natural_freq_rad_s),
-                    format!("{:.3}", r.damping),
-                    fmt_tau(r.time_constant_secs),
-                ),
-                None => ("not in the model".to_owned(), "–".to_owned(), "–".to_owned(), "–".to_owned()),
-            };
-            let _ = writeln!(
-                out,
-                "| {} {} | {} | {:.4} | {}/{} | {} | {} | {root} | {omega} | {zeta} | {tau} |",
-                c.kind,
-                i + 1,
-                fmt_complex(&c.centre),
-                c.radius,
-                c.found,
-                c.needed,
-                if c.valid { "yes".to_owned() } else { c.status.clone() },
-                fmt_complex(&c.centroid),
-            );
-        }
+        clusters_table(out, &id.clusters);
     }
-    let free: Vec<&RootSummary> = id.roots.iter().filter(|r| r.cluster.is_none()).collect();
-    if !free.is_empty() {
-        let _ = writeln!(out, "\n| fitted root | ωn (rad/s) | ζ | τ (s) |\n|---|---|---|---|");
-        for r in free {
-            let _ = writeln!(
-                out,
-                "| {} {} | {:.3} | {:.3} | {} |",
-                r.kind,
-                fmt_root(r),
-                r.natural_freq_rad_s,
-                r.damping,
-                fmt_tau(r.time_constant_secs)
-            );
-        }
-    }
+    fitted_roots_table(out, &id.roots);
     let poles: Vec<String> = id.poles.iter().map(fmt_complex).collect();
     let zeros: Vec<String> = id.zeros.iter().map(fmt_complex).collect();
     let _ = writeln!(
@@ -298,6 +256,58 @@ pub(super) fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
     }
     for d in &id.diagnostics {
         let _ = writeln!(out, "- note: {d}");
+    }
+}
+
+/// The clusters in use, with the root the model has in each.
+fn clusters_table(out: &mut String, clusters: &[ClusterSummary]) {
+    let _ = writeln!(
+        out,
+        "Clusters in use, with the root the model has in each (polished inside the circle):\n\n\
+         | cluster | centre | radius | members | valid | centroid | model root | ωn (rad/s) | ζ | τ (s) |\n\
+         |---|---|---|---|---|---|---|---|---|---|"
+    );
+    for (i, c) in clusters.iter().enumerate() {
+        let (root, omega, zeta, tau) = match &c.model_root {
+            Some(r) => (
+                format!("{}{}", fmt_root(r), if r.at_rim { " (on the rim)" } else { "" }),
+                format!("{:.3}", r.natural_freq_rad_s),
+                format!("{:.3}", r.damping),
+                fmt_tau(r.time_constant_secs),
+            ),
+            None => ("not in the model".to_owned(), "–".to_owned(), "–".to_owned(), "–".to_owned()),
+        };
+        let _ = writeln!(
+            out,
+            "| {} {} | {} | {:.4} | {}/{} | {} | {} | {root} | {omega} | {zeta} | {tau} |",
+            c.kind,
+            i + 1,
+            fmt_complex(&c.centre),
+            c.radius,
+            c.found,
+            c.needed,
+            if c.valid { "yes".to_owned() } else { c.status.clone() },
+            fmt_complex(&c.centroid),
+        );
+    }
+}
+
+/// The roots fitted directly (in no cluster), when there are any.
+fn fitted_roots_table(out: &mut String, roots: &[RootSummary]) {
+    let free: Vec<&RootSummary> = roots.iter().filter(|r| r.cluster.is_none()).collect();
+    if !free.is_empty() {
+        let _ = writeln!(out, "\n| fitted root | ωn (rad/s) | ζ | τ (s) |\n|---|---|---|---|");
+        for r in free {
+            let _ = writeln!(
+                out,
+                "| {} {} | {:.3} | {:.3} | {} |",
+                r.kind,
+                fmt_root(r),
+                r.natural_freq_rad_s,
+                r.damping,
+                fmt_tau(r.time_constant_secs)
+            );
+        }
     }
 }
 

@@ -4,7 +4,8 @@ use std::sync::Arc;
 
 use crate::core::diagnose;
 use crate::core::effects::ExtendedModel;
-use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 use crate::ui::derived::live_model::ModelKey;
 

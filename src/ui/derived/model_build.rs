@@ -14,7 +14,9 @@
 use std::sync::Arc;
 
 use crate::core::identification::cluster::{self, Cluster, ClusterEval};
-use crate::core::identification::pipeline::{self, LiveResult, OutputSettings, SegmentFits, live_result};
+use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::pipeline::{self, LiveResult, live_result};
+use crate::core::identification::settings::OutputSettings;
 use crate::core::run::{Run, RunRole};
 use crate::ui::derived::ident_runs::ScoredSource;
 use crate::ui::derived::live_model::{EffectsOutcome, LiveModel, ScoredRun, next_model_id};

@@ -12,8 +12,9 @@
 use std::sync::Arc;
 
 use crate::core::identification::cluster::{Cluster, ClusterEval};
-use crate::core::identification::pipeline::{OutputSettings, SegmentFits};
+use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::segment::Segment;
+use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::BodePoint;
 use crate::core::run::{Run, RunRole};

@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::effects::EffectId;
 use crate::core::identification::cluster::Cluster;
-use crate::core::identification::pipeline::OutputSettings;
 use crate::core::identification::segment::Segment;
+use crate::core::identification::settings::OutputSettings;
 
 /// Segments, and per output its settings, clusters and effects.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

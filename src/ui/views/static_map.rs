@@ -3,7 +3,7 @@
 use egui::RichText;
 use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
 
-use crate::core::identification::pipeline::OutputSettings;
+use crate::core::identification::settings::OutputSettings;
 use crate::ui::derived::Derived;
 use crate::ui::state::command::Command;
 use crate::ui::theme;

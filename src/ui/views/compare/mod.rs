@@ -16,8 +16,8 @@ use std::time::Duration;
 use egui::RichText;
 
 use crate::core::compare::{CompareInput, OutputComparison, compare_output, compare_stage};
+use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::initial_state::InitialState;
-use crate::core::identification::pipeline::SegmentFits;
 use crate::core::identification::wiener::WienerModel;
 use crate::core::run::Run;
 use crate::ui::derived::Derived;

@@ -7,7 +7,8 @@ use egui::{RichText, Sense};
 use super::state::ZPlaneViewState;
 use crate::core::identification::cluster::{ClusterEval, RootKind};
 use crate::core::identification::reduce::RootGroup;
-use crate::core::identification::structure::{Proposal, root_words};
+use crate::core::identification::structure::Proposal;
+use crate::core::identification::words::root_words;
 use crate::ui::derived::LiveView;
 use crate::ui::derived::model_cache::Proposed;
 use crate::ui::theme;
@@ -167,7 +168,7 @@ fn reasons_ui(ui: &mut egui::Ui, proposal: &Proposal) {
             verdict.damping,
         );
         let what = format!("{kind} {what}, {}/{} segments", verdict.segments_found, verdict.segments_total);
-        reason_ui(ui, verdict.kept, &what, &verdict.reason);
+        reason_ui(ui, verdict.kept(), &what, &verdict.verdict.to_string());
     }
     let dead_time = &proposal.dead_time;
     let what = format!(
@@ -175,7 +176,7 @@ fn reasons_ui(ui: &mut egui::Ui, proposal: &Proposal) {
         dead_time.samples as f64 * dead_time.dt_secs,
         dead_time.samples
     );
-    reason_ui(ui, dead_time.kept, &what, &dead_time.reason);
+    reason_ui(ui, dead_time.kept(), &what, &dead_time.decision.to_string());
     if let Some(direct) = &proposal.direct {
         ui.add(egui::Label::new(RichText::new(&direct.note).color(theme::WARNING)).wrap());
     }

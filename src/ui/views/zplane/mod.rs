@@ -175,7 +175,7 @@ fn polish_checkbox_ui(ui: &mut egui::Ui, output: &str, view: &LiveView<'_>) -> O
          (not while dragging)",
     );
     polish.changed().then(|| {
-        let settings = crate::core::identification::pipeline::OutputSettings {
+        let settings = crate::core::identification::settings::OutputSettings {
             refine,
             ..view.output.setup.settings.clone()
         };

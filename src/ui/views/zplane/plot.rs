@@ -12,7 +12,7 @@ use num_complex::Complex64;
 
 use super::state::{ClusterDrag, Handle, ZPlaneViewState, ZoomView};
 use crate::core::identification::cluster::{Cluster, RootKind};
-use crate::core::identification::pipeline::SegmentFits;
+use crate::core::identification::fits::SegmentFits;
 use crate::ui::derived::LiveView;
 use crate::ui::state::command::Command;
 use crate::ui::theme;

@@ -3,7 +3,7 @@
 //!
 //! **Root groups.** The reduced linear block is a list of [`RootGroup`]s: one real root, or one
 //! conjugate pair, each taken from a valid cluster (its centroid) or free (the direct output-error
-//! fit of `core::identification::structure`). For given roots the Wiener model is [`assemble`]d the one way the
+//! fit of `core::identification::direct_fit`). For given roots the Wiener model is [`assemble`]d the one way the
 //! whole crate uses: the unit-gain response is simulated, gain and offset come from least squares
 //! on the identification range, and the static map is fitted to the steady-state points (the
 //! pre-step baseline and the settled tail of every segment), its order chosen by leave-one-out
@@ -23,8 +23,10 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::identification::cluster::{ClusterEval, RootKind, natural_freq_and_damping};
-use crate::core::identification::pipeline::{OutputSettings, PipelineError, SegmentFits, output_values};
+use crate::core::identification::error::PipelineError;
+use crate::core::identification::fits::{SegmentFits, output_values};
 use crate::core::identification::refine::Refinement;
+use crate::core::identification::settings::{OutputSettings, PolishRegion};
 use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
 use crate::core::identification::wiener::{WienerModel, fit_linear_block_excluding};
 use crate::core::numerics::lm::{
@@ -91,10 +93,10 @@ impl RootGroup {
     }
 
     /// The group with its circle dropped when the polish may move it freely.
-    pub fn within(self, region: crate::core::identification::pipeline::PolishRegion) -> Self {
+    pub fn within(self, region: PolishRegion) -> Self {
         match region {
-            crate::core::identification::pipeline::PolishRegion::WithinClusters => self,
-            crate::core::identification::pipeline::PolishRegion::Free => Self { region: None, ..self },
+            PolishRegion::WithinClusters => self,
+            PolishRegion::Free => Self { region: None, ..self },
         }
     }
 
@@ -432,54 +434,4 @@ pub fn polish_with(
 }
 
 #[cfg(test)]
-mod tests {
-    #![allow(clippy::unwrap_used)]
-    use super::*;
-
-    fn region(re: f64, im: f64, radius: f64) -> Option<Region> {
-        Some(Region { centre: Complex64::new(re, im), radius })
-    }
-
-    #[test]
-    fn parameters_round_trip_and_stay_inside_the_circle() {
-        let pair = RootGroup {
-            kind: RootKind::Pole,
-            root: Complex64::new(0.82, 0.21),
-            pair: true,
-            region: region(0.84, 0.2, 0.05),
-            cluster: Some(0),
-        };
-        let real = RootGroup {
-            kind: RootKind::Pole,
-            root: Complex64::new(0.93, 0.0),
-            pair: false,
-            region: region(0.935, 0.004, 0.02),
-            cluster: Some(1),
-        };
-        for g in [&pair, &real, &RootGroup::free_real(RootKind::Zero, -0.3)] {
-            let back = g.decode(&g.encode()).unwrap();
-            assert!((back.root - g.root).norm() < 1e-12, "{g:?} → {back:?}");
-            assert_eq!(g.encode().len(), g.n_params());
-        }
-        for theta in [[50.0, -80.0], [-3.0, 0.2], [0.0, 0.0]] {
-            let z = pair.decode(&theta).unwrap().root;
-            assert!((z - Complex64::new(0.84, 0.2)).norm() <= 0.05 + 1e-12);
-            let x = real.decode(&theta[..1]).unwrap().root;
-            assert!(x.im == 0.0 && (x - Complex64::new(0.935, 0.004)).norm() <= 0.02 + 1e-12);
-        }
-        assert!(pair.decode(&[50.0, -80.0]).unwrap().at_rim() && !pair.at_rim());
-        let touching = RootGroup { region: region(0.9, 0.02, 0.02), ..real.clone() };
-        assert_eq!(touching.n_params(), 0);
-        assert!((touching.decode(&[]).unwrap().root.re - 0.9).abs() < 1e-15);
-    }
-
-    #[test]
-    fn s_plane_figures_of_a_real_root() {
-        let dt = 0.1;
-        let g = RootGroup::free_real(RootKind::Pole, (-dt / 2.0_f64).exp());
-        let (omega, zeta, tau) = g.s_plane(dt);
-        assert!(
-            (tau.unwrap() - 2.0).abs() < 1e-12 && (omega - 0.5).abs() < 1e-12 && (zeta - 1.0).abs() < 1e-12
-        );
-    }
-}
+mod tests;

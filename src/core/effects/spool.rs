@@ -1,0 +1,115 @@
+//! The spool split off a linear block (its slowest real pole, or pair, and the unit-gain rest) and
+//! the block's response with the spool's time constant scaled sample by sample: what
+//! `asymmetric_dynamics` and `scheduled_time_constant` both act on.
+use num_complex::Complex64;
+
+use super::{EffectError, EffectId};
+use crate::core::identification::wiener::unit_gain_tf;
+use crate::core::numerics::tf::DiscreteTf;
+
+/// The unit-gain linear block split into the spool's root and the rest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplitShape {
+    /// The spool: a real pole in (0, 1), or the upper root of the slowest complex pair when the
+    /// linear block has no real pole there (see `SplitShape::of`).
+    pub spool: Complex64,
+    /// Unit-gain remainder; `None` when the spool is the only root (group).
+    pub rest: Option<DiscreteTf>,
+}
+
+impl SplitShape {
+    /// Whether the spool is a complex pair rather than a real pole.
+    pub fn is_pair(&self) -> bool {
+        self.spool.im.abs() > 1e-9
+    }
+
+    /// Split off the spool: the slowest real pole in (0, 1); when there is none, the slowest
+    /// complex pair. A spool identified from closed-loop data (an ECU that overshoots its fuel
+    /// command at every set-point change) or behind a fast actuator often shows as a damped pair
+    /// rather than one real pole; its time scale follows the operating point by the same power
+    /// balance, so the whole pair is what is scheduled (both its roots' time constants scale
+    /// together, `p → p^(1/factor)`, which keeps its damping ratio).
+    ///
+    /// `effect` is the block that asks, named in the error when there is no spool.
+    pub(super) fn of(
+        poles: &[Complex64],
+        zeros: &[Complex64],
+        dt_secs: f64,
+        effect: EffectId,
+    ) -> Result<Self, EffectError> {
+        let not_applicable = |reason: &str| EffectError::NotApplicable {
+            effect: effect.name().to_owned(),
+            reason: reason.to_owned(),
+        };
+        let slowest = |pick: &dyn Fn(&Complex64) -> bool| {
+            poles.iter().filter(|p| pick(p)).max_by(|a, b| a.norm().total_cmp(&b.norm())).copied()
+        };
+        let real = slowest(&|p| p.im.abs() <= 1e-9 && p.re > 0.0 && p.re < 1.0);
+        let spool = real.or_else(|| slowest(&|p| p.im > 1e-9 && p.norm() < 1.0)).ok_or_else(|| {
+            not_applicable("the linear block has neither a real pole between 0 and 1 nor a complex pair")
+        })?;
+        let is_spool = |p: &Complex64| (p - spool).norm() <= 1e-12 || (p - spool.conj()).norm() <= 1e-12;
+        let mut others: Vec<Complex64> = Vec::with_capacity(poles.len());
+        let mut taken = 0;
+        let group = if real.is_some() { 1 } else { 2 };
+        for p in poles {
+            if taken < group && is_spool(p) {
+                taken += 1;
+            } else {
+                others.push(*p);
+            }
+        }
+        if zeros.len() > others.len() {
+            return Err(not_applicable("the linear block has as many zeros as poles"));
+        }
+        let rest = if others.is_empty() {
+            None
+        } else {
+            Some(
+                unit_gain_tf(&others, zeros, dt_secs)
+                    .map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?,
+            )
+        };
+        Ok(Self { spool, rest })
+    }
+}
+
+/// Unit-gain response of the split linear block to `u`, from the steady state of `u[0]`, with the
+/// spool pole's time constant multiplied at each sample by `schedule(x, r)` (`x` the spool section's
+/// output, `r` its input one sample ago) and, while the response falls, by `decel`.
+pub(super) fn respond(
+    shape: &SplitShape,
+    u: &[f64],
+    decel: f64,
+    schedule: impl Fn(f64, f64) -> f64,
+) -> Vec<f64> {
+    let r = match &shape.rest {
+        Some(tf) => tf.simulate_from_steady(u),
+        None => u.to_vec(),
+    };
+    // The spool's root as a continuous-time rate: scaling the time constant by `factor` divides it.
+    let ln_root = Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
+    let pair = shape.is_pair();
+    let start = r.first().copied().unwrap_or(0.0);
+    // State: the section's output now and one sample ago; its input one and two samples ago.
+    let (mut x, mut x_old, mut prev, mut prev_old) = (start, start, start, start);
+    r.iter()
+        .map(|rk| {
+            let mut factor = schedule(x, prev);
+            if prev < x {
+                factor *= decel;
+            }
+            let root = (ln_root / factor.max(f64::MIN_POSITIVE)).exp();
+            let next = if pair {
+                // Unit-gain pair (1 − a₁ + a₂) z⁻² / (1 − a₁ z⁻¹ + a₂ z⁻²), as `unit_gain_tf` builds it.
+                let (a1, a2) = (2.0 * root.re, root.norm_sqr());
+                a1 * x - a2 * x_old + (1.0 - a1 + a2) * prev_old
+            } else {
+                root.re * x + (1.0 - root.re) * prev
+            };
+            (x_old, x) = (x, next);
+            (prev_old, prev) = (prev, *rk);
+            x
+        })
+        .collect()
+}

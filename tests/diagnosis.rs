@@ -13,7 +13,7 @@
 //! the model error.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use jetid::core::diagnose::{DiagnoseError, DiagnosisKind, DiagnosisReport, apply, diagnose, remove};
+use jetid::core::diagnose::{DiagnoseError, DiagnosisKind, DiagnosisReport, Edit, diagnose, edit};
 use jetid::core::effects::{
     AmbientCorrection, EffectBlock, EffectError, EffectId, ExtendedModel, FitData, refit,
 };
@@ -402,18 +402,18 @@ fn effect_records_are_checked() {
 fn misuse_is_a_typed_error_and_effects_can_be_removed() {
     let b = bench(&[], 1);
     let c = speed_default(&b);
-    let delayed = apply(&c.model, id("transport_delay"), &b.ident, &c.fits, &c.settings).unwrap();
+    let delayed = edit(&c.model, Edit::Add(id("transport_delay")), &b.ident, &c.fits, &c.settings).unwrap();
     assert_eq!(EffectId::names(&delayed.effect_ids()), ["transport_delay"]);
     assert!(matches!(
-        apply(&delayed, id("transport_delay"), &b.ident, &c.fits, &c.settings),
+        edit(&delayed, Edit::Add(id("transport_delay")), &b.ident, &c.fits, &c.settings),
         Err(DiagnoseError::Effect(EffectError::AlreadyApplied { effect })) if effect == "transport_delay"
     ));
     assert!(matches!(
-        remove(&delayed, id("thermal_soak"), &b.ident, &c.fits, &c.settings),
+        edit(&delayed, Edit::Remove(id("thermal_soak")), &b.ident, &c.fits, &c.settings),
         Err(DiagnoseError::Effect(EffectError::NotApplied { effect })) if effect == "thermal_soak"
     ));
     assert!(matches!("warp_drive".parse::<EffectId>(), Err(EffectError::UnknownEffect { .. })));
-    let back = remove(&delayed, id("transport_delay"), &b.ident, &c.fits, &c.settings).unwrap();
+    let back = edit(&delayed, Edit::Remove(id("transport_delay")), &b.ident, &c.fits, &c.settings).unwrap();
     assert!(back.effects.is_empty());
     let (base_error, back_error) =
         (third_run_error(&c.model, &b, TestKind::Chirp), third_run_error(&back, &b, TestKind::Chirp));

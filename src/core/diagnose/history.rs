@@ -8,7 +8,8 @@ use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
 use super::{
-    DiagnoseError, DiagnosisKind, DiagnosisReport, TrialId, apply, diagnose_with_progress, validation_rmspe,
+    DiagnoseError, DiagnosisKind, DiagnosisReport, Edit, TrialId, diagnose_with_progress, edit,
+    validation_rmspe,
 };
 
 /// The mean validation RMSPE of the model after one step ("base", "+thermal_soak", …).
@@ -54,7 +55,7 @@ pub fn apply_in_order(
     };
     sequence.record("base", validation, settings);
     for &id in ids {
-        match apply(&sequence.model, id, ident, fits, settings) {
+        match edit(&sequence.model, Edit::Add(id), ident, fits, settings) {
             Ok(next) => sequence.model = next,
             Err(err) => {
                 sequence.failed = Some((id, err));

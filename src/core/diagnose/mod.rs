@@ -72,7 +72,7 @@ mod held_out;
 mod history;
 mod report;
 mod witness;
-pub use edit::{apply, remove};
+pub use edit::{Edit, edit};
 use held_out::{HeldOut, Recipe};
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
 pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, StructureRival, TrialId};

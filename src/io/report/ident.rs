@@ -277,18 +277,16 @@ fn clusters_table(out: &mut String, clusters: &[ClusterSummary]) {
             ),
             None => ("not in the model".to_owned(), "–".to_owned(), "–".to_owned(), "–".to_owned()),
         };
-        let _ = writeln!(
-            out,
-            "| {} {} | {} | {:.4} | {}/{} | {} | {} | {root} | {omega} | {zeta} | {tau} |",
-            c.kind,
-            i + 1,
+        let valid = if c.valid { "yes".to_owned() } else { c.status.clone() };
+        let cells = [
+            format!("{} {}", c.kind, i + 1),
             fmt_complex(&c.centre),
-            c.radius,
-            c.found,
-            c.needed,
-            if c.valid { "yes".to_owned() } else { c.status.clone() },
+            format!("{:.4}", c.radius),
+            format!("{}/{}", c.found, c.needed),
+            valid,
             fmt_complex(&c.centroid),
-        );
+        ];
+        table_row(out, cells.into_iter().chain([root, omega, zeta, tau]));
     }
 }
 
@@ -298,15 +296,13 @@ fn fitted_roots_table(out: &mut String, roots: &[RootSummary]) {
     if !free.is_empty() {
         let _ = writeln!(out, "\n| fitted root | ωn (rad/s) | ζ | τ (s) |\n|---|---|---|---|");
         for r in free {
-            let _ = writeln!(
-                out,
-                "| {} {} | {:.3} | {:.3} | {} |",
-                r.kind,
-                fmt_root(r),
-                r.natural_freq_rad_s,
-                r.damping,
-                fmt_tau(r.time_constant_secs)
-            );
+            let cells = [
+                format!("{} {}", r.kind, fmt_root(r)),
+                format!("{:.3}", r.natural_freq_rad_s),
+                format!("{:.3}", r.damping),
+                fmt_tau(r.time_constant_secs),
+            ];
+            table_row(out, cells);
         }
     }
 }
@@ -320,18 +316,21 @@ fn candidates_table(out: &mut String, candidates: &[CandidateSummary]) {
          runs):\n\n| candidate | centre | m/J | ωn (rad/s) | ζ | verdict |\n|---|---|---|---|---|---|"
     );
     for (i, c) in candidates.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "| {} {} | {} | {}/{} | {:.3} | {:.3} | {} |",
-            c.kind,
-            i + 1,
+        let cells = [
+            format!("{} {}", c.kind, i + 1),
             fmt_complex(&c.centre),
-            c.segments_found,
-            c.segments_total,
-            c.natural_freq_rad_s,
-            c.damping,
-            c.reason
-        );
+            format!("{}/{}", c.segments_found, c.segments_total),
+            format!("{:.3}", c.natural_freq_rad_s),
+            format!("{:.3}", c.damping),
+            c.reason.clone(),
+        ];
+        table_row(out, cells);
     }
     let _ = writeln!(out);
+}
+
+/// One row of a report.md table: `| a | b | … |`.
+fn table_row(out: &mut String, cells: impl IntoIterator<Item = String>) {
+    let cells: Vec<String> = cells.into_iter().collect();
+    let _ = writeln!(out, "| {} |", cells.join(" | "));
 }

@@ -45,12 +45,12 @@ pub fn zplane_ui(
     let height = ui.available_height();
     ui.horizontal_top(|ui| {
         ui.allocate_ui(egui::vec2(plot_width, height), |ui| {
-            ui.vertical(|ui| commands.extend(zplane_plot::main_plot_ui(ui, output, &view, state, height)));
+            ui.vertical(|ui| commands.extend(zplane_plot::main_plot_ui(ui, &view, state, height)));
         });
         ui.allocate_ui(egui::vec2(side_width, height), |ui| {
             ui.vertical(|ui| {
                 ui.horizontal_top(|ui| {
-                    zplane_plot::overview_ui(ui, output, &view, state, OVERVIEW_SIDE);
+                    zplane_plot::overview_ui(ui, &view, state, OVERVIEW_SIDE);
                     ui.vertical(|ui| live_strip_ui(ui, &view));
                 });
                 ui.separator();

@@ -229,30 +229,40 @@ fn drag_to(drag: &mut ClusterDrag, pointer: PlotPoint) {
 }
 
 /// The detail plot; returns the cluster change committed when a drag ends.
-pub fn main_plot_ui(
-    ui: &mut egui::Ui,
-    output: &str,
-    view: &LiveView<'_>,
-    state: &mut ZPlaneViewState,
-    height: f32,
-) -> Option<Command> {
+/// What both z-plane plots draw of the view: the segment fits, the exclusion angle beyond which
+/// roots are not engine dynamics, and which clusters are valid (none while they cannot be evaluated).
+fn drawn<'a>(view: &'a LiveView<'_>) -> Option<(&'a SegmentFits, f64, Vec<bool>)> {
     let fits = view.output.fits.as_ref().ok()?;
-    let dt_secs = fits.dt_secs;
     let exclusion_rad = view.output.setup.settings.cluster.nyquist_exclusion_rad;
-    let valid: Vec<bool> = match view.evals {
-        Ok(evals) => evals.iter().map(|e| e.valid).collect(),
-        Err(_) => Vec::new(),
-    };
-    // The pointer readout has a row of its own under the plot, so it never covers roots.
-    let readout_height = ui.text_style_height(&egui::TextStyle::Monospace) + ui.spacing().item_spacing.y;
-    let plot = Plot::new(("zplane", output))
-        .height(height - readout_height)
+    let valid = view.evals.as_ref().map(|e| e.iter().map(|e| e.valid).collect()).unwrap_or_default();
+    Some((fits, exclusion_rad, valid))
+}
+
+/// A z-plane plot the pointer does not pan or zoom (the view moves it on drags and the wheel
+/// itself), with the unit circle round.
+fn still_plot<'a>(id: (&str, &str)) -> Plot<'a> {
+    Plot::new(id)
         .data_aspect(1.0)
         .allow_drag(false)
         .allow_zoom(false)
         .allow_scroll(false)
         .allow_boxed_zoom(false)
         .allow_double_click_reset(false)
+}
+
+pub fn main_plot_ui(
+    ui: &mut egui::Ui,
+    view: &LiveView<'_>,
+    state: &mut ZPlaneViewState,
+    height: f32,
+) -> Option<Command> {
+    let output = view.output.name.as_str();
+    let (fits, exclusion_rad, valid) = drawn(view)?;
+    let dt_secs = fits.dt_secs;
+    // The pointer readout has a row of its own under the plot, so it never covers roots.
+    let readout_height = ui.text_style_height(&egui::TextStyle::Monospace) + ui.spacing().item_spacing.y;
+    let plot = still_plot(("zplane", output))
+        .height(height - readout_height)
         .allow_axis_zoom_drag(false)
         .show_crosshair(false)
         .x_axis_label("Re z")
@@ -383,27 +393,13 @@ fn interact(
 }
 
 /// The whole unit circle with the detail view's rectangle; a click centres the detail view there.
-pub fn overview_ui(
-    ui: &mut egui::Ui,
-    output: &str,
-    view: &LiveView<'_>,
-    state: &mut ZPlaneViewState,
-    side: f32,
-) {
-    let Ok(fits) = &view.output.fits else { return };
-    let exclusion_rad = view.output.setup.settings.cluster.nyquist_exclusion_rad;
-    let valid: Vec<bool> =
-        view.evals.as_ref().map(|e| e.iter().map(|e| e.valid).collect()).unwrap_or_default();
+pub fn overview_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &mut ZPlaneViewState, side: f32) {
+    let output = view.output.name.as_str();
+    let Some((fits, exclusion_rad, valid)) = drawn(view) else { return };
     let detail = state.last_transform.map(|t| *t.bounds());
-    let response = Plot::new(("zplane_overview", output))
+    let response = still_plot(("zplane_overview", output))
         .width(side)
         .height(side)
-        .data_aspect(1.0)
-        .allow_drag(false)
-        .allow_zoom(false)
-        .allow_scroll(false)
-        .allow_boxed_zoom(false)
-        .allow_double_click_reset(false)
         .show_axes(false)
         .show_grid(false)
         .show_crosshair(false)

@@ -29,8 +29,8 @@ pub struct Cli {
     /// PNG of one view to this file, and exit.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
-    /// The view to capture with --screenshot: data, zplane, bode, static, traces, compare, diagnosis
-    /// or failures (the Diagnosis view's "Where it fails" section).
+    /// The view to capture with --screenshot: data, zplane, bode, static, traces, compare, diagnosis,
+    /// failures (the Diagnosis view's "Where it fails" section) or control.
     #[arg(long, default_value = DEFAULT_VIEW)]
     pub view: String,
     #[command(subcommand)]

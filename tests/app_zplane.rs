@@ -510,7 +510,7 @@ fn the_app_finds_steps_on_the_projects_steps_from_channel_and_saves_it() {
             assert_eq!(segments.unwrap(), expected);
             assert_ne!(expected, on_input, "the channel must make a difference for this test to tell");
         }
-        Err(e) => assert!(segments.unwrap_err().contains(&e.to_string())),
+        Err(e) => assert!(segments.unwrap_err().to_string().contains(&e.to_string())),
     }
     let saved = dir.path().join("saved.toml");
     app.apply(Command::SaveProject(saved.clone()));
@@ -519,7 +519,7 @@ fn the_app_finds_steps_on_the_projects_steps_from_channel_and_saves_it() {
     let mut typo = App::new(jetid::ui::Session::default());
     typo.apply(Command::OpenProject(write("typo.toml", "egt")));
     typo.settle();
-    let err = typo.cache.ident.as_ref().unwrap().segments.clone().unwrap_err();
+    let err = typo.cache.ident.as_ref().unwrap().segments.clone().unwrap_err().to_string();
     assert!(err.contains("steps_from = \"egt\"") && err.contains("no such channel"), "{err}");
 }
 

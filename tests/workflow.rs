@@ -212,6 +212,12 @@ fn hot_day_gives_the_same_model_in_the_batch_and_the_app() {
 
 #[cfg(feature = "gui")]
 #[test]
+fn soak_gives_the_same_model_in_the_batch_and_the_app() {
+    same_model_in_batch_and_app(&sample("soak/project.toml"));
+}
+
+#[cfg(feature = "gui")]
+#[test]
 fn soak_with_an_effect_and_the_loop_gives_the_same_model_in_the_batch_and_the_app() {
     // The soak project with an effect added by hand and one round of the missing-physics loop: the
     // app runs the same loop as the batch.

@@ -122,13 +122,13 @@ pub enum EffectsError {
         id: EffectId,
         output: String,
         #[source]
-        source: DiagnoseError,
+        source: Box<DiagnoseError>,
     },
     #[error("the missing-physics loop on '{output}': {source}")]
     Loop {
         output: String,
         #[source]
-        source: DiagnoseError,
+        source: Box<DiagnoseError>,
     },
 }
 
@@ -142,11 +142,13 @@ impl Effects {
     /// not the one the plan asks for.
     pub fn check(&self, output: &str) -> Result<(), EffectsError> {
         if let Some((id, source)) = &self.sequence.failed {
-            let (id, output, source) = (*id, output.to_owned(), source.clone());
+            let (id, output, source) = (*id, output.to_owned(), Box::new(source.clone()));
             return Err(EffectsError::Add { id, output, source });
         }
         match &self.loop_failed {
-            Some(source) => Err(EffectsError::Loop { output: output.to_owned(), source: source.clone() }),
+            Some(source) => {
+                Err(EffectsError::Loop { output: output.to_owned(), source: Box::new(source.clone()) })
+            }
             None => Ok(()),
         }
     }

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use crate::core::identification::segment::Segment;
 use crate::core::run::{Run, RunRole};
+use crate::ui::derived::live_model::Unavailable;
 use crate::ui::state::session::Session;
 use crate::workflow::runs::{
     Grid, grid_of, join_identification as join, resample_note, resampled_onto, segments,
@@ -48,10 +49,10 @@ pub(super) fn detect_or_check(
     junctions: &[usize],
     given: Option<&[Segment]>,
     steps_from: Option<&str>,
-) -> Result<Vec<Segment>, String> {
-    segments(run, junctions, given, steps_from).map_err(|e| match steps_from {
-        Some(name) if given.is_none() => format!("{e} (steps detected on {name})"),
-        _ => e.to_string(),
+) -> Result<Vec<Segment>, Unavailable> {
+    segments(run, junctions, given, steps_from).map_err(|source| match steps_from {
+        Some(channel) if given.is_none() => Unavailable::StepsOn { channel: channel.to_owned(), source },
+        _ => Unavailable::Pipeline(source),
     })
 }
 

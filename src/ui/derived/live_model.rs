@@ -5,11 +5,48 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::core::diagnose::{AutoRound, HistoryStep};
 use crate::core::effects::{EffectRecord, ExtendedModel};
+use crate::core::identification::error::PipelineError;
 use crate::core::identification::pipeline::{GrayBoxModel, RunPrediction};
 use crate::core::identification::wiener::WienerModel;
 use crate::core::numerics::tf::BodePoint;
 use crate::core::run::RunRole;
+use crate::ui::derived::jobs::JobError;
 use crate::workflow::EffectPlan;
+
+/// Why a derived value (the segments, the segment fits, the model, what a diagnosis needs) is not
+/// there; the views show it as it reads.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Unavailable {
+    #[error("not computed yet")]
+    NotYet,
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    /// Segments detected on a channel other than the input could not be found.
+    #[error("{source} (steps detected on {channel})")]
+    StepsOn { channel: String, source: PipelineError },
+    #[error("no segments: {0}")]
+    NoSegments(Box<Unavailable>),
+    #[error("no segment fits: {0}")]
+    NoFits(Box<Unavailable>),
+    #[error("the automatic proposal is being computed")]
+    Proposing,
+    #[error("the automatic cluster proposal failed: {0}")]
+    ProposalFailed(String),
+    #[error("there are no clusters; add a pole cluster or accept the automatic proposal")]
+    NoClusters,
+    #[error("the model could not be finished: {0}")]
+    NotFinished(JobError),
+    #[error("no model: {0}")]
+    NoModel(Box<Unavailable>),
+    #[error("the model is being finished (centroids polished, effects refitted); a moment")]
+    Finishing,
+    #[error("the model's effects could not be added: {0}")]
+    EffectsNotAdded(String),
+    #[error("no identification run")]
+    NoIdentificationRun,
+    #[error("give a run the role validation: the effects are scored on validation runs")]
+    NoValidationRun,
+}
 
 /// Every live model gets its own id, so that results computed for a model (the diagnosis, the
 /// residual analysis) can tell when they are stale.
@@ -63,7 +100,7 @@ pub struct ScoredRun {
     /// model without effects).
     pub effects_error: Option<String>,
     /// The linear block alone (the "linear" baseline).
-    pub linear: Result<RunPrediction, String>,
+    pub linear: Result<RunPrediction, PipelineError>,
 }
 
 impl ScoredRun {

@@ -18,6 +18,7 @@ use egui_plot::PlotPoint;
 
 use crate::core::identification::cluster::{Cluster, ClusterEval};
 use crate::core::run::{Channel, Run};
+use crate::ui::derived::live_model::Unavailable;
 use crate::ui::derived::model_cache::{IdentCache, LiveModel, OutputCache, Preview};
 use crate::ui::state::session::Session;
 
@@ -98,8 +99,8 @@ pub struct Derived {
 pub struct LiveView<'a> {
     pub output: &'a OutputCache,
     pub clusters: &'a [Cluster],
-    pub evals: &'a Result<Vec<ClusterEval>, String>,
-    pub live: &'a Result<LiveModel, String>,
+    pub evals: &'a Result<Vec<ClusterEval>, Unavailable>,
+    pub live: &'a Result<LiveModel, Unavailable>,
     /// The clusters are being dragged: the model is a preview, centroids not polished.
     pub is_preview: bool,
 }

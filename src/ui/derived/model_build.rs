@@ -19,16 +19,16 @@ use crate::core::identification::pipeline::{self, LiveResult, live_result};
 use crate::core::identification::settings::OutputSettings;
 use crate::core::run::{Run, RunRole};
 use crate::ui::derived::ident_runs::ScoredSource;
-use crate::ui::derived::live_model::{EffectsOutcome, LiveModel, ScoredRun, next_model_id};
+use crate::ui::derived::live_model::{EffectsOutcome, LiveModel, ScoredRun, Unavailable, next_model_id};
 use crate::workflow::model::{self, EffectPlan, ModelSource};
 
 /// Cluster evaluations and the model, as a cache keeps them.
-pub(super) type Built = (Result<Vec<ClusterEval>, String>, Result<LiveModel, String>);
+pub(super) type Built = (Result<Vec<ClusterEval>, Unavailable>, Result<LiveModel, Unavailable>);
 
 /// What building one output's model needs, owned so that a worker thread can do it.
 pub(super) struct ModelInputs {
     pub(super) run: Arc<Run>,
-    pub(super) fits: Result<Arc<SegmentFits>, String>,
+    pub(super) fits: Result<Arc<SegmentFits>, Unavailable>,
     pub(super) scored: Vec<ScoredSource>,
     pub(super) omegas_rad_s: Arc<[f64]>,
     pub(super) effects: EffectPlan,
@@ -45,8 +45,7 @@ impl ModelInputs {
         if let ModelSource::Clusters(clusters) = source
             && clusters.is_empty()
         {
-            let why = "there are no clusters; add a pole cluster or accept the automatic proposal".to_owned();
-            return (Ok(Vec::new()), Err(why));
+            return (Ok(Vec::new()), Err(Unavailable::NoClusters));
         }
         let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
         let live = source
@@ -57,10 +56,10 @@ impl ModelInputs {
             (Err(err), ModelSource::Clusters(clusters)) => {
                 let evals =
                     cluster::evaluate_clusters(clusters, &fits.roots, &settings.cluster, fits.dt_secs)
-                        .map_err(|e| e.to_string());
-                (evals, Err(err.to_string()))
+                        .map_err(|e| Unavailable::Pipeline(e.into()));
+                (evals, Err(err.into()))
             }
-            (Err(err), ModelSource::Proposal(_)) => (Ok(Vec::new()), Err(err.to_string())),
+            (Err(err), ModelSource::Proposal(_)) => (Ok(Vec::new()), Err(err.into())),
         }
     }
 
@@ -172,8 +171,8 @@ impl ModelInputs {
 pub struct Preview {
     pub output: String,
     pub clusters: Vec<Cluster>,
-    pub evals: Result<Vec<ClusterEval>, String>,
-    pub live: Result<LiveModel, String>,
+    pub evals: Result<Vec<ClusterEval>, Unavailable>,
+    pub live: Result<LiveModel, Unavailable>,
 }
 
 impl Preview {

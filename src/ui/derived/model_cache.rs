@@ -23,7 +23,7 @@ use crate::ui::derived::diagnosis_model::DiagnosisInput;
 use crate::ui::derived::empirical_bode::EmpiricalBode;
 use crate::ui::derived::ident_runs::{ScoredSource, detect_or_check, join_identification, scored_runs};
 use crate::ui::derived::jobs::{Job, JobResult};
-pub use crate::ui::derived::live_model::{LiveModel, ScoredRun};
+pub use crate::ui::derived::live_model::{LiveModel, ScoredRun, Unavailable};
 pub use crate::ui::derived::model_build::Preview;
 use crate::ui::derived::model_build::{Built, ModelInputs};
 use crate::ui::state::session::{Session, SessionRun};
@@ -48,7 +48,7 @@ pub struct IdentCache {
     given_segments: Option<Vec<Segment>>,
     steps_from: Option<String>,
     /// The segments in use: the user's (checked) or the detected ones.
-    pub segments: Result<Vec<Segment>, String>,
+    pub segments: Result<Vec<Segment>, Unavailable>,
     /// One entry per output of the identification run, in its column order.
     pub outputs: Vec<OutputCache>,
 }
@@ -238,7 +238,7 @@ pub struct OutputCache {
     pub setup: OutputSetup,
     source: Option<Arc<Run>>,
     fits_key: Option<FitsKey>,
-    pub fits: Result<Arc<SegmentFits>, String>,
+    pub fits: Result<Arc<SegmentFits>, Unavailable>,
     pub omegas_rad_s: Arc<[f64]>,
     /// Bode of every segment's ARX model at `omegas_rad_s`, in segment order.
     pub segment_bode: Vec<Vec<BodePoint>>,
@@ -246,9 +246,9 @@ pub struct OutputCache {
     pub proposal: Proposed,
     /// The clusters in use: the user's, else the automatic proposal.
     pub clusters: Vec<Cluster>,
-    pub evals: Result<Vec<ClusterEval>, String>,
+    pub evals: Result<Vec<ClusterEval>, Unavailable>,
     scored: Vec<ScoredSource>,
-    pub live: Result<LiveModel, String>,
+    pub live: Result<LiveModel, Unavailable>,
     /// The committed model being finished on a worker thread (centroids polished, effects
     /// refitted); `live` is its unpolished first look meanwhile.
     finishing: Option<Job<Built>>,
@@ -266,14 +266,14 @@ impl OutputCache {
             setup: OutputSetup::for_output(name),
             source: None,
             fits_key: None,
-            fits: Err("not computed yet".into()),
+            fits: Err(Unavailable::NotYet),
             omegas_rad_s: Arc::from([]),
             segment_bode: Vec::new(),
             proposal: Proposed::Failed("not computed yet".into()),
             clusters: Vec::new(),
-            evals: Err("not computed yet".into()),
+            evals: Err(Unavailable::NotYet),
             scored: Vec::new(),
-            live: Err("not computed yet".into()),
+            live: Err(Unavailable::NotYet),
             finishing: None,
             empirical_bode: EmpiricalBode::default(),
             notes: Vec::new(),
@@ -288,7 +288,7 @@ impl OutputCache {
     fn update(
         &mut self,
         run: &Arc<Run>,
-        segments: &Result<Vec<Segment>, String>,
+        segments: &Result<Vec<Segment>, Unavailable>,
         setup: OutputSetup,
         scored: Vec<ScoredSource>,
     ) {
@@ -300,8 +300,8 @@ impl OutputCache {
             self.fits = match segments {
                 Ok(segments) => model::fit_segments(run, &self.name, segments, &setup.settings)
                     .map(Arc::new)
-                    .map_err(|e| e.to_string()),
-                Err(err) => Err(format!("no segments: {err}")),
+                    .map_err(Unavailable::from),
+                Err(err) => Err(Unavailable::NoSegments(Box::new(err.clone()))),
             };
             self.omegas_rad_s = bode_grid(run.dt_secs).into();
             self.segment_bode = match &self.fits {
@@ -320,7 +320,7 @@ impl OutputCache {
         if refit || setup.settings.cluster != self.setup.settings.cluster {
             self.proposal = match &self.fits {
                 Ok(fits) => Proposed::start(fits, run, &setup.settings),
-                Err(err) => Proposed::Failed(err.clone()),
+                Err(err) => Proposed::Failed(err.to_string()),
             };
         }
         self.source = Some(Arc::clone(run));
@@ -346,12 +346,12 @@ impl OutputCache {
             (Some(clusters), _) => ModelSource::Clusters(clusters.clone()),
             (None, Proposed::Ready(proposal)) => ModelSource::Proposal(Arc::clone(proposal)),
             (None, Proposed::Running(_)) => {
-                let why = "the automatic proposal is being computed".to_owned();
-                (self.clusters, self.evals, self.live) = (Vec::new(), Ok(Vec::new()), Err(why));
+                (self.clusters, self.evals, self.live) =
+                    (Vec::new(), Ok(Vec::new()), Err(Unavailable::Proposing));
                 return;
             }
             (None, Proposed::Failed(err)) => {
-                let why = format!("the automatic cluster proposal failed: {err}");
+                let why = Unavailable::ProposalFailed(err.clone());
                 (self.clusters, self.evals, self.live) = (Vec::new(), Ok(Vec::new()), Err(why));
                 return;
             }
@@ -389,7 +389,7 @@ impl OutputCache {
     fn take_finished(&mut self, result: JobResult<Built>) {
         match result {
             Ok((evals, live)) => (self.evals, self.live) = (evals, live),
-            Err(err) => self.live = Err(format!("the model could not be finished: {err}")),
+            Err(err) => self.live = Err(Unavailable::NotFinished(err)),
         }
     }
 
@@ -454,15 +454,15 @@ impl OutputCache {
 
     /// What a diagnosis of the committed model needs; an error when there is no model or no
     /// validation run.
-    pub fn diagnosis_input(&self) -> Result<DiagnosisInput, String> {
-        let live = self.live.as_ref().map_err(|e| format!("no model: {e}"))?;
+    pub fn diagnosis_input(&self) -> Result<DiagnosisInput, Unavailable> {
+        let live = self.live.as_ref().map_err(|e| Unavailable::NoModel(Box::new(e.clone())))?;
         if live.finishing {
-            return Err("the model is being finished (centroids polished, effects refitted); a moment".into());
+            return Err(Unavailable::Finishing);
         }
-        let fits = self.fits.as_ref().map_err(|e| format!("no segment fits: {e}"))?;
-        let ident = self.source.as_ref().ok_or("no identification run")?;
+        let fits = self.fits.as_ref().map_err(|e| Unavailable::NoFits(Box::new(e.clone())))?;
+        let ident = self.source.as_ref().ok_or(Unavailable::NoIdentificationRun)?;
         if let Some(problem) = live.effects.problems.first().filter(|_| live.effects.model.is_none()) {
-            return Err(format!("the model's effects could not be added: {problem}"));
+            return Err(Unavailable::EffectsNotAdded(problem.clone()));
         }
         let validation: Vec<Arc<Run>> = self
             .scored
@@ -471,7 +471,7 @@ impl OutputCache {
             .map(|s| Arc::clone(&s.run))
             .collect();
         if validation.is_empty() {
-            return Err("give a run the role validation: the effects are scored on validation runs".into());
+            return Err(Unavailable::NoValidationRun);
         }
         Ok(DiagnosisInput {
             model: live.key(),

@@ -83,7 +83,10 @@ pub fn data_ui(
 
 fn segments_header_ui(
     ui: &mut egui::Ui,
-    segments: &Result<Vec<crate::core::identification::segment::Segment>, String>,
+    segments: &Result<
+        Vec<crate::core::identification::segment::Segment>,
+        crate::ui::derived::live_model::Unavailable,
+    >,
     automatic: bool,
     how: &str,
 ) -> Option<Command> {

@@ -165,7 +165,7 @@ pub fn metrics_table_ui(ui: &mut egui::Ui, id: &str, runs: &[ScoredRun]) {
                         }
                     }
                     Err(err) => {
-                        ui.label(RichText::new(err.as_str()).color(theme::ERROR));
+                        ui.label(RichText::new(err.to_string()).color(theme::ERROR));
                     }
                 }
                 ui.end_row();

@@ -228,8 +228,11 @@ fn job_status_ui(
             state.start(input, move || ctx.request_repaint());
         }
         Err(err) => {
-            let finished =
-                FinishedDiagnosis { model: model.clone(), outcome: Err(err), duration: Duration::ZERO };
+            let finished = FinishedDiagnosis {
+                model: model.clone(),
+                outcome: Err(err.to_string()),
+                duration: Duration::ZERO,
+            };
             state.results.insert(output.to_owned(), finished);
         }
     };

@@ -143,7 +143,7 @@ impl Batch<'_> {
             })
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
         let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
-        let mut notes = Vec::new();
+        let mut notes: Vec<String> = model::few_segments_note(&identified.fits).into_iter().collect();
         let (built, mut models) = self.effects_beside_baselines(&plan, &identified, &mut notes, timings)?;
         let extended = built.effects.model();
         models.initial_state = plan.settings.initial_state;

@@ -48,7 +48,7 @@ pub struct BatchArgs {
     #[arg(long = "clusters", value_name = "MODEL.json")]
     pub clusters_from: Option<PathBuf>,
     /// Sample time in seconds, for files without a time column.
-    #[arg(long)]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = super::positive_secs)]
     pub sample_time: Option<f64>,
     /// Read logs with repeated or irregular time stamps: rows sharing a time stamp are merged into
     /// their mean and the time axis is resampled onto a uniform grid (for every run).

@@ -8,6 +8,7 @@ use clap::Args;
 use crate::io::atomic::write_atomic;
 use crate::io::export::{Format, export};
 use crate::io::model_file::read_model;
+use crate::io::paths::overwrites_input;
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -41,6 +42,9 @@ impl From<FormatArg> for Format {
 }
 
 pub fn run(args: &ExportArgs) -> Result<()> {
+    if let Some(why) = overwrites_input("--out", &args.out, &[("--model", args.model.as_path())]) {
+        anyhow::bail!(why);
+    }
     let model = read_model(&args.model)?;
     let source = args
         .model

@@ -6,42 +6,18 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use crate::core::run::{Channel, Run};
-use crate::io::csv_run::{LoadNotes, LoadOptions, load_run_with_notes};
+use crate::io::csv_run::{LoadNotes, load_run_with_notes};
 
 #[derive(Debug, Args)]
 pub struct InspectArgs {
     /// The run file (CSV).
     pub file: PathBuf,
-    /// Column mapping ROLE=COLUMN, roles time|input|output|aux (repeatable).
-    #[arg(long = "map", value_name = "ROLE=COLUMN")]
-    pub maps: Vec<String>,
-    /// Sample time in seconds, for files without a time column.
-    #[arg(long, value_name = "SECONDS")]
-    pub sample_time: Option<f64>,
-    /// Keep only samples START:END (0-based, END excluded), or seconds with `s`: 12.5s:80s; or
-    /// `auto`: from the end of the start-up run-up to the fuel cut, found from the signals.
-    #[arg(long, value_name = "START:END")]
-    pub window: Option<String>,
-    /// A 0/1 column marking good samples; bad ones are interpolated.
-    #[arg(long, value_name = "COLUMN")]
-    pub quality: Option<String>,
-    /// Resample a non-uniform time axis onto a uniform grid.
-    #[arg(long)]
-    pub resample: bool,
-    /// Values a channel's logger writes for "no reading", which become gaps (repeatable).
-    #[arg(long = "invalid", value_name = "CHANNEL=V1,V2")]
-    pub invalid: Vec<String>,
+    #[command(flatten)]
+    pub read: super::read_args::ReadArgs,
 }
 
 pub fn run(args: &InspectArgs) -> Result<()> {
-    let opts = LoadOptions::from_cli(
-        &args.maps,
-        args.sample_time,
-        args.window.as_deref(),
-        args.quality.as_deref(),
-        args.resample,
-    )?
-    .with_invalid_specs(&args.invalid)?;
+    let opts = args.read.options(&args.file)?;
     // The loader's errors already name the file, row and column.
     let (run, notes) = load_run_with_notes(&args.file, &opts).context("cannot load the run file")?;
     print!("{}", summary(&run, &notes));
@@ -65,7 +41,12 @@ pub fn summary(run: &Run, notes: &LoadNotes) -> String {
         notes.kept_rows.end,
         notes.rows_in_file
     );
-    let _ = writeln!(out, "dt        {:.6} s ({:.4} Hz)", run.dt_secs, 1.0 / run.dt_secs);
+    let _ = writeln!(
+        out,
+        "dt        {} s ({} Hz)",
+        crate::core::numerics::stats::significant(run.dt_secs, 6),
+        crate::core::numerics::stats::significant(1.0 / run.dt_secs, 5)
+    );
     let _ = writeln!(out, "duration  {:.3} s (t = {t0} s to {t_end} s)", t_end - t0);
     let time_source = notes.time_column.as_ref().map_or("sample time".to_owned(), |c| format!("column {c}"));
     let merged = match notes.merged_repeats {

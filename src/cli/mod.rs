@@ -11,6 +11,7 @@ pub mod batch_args;
 pub mod export;
 pub mod inspect;
 pub mod predict;
+pub mod read_args;
 pub mod simulate;
 
 /// The view `--screenshot` takes unless `--view` says otherwise.
@@ -47,6 +48,16 @@ pub enum Command {
     Inspect(inspect::InspectArgs),
     /// Write a saved model as a Python, C99 or MATLAB program that reproduces `jetid predict`.
     Export(export::ExportArgs),
+}
+
+/// A duration on the command line (`--sample-time`): a positive finite number of seconds; a
+/// negative one is read as a number (not taken for a flag) to be refused with this message.
+pub(crate) fn positive_secs(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a positive number of seconds, got {v}")),
+        Err(_) => Err(format!("must be a positive number of seconds, got \"{text}\"")),
+    }
 }
 
 /// Dispatch a parsed command line.

@@ -2,13 +2,15 @@
 //! run's input alone.
 use std::path::{Path, PathBuf};
 
+use crate::core::numerics::stats::significant;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 
 use crate::core::identification::initial_state::InitialState;
-use crate::core::run::{Channel, Run};
-use crate::io::csv_run::{LoadOptions, load_run, write_run};
+use crate::core::run::{Channel, InputCoverage, Run};
+use crate::io::csv_run::{load_run, write_run};
 use crate::io::model_file::{ModelFile, read_model};
+use crate::io::paths::overwrites_input;
 
 #[derive(Debug, Args)]
 pub struct PredictArgs {
@@ -21,38 +23,28 @@ pub struct PredictArgs {
     /// Where the prediction goes: time_s and one column per modelled output.
     #[arg(long)]
     pub out: PathBuf,
-    /// Column mapping ROLE=COLUMN for the input run (repeatable).
-    #[arg(long = "map")]
-    pub maps: Vec<String>,
-    /// Sample time in seconds, for files without a time column.
-    #[arg(long)]
-    pub sample_time: Option<f64>,
+    /// How the input run is read (as a batch reads a project's runs).
+    #[command(flatten)]
+    pub read: super::read_args::ReadArgs,
     /// Where the simulation starts: `steady` (the steady state of the first input sample) or
     /// `estimated` (the state that best fits the first seconds of the run's measured output, which
     /// the run must then hold).
     #[arg(long = "initial-state", value_enum, default_value_t = InitialStateArg::Steady)]
     pub initial_state: InitialStateArg,
-}
-
-/// Whether `a` and `b` name the same file (`b` need not exist yet).
-fn same_file(a: &Path, b: &Path) -> bool {
-    let absolute = |p: &Path| {
-        std::fs::canonicalize(p).ok().or_else(|| {
-            let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-            Some(std::fs::canonicalize(parent).ok()?.join(p.file_name()?))
-        })
-    };
-    matches!((absolute(a), absolute(b)), (Some(x), Some(y)) if x == y)
+    /// Refuse a run whose input leaves the range the model was identified on (or changes sign),
+    /// instead of saying so on stderr and extrapolating.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// Refuse a model whose linear block has a pole on or outside the unit circle: simulating it
 /// diverges (a model file edited by hand, or written by another tool).
 fn check_stable(model: &ModelFile, path: &Path) -> Result<()> {
     for out in &model.outputs {
-        let poles = out.wiener.linear.tf.poles().map_err(|e| {
+        let unstable = out.wiener.linear.tf.unstable_pole().map_err(|e| {
             anyhow!("{}: output '{}': the linear block's poles: {e}", path.display(), out.name)
         })?;
-        if let Some(p) = poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0) {
+        if let Some(p) = unstable {
             bail!(
                 "{}: output '{}' has a pole at {:.4}{:+.4}i (|z| = {:.4}), on or outside the unit circle: the model is \
                  unstable and its simulation diverges; identify it again",
@@ -65,6 +57,49 @@ fn check_stable(model: &ModelFile, path: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Say on stderr which share of the run's input lies outside the range the model was identified on
+/// (or that it changes sign); with `--strict` refuse the run instead.
+fn check_coverage(model: &ModelFile, run: &Run, args: &PredictArgs) -> Result<()> {
+    let Some(range) = model.input_range else { return Ok(()) };
+    let coverage = InputCoverage::of(&run.input.values, range);
+    let Some(words) = coverage.words(&model.input.unit) else { return Ok(()) };
+    if args.strict {
+        bail!(
+            "{}: {words}; --strict refuses it (without --strict the prediction is written and this is said)",
+            args.input.display()
+        );
+    }
+    eprintln!("jetid: {}: {words}", args.input.display());
+    Ok(())
+}
+
+/// The parameter of largest magnitude in an output's model, with its path in model.json
+/// (`wiener.map.coeffs_scaled[2]`), to name when the model overflows.
+fn largest_parameter(out: &crate::io::model_file::OutputModel) -> (String, f64) {
+    fn walk(value: &serde_json::Value, path: String, best: &mut (String, f64)) {
+        match value {
+            serde_json::Value::Number(n) => {
+                let v = n.as_f64().unwrap_or(f64::INFINITY);
+                if !(v.abs() <= best.1.abs()) {
+                    *best = (path, v);
+                }
+            }
+            serde_json::Value::Array(items) => {
+                items.iter().enumerate().for_each(|(i, item)| walk(item, format!("{path}[{i}]"), best));
+            }
+            serde_json::Value::Object(fields) => {
+                fields.iter().for_each(|(k, item)| walk(item, format!("{path}.{k}"), best));
+            }
+            _ => {}
+        }
+    }
+    let mut best = (String::new(), 0.0);
+    if let Ok(value) = serde_json::to_value(out) {
+        walk(&value, String::new(), &mut best);
+    }
+    (best.0.trim_start_matches('.').to_owned(), best.1)
 }
 
 /// `--initial-state`.
@@ -84,15 +119,13 @@ impl From<InitialStateArg> for InitialState {
 }
 
 pub fn run(args: &PredictArgs) -> Result<()> {
-    if same_file(&args.input, &args.out) {
-        bail!(
-            "--out {} is the --input file: the prediction would overwrite the run it is made from; write it elsewhere",
-            args.out.display()
-        );
+    let inputs = [("--input", args.input.as_path()), ("--model", args.model.as_path())];
+    if let Some(why) = overwrites_input("--out", &args.out, &inputs) {
+        bail!(why);
     }
     let model = read_model(&args.model)?;
     check_stable(&model, &args.model)?;
-    let mut opts = LoadOptions::from_cli(&args.maps, args.sample_time, None, None, false).context("--map")?;
+    let mut opts = args.read.options(&args.input)?;
     // Started from the steady state, the model needs the input alone: a fuel schedule without
     // measured outputs, or with gaps in them, is a run to predict from.
     opts.input_only =
@@ -110,15 +143,16 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     }
     if ((run.dt_secs / model.dt_secs) - 1.0).abs() > 0.02 {
         bail!(
-            "{} is sampled every {:.5} s but the model every {:.5} s; the model is discrete-time",
+            "{} is sampled every {} s but the model every {} s; the model is discrete-time",
             args.input.display(),
-            run.dt_secs,
-            model.dt_secs
+            significant(run.dt_secs, 5),
+            significant(model.dt_secs, 5)
         );
     }
     if model.outputs.is_empty() {
         bail!("{} holds no output model", args.model.display());
     }
+    check_coverage(&model, &run, args)?;
     let mut outputs = Vec::new();
     for out in &model.outputs {
         let extended =
@@ -136,6 +170,17 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         let y = extended
             .simulate_scored(&run, initial)
             .with_context(|| format!("simulating output '{}' on {}", out.name, args.input.display()))?;
+        if let Some(k) = y.iter().position(|v| !v.is_finite()) {
+            let (parameter, value) = largest_parameter(out);
+            bail!(
+                "{}: output '{}' overflows at sample {k} of {} (value {}): a parameter of the model is out of \
+                 range (the largest: {parameter} = {value:e}); identify the model again",
+                args.model.display(),
+                out.name,
+                args.input.display(),
+                y[k]
+            );
+        }
         outputs.push(Channel { name: out.name.clone(), unit: out.unit.clone(), values: y });
     }
     let prediction = Run {

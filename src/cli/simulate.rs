@@ -58,6 +58,12 @@ pub struct SimulateArgs {
 }
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
+    if let Some(truth) = &args.truth_out
+        && let Some(why) =
+            crate::io::paths::overwrites_input("--truth-out", truth, &[("--out", args.out.as_path())])
+    {
+        anyhow::bail!("{why}: the truth and the measured run are two files");
+    }
     let effects = args
         .effects
         .iter()

@@ -67,6 +67,73 @@ impl Quantity {
     }
 }
 
+/// How an input covers the range a model was identified on: the share of samples outside it, and
+/// whether it changes sign where the identification input never did. A model outside its
+/// identified range extrapolates its static map (a polynomial) and says nothing trustworthy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputCoverage {
+    /// The identified range, `[lowest, highest]` input of the identification run.
+    pub range: [f64; 2],
+    /// Samples below and above it.
+    pub below: usize,
+    pub above: usize,
+    pub samples: usize,
+    /// The input's own extremes.
+    pub min: f64,
+    pub max: f64,
+    /// The input takes both signs while the identification input kept one.
+    pub changes_sign: bool,
+}
+
+impl InputCoverage {
+    /// The coverage of `u` against `range`.
+    pub fn of(u: &[f64], range: [f64; 2]) -> Self {
+        let below = u.iter().filter(|v| **v < range[0]).count();
+        let above = u.iter().filter(|v| **v > range[1]).count();
+        let (min, max) =
+            u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+        let one_sign = range[0] >= 0.0 || range[1] <= 0.0;
+        let changes_sign = one_sign && min < 0.0 && max > 0.0;
+        Self { range, below, above, samples: u.len(), min, max, changes_sign }
+    }
+
+    /// Share of the samples outside the identified range, 0..=1.
+    pub fn outside_share(&self) -> f64 {
+        (self.below + self.above) as f64 / self.samples.max(1) as f64
+    }
+
+    /// True when every sample lies in the identified range and the sign holds.
+    pub fn is_inside(&self) -> bool {
+        self.below + self.above == 0 && !self.changes_sign
+    }
+
+    /// "12.3 % of the input (408 of 3319 samples) lies outside the identified range 2.000 to 7.400
+    /// gal/h (the input spans 0.3000 to 15.00): the model extrapolates there", with the sign change
+    /// named; `None` when the input is inside.
+    pub fn words(&self, unit: &str) -> Option<String> {
+        if self.is_inside() {
+            return None;
+        }
+        let s = |x: f64| crate::core::numerics::stats::significant(x, 4);
+        let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+        let mut text = format!(
+            "{:.1} % of the input ({} of {} samples) lies outside the identified range {} to {}{unit} \
+             (the input spans {} to {}): the model extrapolates there",
+            100.0 * self.outside_share(),
+            self.below + self.above,
+            self.samples,
+            s(self.range[0]),
+            s(self.range[1]),
+            s(self.min),
+            s(self.max)
+        );
+        if self.changes_sign {
+            text.push_str("; the input changes sign, which the identification input never did");
+        }
+        Some(text)
+    }
+}
+
 /// One named signal with its unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Channel {
@@ -153,7 +220,9 @@ pub enum RunError {
     #[error("no runs to join")]
     NothingToJoin,
     #[error(
-        "run '{run}' is sampled every {dt_secs:.5} s but '{first}' every {first_dt_secs:.5} s; resample it before joining"
+        "run '{run}' is sampled every {} s but '{first}' every {} s; resample it before joining",
+        crate::core::numerics::stats::significant(*dt_secs, 5),
+        crate::core::numerics::stats::significant(*first_dt_secs, 5)
     )]
     SampleTimeMismatch { run: String, dt_secs: f64, first: String, first_dt_secs: f64 },
     #[error("run '{run}' has input '{input}' but '{first}' has '{first_input}'")]

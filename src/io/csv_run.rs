@@ -196,7 +196,11 @@ pub fn load_run(path: &Path, opts: &LoadOptions) -> Result<Run, RunFileError> {
 /// Read a run file and report what was repaired, trimmed or left out.
 pub fn load_run_with_notes(path: &Path, opts: &LoadOptions) -> Result<(Run, LoadNotes), RunFileError> {
     // Streamed: a long log is parsed cell by cell into numbers, never held as text.
-    std::fs::metadata(path).map_err(|io| RunFileError::Unreadable { file: path.to_owned(), io })?;
+    let meta =
+        std::fs::metadata(path).map_err(|io| RunFileError::Unreadable { file: path.to_owned(), io })?;
+    if meta.is_dir() {
+        return Err(RunFileError::IsFolder { file: path.to_owned() });
+    }
     read::parse(path, table::Source::File(path), opts)
 }
 

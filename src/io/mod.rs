@@ -4,5 +4,6 @@ pub mod csv_run;
 pub mod export;
 pub mod figures;
 pub mod model_file;
+pub mod paths;
 pub mod project;
 pub mod report;

@@ -49,6 +49,10 @@ pub struct ModelFile {
     pub convention: String,
     pub dt_secs: f64,
     pub input: SignalInfo,
+    /// The lowest and highest input of the identification run: outside it the model
+    /// extrapolates (`jetid predict` says so; absent in older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_range: Option<[f64; 2]>,
     pub outputs: Vec<OutputModel>,
 }
 
@@ -59,6 +63,7 @@ impl ModelFile {
             convention: CONVENTION.to_owned(),
             dt_secs,
             input,
+            input_range: None,
             outputs: Vec::new(),
         }
     }
@@ -82,10 +87,10 @@ pub fn structures_from_model(
     let model = read_model(path)?;
     if ((model.dt_secs - dt_secs) / dt_secs).abs() > 0.02 {
         bail!(
-            "{} was identified at a sample time of {:.5} s, but the identification run is sampled every {:.5} s; its clusters do not apply",
+            "{} was identified at a sample time of {} s, but the identification run is sampled every {} s; its clusters do not apply",
             path.display(),
-            model.dt_secs,
-            dt_secs
+            crate::core::numerics::stats::significant(model.dt_secs, 5),
+            crate::core::numerics::stats::significant(dt_secs, 5)
         );
     }
     Ok(model

@@ -116,7 +116,10 @@ impl LoadSpec {
 
 /// A run in a project: a path, or a table with a path and its own load options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a run is a path in quotes (\"runA.csv\") or a table with a path and load options ({ path = \"runA.csv\", window = \"935:2603\" })"
+)]
 pub enum RunEntry {
     Path(String),
     Table {
@@ -126,15 +129,18 @@ pub enum RunEntry {
     },
 }
 
-/// Per-output settings as written in a project file.
 /// The identification run, or several runs joined end to end.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "ident is a run (a path in quotes, \"ident.csv\", or a table { path = \"ident.csv\", window = \"880:2400\" }) or a list of runs joined end to end ([\"runB.csv\", \"runD.csv\"])"
+)]
 pub enum IdentEntry {
     One(RunEntry),
     Many(Vec<RunEntry>),
 }
 
+/// Per-output settings as written in a project file.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OutputSpec {
@@ -259,8 +265,15 @@ fn output_settings(name: &str, spec: &OutputSpec) -> Result<OutputSettings> {
         nk: spec.nk.unwrap_or(s.orders.nk),
     };
     s.orders.check().with_context(|| format!("[output.{name}]"))?;
-    if spec.static_order.is_some() {
-        s.static_order = spec.static_order;
+    if let Some(order) = spec.static_order {
+        use crate::core::identification::static_map::MAX_ORDER;
+        if !(1..=MAX_ORDER).contains(&order) {
+            bail!(
+                "[output.{name}] static_order = {order} is out of range: the static map's order is 1 (a gain) to \
+                 {MAX_ORDER}; leave it out to let the steady points choose (leave-one-out, up to 3)"
+            );
+        }
+        s.static_order = Some(order);
     }
     if let Some(m) = spec.min_segments {
         s.cluster.min_segments = Some(m);

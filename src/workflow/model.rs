@@ -102,6 +102,25 @@ pub fn identify(ident: &Run, junctions: &[usize], plan: &OutputPlan) -> Result<I
     pipeline::identify_output(ident, &plan.output, &plan.settings, &segments, plan.clusters.as_deref())
 }
 
+/// Fewest step segments that make a dependable model. The proposal keeps a candidate only when it
+/// predicts most of the held-out segments better (leave one segment out): with three segments a
+/// useless candidate still wins all three by chance one time in eight, and the diagnosis's
+/// cross-validation needs six (two per fold). Below four the model is built, and the notes say so.
+pub const FEW_SEGMENTS: usize = 4;
+
+/// Why a model identified from `fits` is weak, when it has fewer than [`FEW_SEGMENTS`] segments.
+pub fn few_segments_note(fits: &SegmentFits) -> Option<String> {
+    let n = fits.segments.len();
+    (n < FEW_SEGMENTS).then(|| {
+        format!(
+            "'{}' was identified from {n} step segments only: so few make a weak model (each candidate root is \
+             judged on {n} held-out steps); record at least {FEW_SEGMENTS} steps across the operating range, each \
+             held until the engine settles",
+            fits.output
+        )
+    })
+}
+
 /// The effects of a model as [`add_effects`] leaves them.
 #[derive(Clone, Debug)]
 pub struct Effects {

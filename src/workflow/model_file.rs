@@ -12,10 +12,19 @@ use crate::io::project::Project;
 
 /// An empty model file for models identified on `ident`: its sample time and input.
 pub fn new_model_file(ident: &Run) -> ModelFile {
-    ModelFile::new(
-        ident.dt_secs,
-        SignalInfo { name: ident.input.name.clone(), unit: ident.input.unit.clone() },
-    )
+    let input = SignalInfo { name: ident.input.name.clone(), unit: ident.input.unit.clone() };
+    let mut file = ModelFile::new(ident.dt_secs, input);
+    file.input_range = input_range(&ident.input.values);
+    file
+}
+
+/// The lowest and highest of an identification input (`None` when it has no finite value).
+pub fn input_range(u: &[f64]) -> Option<[f64; 2]> {
+    let (lo, hi) = u
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+    (lo <= hi).then_some([lo, hi])
 }
 
 /// The entry of one output: `current` is the model with its effects (fitted together with the

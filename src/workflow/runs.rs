@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use crate::core::identification::error::PipelineError;
 use crate::core::identification::fits::{segments_for, step_signal};
 use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
+use crate::core::numerics::stats::significant;
 use crate::core::run::{Run, RunError, RunRole, join_runs};
 use crate::io::csv_run::load_run_with_notes;
 use crate::io::project::{Project, RunSource};
@@ -75,8 +76,10 @@ pub fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
     let (run, read) = load_run_with_notes(&source.path, &opts)?;
     if read.resampled || read.merged_repeats > 0 {
         notes.push(format!(
-            "run '{}': time axis resampled onto a uniform {:.4} s grid ({} rows sharing a time stamp merged into their mean)",
-            run.name, run.dt_secs, read.merged_repeats
+            "run '{}': time axis resampled onto a uniform {} s grid ({} rows sharing a time stamp merged into their mean)",
+            run.name,
+            significant(run.dt_secs, 4),
+            read.merged_repeats
         ));
     }
     notes.extend(read.reading_notes().into_iter().map(|n| format!("run '{}': {n}", run.name)));
@@ -129,7 +132,9 @@ pub fn segments(
 /// A scored run whose sample time is not the identification run's.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error(
-    "run '{run}' is sampled every {dt_secs:.5} s but the identification run every {ident_dt_secs:.5} s; models are discrete-time, so resample it first"
+    "run '{run}' is sampled every {} s but the identification run every {} s; models are discrete-time, so resample it first",
+    significant(*dt_secs, 5),
+    significant(*ident_dt_secs, 5)
 )]
 pub struct OffGrid {
     pub run: String,
@@ -166,8 +171,10 @@ pub fn resampled_onto(run: &Run, ident_dt_secs: f64) -> (Run, String) {
 /// What [`resampled_onto`] did to `run`, in words.
 pub fn resample_note(run: &Run, ident_dt_secs: f64) -> String {
     format!(
-        "run '{}': resampled again from {:.5} s onto the identification run's {:.5} s grid",
-        run.name, run.dt_secs, ident_dt_secs
+        "run '{}': resampled again from {} s onto the identification run's {} s grid",
+        run.name,
+        significant(run.dt_secs, 5),
+        significant(ident_dt_secs, 5)
     )
 }
 
@@ -200,7 +207,81 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             Grid::Off(off) => return Err(off.into()),
         }
     }
-    Ok(Runs { ident, ident_junctions, validate, held_out, chirp, steady, notes })
+    let mut runs = Runs { ident, ident_junctions, validate, held_out, chirp, steady, notes };
+    runs.name_apart(project);
+    runs.note_reused_identification(project);
+    runs.note_coverage();
+    Ok(runs)
+}
+
+impl Runs {
+    /// Every run by role with its source, in the order the project lists them.
+    fn with_sources<'a>(&'a mut self, project: &'a Project) -> Vec<(&'a mut Run, &'a RunSource)> {
+        let sources =
+            project.validate.iter().chain(&project.held_out).chain(&project.chirp).chain(&project.steady);
+        let runs =
+            self.validate.iter_mut().chain(&mut self.held_out).chain(&mut self.chirp).chain(&mut self.steady);
+        runs.zip(sources).collect()
+    }
+
+    /// Runs of the same file name from different folders get the folder in their name ("dayA-run"),
+    /// so that the reports, keyed by run name, tell them apart.
+    fn name_apart(&mut self, project: &Project) {
+        let ident_name = self.ident.name.clone();
+        let mut notes = Vec::new();
+        let mut runs = self.with_sources(project);
+        let names: Vec<String> = runs.iter().map(|(run, _)| run.name.clone()).collect();
+        for (i, (run, source)) in runs.iter_mut().enumerate() {
+            let clashes =
+                names.iter().enumerate().any(|(j, n)| j != i && *n == run.name) || run.name == ident_name;
+            let folder =
+                source.path.parent().and_then(|p| p.file_name()).map(|f| f.to_string_lossy().into_owned());
+            if let (true, Some(folder)) = (clashes, folder) {
+                let named = format!("{folder}-{}", run.name);
+                notes.push(format!(
+                    "run '{}' of {} is called '{named}': another run has the same file name",
+                    run.name,
+                    source.path.display()
+                ));
+                run.name = named;
+            }
+        }
+        self.notes.extend(notes);
+    }
+
+    /// A run that is also the identification run says nothing about how the model generalises.
+    fn note_reused_identification(&mut self, project: &Project) {
+        let mut notes = Vec::new();
+        for (run, source) in self.with_sources(project) {
+            if project
+                .ident
+                .iter()
+                .any(|i| crate::io::paths::same_file(&i.path, &source.path) && i.load == source.load)
+            {
+                notes.push(format!(
+                    "run '{}' is also the identification run: its scores measure how the model fits the data it \
+                     was identified on, not how it predicts a run it has not seen",
+                    run.name
+                ));
+            }
+        }
+        self.notes.extend(notes);
+    }
+
+    /// The share of each scored run's input outside the identification run's range, in words.
+    fn note_coverage(&mut self) {
+        let Some(range) = crate::workflow::model_file::input_range(&self.ident.input.values) else { return };
+        let unit = self.ident.input.unit.clone();
+        let notes: Vec<String> = self
+            .scored()
+            .into_iter()
+            .filter_map(|run| {
+                let words = crate::core::run::InputCoverage::of(&run.input.values, range).words(&unit)?;
+                Some(format!("run '{}': {words}", run.name))
+            })
+            .collect();
+        self.notes.extend(notes);
+    }
 }
 
 /// The runs of a project by role, in the order they are listed (for the app's session).

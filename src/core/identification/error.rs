@@ -16,7 +16,13 @@ pub enum PipelineError {
     )]
     NoStepChannel { run: String, channel: String },
     #[error("only {fitted} of {segments} segment models could be fitted (need at least 2): {diagnostics}")]
+    /// (`diagnostics` says why each of the others could not be.)
     TooFewSegmentFits { fitted: usize, segments: usize, diagnostics: String },
+    /// Fewer than two steps: one segment model tells nothing about which roots recur.
+    #[error(
+        "only {found} step segment(s) in '{run}', at least 2 are needed: record at least two steps of the input, each held until the engine settles"
+    )]
+    TooFewSegments { run: String, found: usize },
     #[error(transparent)]
     Cluster(#[from] ClusterError),
     #[error(transparent)]

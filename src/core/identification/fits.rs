@@ -107,6 +107,9 @@ pub fn fit_segments(
             Err(err) => diagnostics.push(format!("segment {}: {err}", seg.label)),
         }
     }
+    if segments.len() < 2 {
+        return Err(PipelineError::TooFewSegments { run: run.name.clone(), found: segments.len() });
+    }
     if models.len() < 2 {
         return Err(PipelineError::TooFewSegmentFits {
             fitted: models.len(),

@@ -49,12 +49,25 @@ impl Default for SegmentSettings {
     }
 }
 
+/// `x` with four significant digits, however small or large it is (`0.0004213`, `4.213e-7`).
+fn significant(x: f64) -> String {
+    crate::core::numerics::stats::significant(x, 4)
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SegmentError {
     #[error(
-        "no steps found in the input (largest change {largest:.4} is below the threshold {threshold:.4}); give segments by hand"
+        "no steps found in the input (largest change {} is below the threshold {}); give segments by hand",
+        significant(*largest),
+        significant(*threshold)
     )]
     NoSteps { largest: f64, threshold: f64 },
+    /// The input holds one value: there is nothing to identify from.
+    #[error(
+        "the input never changes (it holds {} throughout): record steps of the input, each held until the engine settles",
+        significant(*value)
+    )]
+    ConstantInput { value: f64 },
     #[error("the run has {samples} samples, too few to segment")]
     TooShort { samples: usize },
     #[error("segment {label}: bounds {start}..{step_at}..{end} are not ordered inside 0..{samples}")]
@@ -78,6 +91,12 @@ pub fn segment_label(i: usize) -> String {
 /// then a step at the start of the ramp (where the half-hold means first differ by the threshold),
 /// and its segment holds the ramp and the hold after it; ramps closer than a hold merge into one.
 pub fn detect_steps(u: &[f64], dt_secs: f64, settings: &SegmentSettings) -> Result<Vec<usize>, SegmentError> {
+    if let Some(&first) = u.first()
+        && u.len() >= 2
+        && u.iter().all(|v| v.to_bits() == first.to_bits())
+    {
+        return Err(SegmentError::ConstantInput { value: first });
+    }
     let w = ((1.0 / dt_secs).round() as usize).max(3);
     match steps_at_scale(u, w, dt_secs, settings, Landmark::LargestJump) {
         Err(SegmentError::NoSteps { largest, threshold }) => {
@@ -353,10 +372,9 @@ mod tests {
     #[test]
     fn noiseless_flat_input_has_no_steps() {
         let u = vec![5.43; 400];
-        assert!(matches!(
-            detect_steps(&u, 0.113, &SegmentSettings::default()),
-            Err(SegmentError::NoSteps { .. })
-        ));
+        let err = detect_steps(&u, 0.113, &SegmentSettings::default()).unwrap_err();
+        assert!(matches!(err, SegmentError::ConstantInput { .. }), "{err}");
+        assert!(err.to_string().contains("never changes") && err.to_string().contains("5.43"), "{err}");
     }
 
     #[test]

@@ -20,7 +20,7 @@ pub struct StaticMap {
 pub enum StaticMapError {
     #[error("a static map of order {order} needs at least {needed} steady-state points, got {points}")]
     TooFewPoints { order: usize, points: usize, needed: usize },
-    #[error("static map order {order} is out of range 1..=6")]
+    #[error("static map order {order} is out of range 1..={MAX_ORDER}")]
     BadOrder { order: usize },
     #[error("v and y have different lengths ({v} vs {y})")]
     LengthMismatch { v: usize, y: usize },
@@ -74,9 +74,14 @@ impl StaticMap {
     }
 }
 
+/// Highest order of a static map: an identification run holds a handful to a few dozen steady
+/// points, and a polynomial of higher order through them follows their noise between them (and the
+/// scaled Vandermonde system loses digits beyond it). Order 0 would be a constant: no map.
+pub const MAX_ORDER: usize = 6;
+
 /// Least-squares polynomial of `order` through the points (v, y).
 pub fn fit_static_map(v: &[f64], y: &[f64], order: usize) -> Result<StaticMap, StaticMapError> {
-    if !(1..=6).contains(&order) {
+    if !(1..=MAX_ORDER).contains(&order) {
         return Err(StaticMapError::BadOrder { order });
     }
     if v.len() != y.len() {
@@ -105,7 +110,7 @@ pub struct OrderSuggestion {
 
 pub fn suggest_order(v: &[f64], y: &[f64], max_order: usize) -> Result<OrderSuggestion, StaticMapError> {
     let mut loo_rmse = Vec::new();
-    for order in 1..=max_order.min(6) {
+    for order in 1..=max_order.min(MAX_ORDER) {
         // Leave-one-out needs order + 2 points so each fit is determined.
         if v.len() < order + 2 {
             break;

@@ -47,3 +47,20 @@ mod tests {
         assert!((w[0] - 0.0).abs() < 1e-15 && (w[2] - 1.0).abs() < 1e-15 && (w[1] - 0.5).abs() < 1e-12);
     }
 }
+
+/// `x` with `digits` significant digits in plain notation where that stays short (0.001 to
+/// 100 000), in scientific notation otherwise: a sample time of 1e-7 s reads `1.000e-7`, not
+/// `0.00000`.
+pub fn significant(x: f64, digits: usize) -> String {
+    let digits = digits.max(1);
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor();
+    if (-3.0..5.0).contains(&magnitude) {
+        let decimals = (digits as f64 - 1.0 - magnitude).max(0.0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.prec$e}", prec = digits - 1)
+    }
+}

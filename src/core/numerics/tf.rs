@@ -4,6 +4,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::numerics::poly;
 
+/// How close to the unit circle a pole may come, `1 − |z|`: a pole within it has a time constant
+/// over `dt / 1e-6` (a day at 0.1 s), no spool's or sensor's, so it is an integrator in all but
+/// rounding, and a model holding one drifts without bound (refused by `predict` and `export`).
+pub const STABILITY_MARGIN: f64 = 1e-6;
+
 /// `G(z) = (b0 + b1 z⁻¹ + … + bm z⁻ᵐ) / (1 + a1 z⁻¹ + … + an z⁻ⁿ)`.
 ///
 /// Index k of `num_zinv` / `den_zinv` multiplies z⁻ᵏ, and `den_zinv[0] == 1` (enforced by [`DiscreteTf::new`]).
@@ -76,6 +81,13 @@ impl DiscreteTf {
     /// numerator is exactly as long as the denominator, plus one coefficient per sample of delay.
     pub fn input_delay(&self) -> usize {
         self.num_zinv.len().saturating_sub(self.den_zinv.len())
+    }
+
+    /// The first pole on or outside the unit circle, or within [`STABILITY_MARGIN`] of it (a pole at
+    /// `1 − 1e-16` is a rounded 1: the block integrates and its simulation drifts without bound).
+    pub fn unstable_pole(&self) -> Result<Option<Complex64>, poly::PolyError> {
+        let poles = self.poles()?;
+        Ok(poles.into_iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0 - STABILITY_MARGIN))
     }
 
     /// Poles (roots of the denominator read in powers of z), sorted.

@@ -17,6 +17,12 @@ pub enum RunFileError {
     #[error("{}: empty file: no header row", file.display())]
     Empty { file: PathBuf },
 
+    #[error("{}: is a folder, not a run file; give the CSV file in it", file.display())]
+    IsFolder { file: PathBuf },
+
+    #[error("{}: not a text CSV file: it is {what}", file.display())]
+    NotText { file: PathBuf, what: &'static str },
+
     #[error("{}: line {line}: malformed CSV: {message}", file.display())]
     Malformed { file: PathBuf, line: u64, message: String },
 

@@ -79,6 +79,15 @@ impl Source<'_> {
     }
 }
 
+/// The text from the first line that is not a `#` comment on (the header line first).
+fn first_data_line(bytes: &[u8]) -> &[u8] {
+    let mut rest = bytes;
+    while rest.first() == Some(&b'#') {
+        rest = rest.iter().position(|&b| b == b'\n').map_or(&[][..], |i| &rest[i + 1..]);
+    }
+    rest
+}
+
 /// The field separator of a file: `;` or a tab when the header line has one and no comma (a
 /// spreadsheet's export with decimal commas), else a comma.
 fn separator(bytes: &[u8]) -> u8 {
@@ -178,14 +187,40 @@ impl LineCounter<'_> {
     }
 }
 
-pub(super) fn read_table<'a>(file: &Path, source: Source<'a>) -> Result<Table<'a>, RunFileError> {
-    let sep = separator(&source.read_at(0, RECORD_READ_BACK));
-    let mut reader = csv::ReaderBuilder::new()
+/// What a file that is not text is, from its first bytes: gzip-compressed, or binary (a NUL byte,
+/// which no text encoding a logger writes has).
+fn not_text(start: &[u8]) -> Option<&'static str> {
+    if start.starts_with(&[0x1f, 0x8b]) {
+        Some("gzip-compressed: decompress it first (gunzip)")
+    } else if start.starts_with(b"PK\x03\x04") {
+        Some("a zip archive (a spreadsheet's .xlsx, say): export the sheet as CSV")
+    } else if start.contains(&0) {
+        Some("binary (it holds NUL bytes)")
+    } else {
+        None
+    }
+}
+
+/// The csv reader every read of a run file uses: no header handling, ragged rows reported by the
+/// caller, cells trimmed, lines starting with `#` skipped as comments (loggers write their settings
+/// there).
+fn csv_reader<R: std::io::Read>(sep: u8, reader: R) -> csv::Reader<R> {
+    csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .trim(csv::Trim::All)
+        .comment(Some(b'#'))
         .delimiter(sep)
-        .from_reader(source.reader(file)?);
+        .from_reader(reader)
+}
+
+pub(super) fn read_table<'a>(file: &Path, source: Source<'a>) -> Result<Table<'a>, RunFileError> {
+    let start = source.read_at(0, RECORD_READ_BACK);
+    if let Some(what) = not_text(&start) {
+        return Err(RunFileError::NotText { file: file.to_owned(), what });
+    }
+    let sep = separator(first_data_line(&start));
+    let mut reader = csv_reader(sep, source.reader(file)?);
     let malformed = |err: csv::Error| RunFileError::Malformed {
         file: file.to_owned(),
         line: err.position().map_or(0, csv::Position::line),
@@ -281,12 +316,7 @@ impl Table<'_> {
     pub(super) fn text(&self, row: usize, col: usize) -> String {
         let Some(&start) = self.starts.get(row) else { return String::new() };
         let record_bytes = self.source.read_at(start, RECORD_READ_BACK);
-        let mut reader = csv::ReaderBuilder::new()
-            .has_headers(false)
-            .flexible(true)
-            .trim(csv::Trim::All)
-            .delimiter(self.sep)
-            .from_reader(&record_bytes[..]);
+        let mut reader = csv_reader(self.sep, &record_bytes[..]);
         let mut record = csv::ByteRecord::new();
         match reader.read_byte_record(&mut record) {
             Ok(true) => shown(record.get(col).unwrap_or_default()),

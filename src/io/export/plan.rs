@@ -285,7 +285,8 @@ fn bad_linear(out: &OutputModel, reason: String) -> ExportError {
 
 /// A pole on or outside the unit circle (or not a number) makes the model unstable: refused.
 fn check_stable(out: &OutputModel, poles: &[Complex64]) -> Result<(), ExportError> {
-    match poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0) {
+    let margin = crate::core::numerics::tf::STABILITY_MARGIN;
+    match poles.iter().find(|p| p.norm().is_nan() || p.norm() >= 1.0 - margin) {
         Some(p) => Err(bad_linear(
             out,
             format!(

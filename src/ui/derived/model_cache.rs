@@ -102,6 +102,9 @@ impl IdentCache {
                     .as_deref()
                     .map(|given| detect_or_check(&run, &junctions, Some(given), steps_from.as_deref()));
                 cache.update(&run, own.as_ref().unwrap_or(&segments), setup, scored);
+                if let Some(note) = cache.fits.as_ref().ok().and_then(|fits| model::few_segments_note(fits)) {
+                    cache.notes.push(note);
+                }
                 cache.empirical_bode.refresh(session, &run, &channel.name);
                 cache
             })

@@ -232,14 +232,14 @@ fn batch_errors_name_what_is_wrong() {
     );
     expect_error(&["--batch", proj.to_str().unwrap(), "--map", "banana", "--out", out], &["banana"]);
     expect_error(&["--batch", "--bogus-flag"], &["--bogus-flag"]);
-    // A flat input has no steps to identify from.
+    // A flat input has no steps to identify from, and the message says so in those words.
     let flat: String = std::iter::once("time_s,fuel_flow_gph,shaft_speed_rpm\n".to_owned())
         .chain((0..400).map(|k| format!("{},{},{}\n", k as f64 * 0.113, 5.43, 73850.0 + (k % 7) as f64)))
         .collect();
     let flat = write(dir.path(), "flat.csv", &flat);
-    expect_error(&["--batch", "--ident", flat.to_str().unwrap(), "--out", out], &["no steps"]);
+    expect_error(&["--batch", "--ident", flat.to_str().unwrap(), "--out", out], &["never changes", "5.430"]);
     let said = stderr(&jetid(&["--batch", "--ident", flat.to_str().unwrap(), "--out", out]));
-    assert_eq!(said.matches("no steps").count(), 1, "the cause is said once: {said}");
+    assert_eq!(said.matches("never changes").count(), 1, "the cause is said once: {said}");
     assert!(!Path::new(out).join("report.json").exists(), "no report may be left behind by a failed run");
 }
 
@@ -555,9 +555,10 @@ fn predict_refuses_models_it_cannot_trust() {
     let copy = dir.path().join("run.csv");
     std::fs::copy(&val, &copy).unwrap();
     let before = std::fs::read(&copy).unwrap();
-    expect_error(&predict_args(&good, &copy, &copy, &[]), &["--out", "--input", "overwrite"]);
+    expect_error(&predict_args(&good, &copy, &copy, &[]), &["--out", "--input", "destroy"]);
     let relative_twin = dir.path().join(".").join("run.csv");
-    expect_error(&predict_args(&good, &copy, &relative_twin, &[]), &["overwrite"]);
+    expect_error(&predict_args(&good, &copy, &relative_twin, &[]), &["destroy"]);
+    expect_error(&predict_args(&good, &copy, &good, &[]), &["--out", "--model", "destroy"]);
     assert_eq!(std::fs::read(&copy).unwrap(), before, "the run is untouched");
 }
 

@@ -47,7 +47,8 @@ pub fn summary(run: &Run, notes: &LoadNotes) -> String {
         crate::core::numerics::stats::significant(run.dt_secs, 6),
         crate::core::numerics::stats::significant(1.0 / run.dt_secs, 5)
     );
-    let _ = writeln!(out, "duration  {:.3} s (t = {t0} s to {t_end} s)", t_end - t0);
+    let sig = |x: f64| crate::core::numerics::stats::significant(x, 4);
+    let _ = writeln!(out, "duration  {} s (t = {} s to {} s)", sig(t_end - t0), sig(*t0), sig(*t_end));
     let time_source = notes.time_column.as_ref().map_or("sample time".to_owned(), |c| format!("column {c}"));
     let merged = match notes.merged_repeats {
         0 => String::new(),

@@ -82,7 +82,7 @@ fn largest_parameter(out: &crate::io::model_file::OutputModel) -> (String, f64) 
         match value {
             serde_json::Value::Number(n) => {
                 let v = n.as_f64().unwrap_or(f64::INFINITY);
-                if !(v.abs() <= best.1.abs()) {
+                if v.abs().total_cmp(&best.1.abs()).is_gt() {
                     *best = (path, v);
                 }
             }
@@ -143,9 +143,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     }
     if ((run.dt_secs / model.dt_secs) - 1.0).abs() > 0.02 {
         bail!(
-            "{} is sampled every {} s but the model every {} s; the model is discrete-time",
+            "{} is sampled every {} s but the model {} every {} s; the model is discrete-time: resample the run \
+             (--resample puts an irregular log on its median step) or identify a model at its sample time",
             args.input.display(),
             significant(run.dt_secs, 5),
+            args.model.display(),
             significant(model.dt_secs, 5)
         );
     }

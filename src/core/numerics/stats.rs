@@ -32,22 +32,6 @@ pub fn hann(len: usize) -> Vec<f64> {
     (0..len).map(|k| 0.5 - 0.5 * (2.0 * PI * k as f64 / len as f64).cos()).collect()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn helpers_on_known_values() {
-        assert!(mean(&[]).abs() <= f64::MIN_POSITIVE);
-        assert!((mean(&[1.0, 2.0, 6.0]) - 3.0).abs() < 1e-15);
-        assert!((sum_of_squares(&[3.0, -4.0]) - 25.0).abs() < 1e-12);
-        assert!((quantile(&[3.0, f64::NAN, 1.0, 2.0], 0.5) - 2.0).abs() < 1e-15);
-        assert!((quantile(&[3.0, 1.0, 2.0], 1.0) - 3.0).abs() < 1e-15 && quantile(&[], 0.5).abs() < 1e-15);
-        let w = hann(4);
-        assert!((w[0] - 0.0).abs() < 1e-15 && (w[2] - 1.0).abs() < 1e-15 && (w[1] - 0.5).abs() < 1e-12);
-    }
-}
-
 /// `x` with `digits` significant digits in plain notation where that stays short (0.001 to
 /// 100 000), in scientific notation otherwise: a sample time of 1e-7 s reads `1.000e-7`, not
 /// `0.00000`.
@@ -62,5 +46,30 @@ pub fn significant(x: f64, digits: usize) -> String {
         format!("{x:.decimals$}")
     } else {
         format!("{x:.prec$e}", prec = digits - 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn helpers_on_known_values() {
+        assert!(mean(&[]).abs() <= f64::MIN_POSITIVE);
+        assert!((mean(&[1.0, 2.0, 6.0]) - 3.0).abs() < 1e-15);
+        assert!((sum_of_squares(&[3.0, -4.0]) - 25.0).abs() < 1e-12);
+        assert!((quantile(&[3.0, f64::NAN, 1.0, 2.0], 0.5) - 2.0).abs() < 1e-15);
+        assert!((quantile(&[3.0, 1.0, 2.0], 1.0) - 3.0).abs() < 1e-15 && quantile(&[], 0.5).abs() < 1e-15);
+        let w = hann(4);
+        assert!((w[0] - 0.0).abs() < 1e-15 && (w[2] - 1.0).abs() < 1e-15 && (w[1] - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn significant_digits_read_alike_at_every_scale() {
+        assert_eq!(super::significant(0.112994, 5), "0.11299");
+        assert_eq!(super::significant(2.9, 4), "2.900");
+        assert_eq!(super::significant(1e-7, 6), "1.00000e-7");
+        assert_eq!(super::significant(123456.0, 4), "1.235e5");
+        assert_eq!(super::significant(0.0, 4), "0");
     }
 }

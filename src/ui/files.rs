@@ -135,7 +135,8 @@ impl App {
     /// Replace the session by the project's, unless none of its runs can be read.
     fn open_project(&mut self, path: &Path) -> Result<()> {
         let project = load_project(path).context("opening a project (the session was kept)")?;
-        let (mut session, failures) = project_io::session_from_project(&project);
+        let (mut session, failures) = project_io::session_from_project(&project)
+            .with_context(|| format!("opening {} (the session was kept)", path.display()))?;
         if session.runs.is_empty() {
             let why = failures.iter().map(|f| f.message.as_str()).collect::<Vec<_>>().join("; ");
             return Err(anyhow!("none of the project's runs could be read: {why}")

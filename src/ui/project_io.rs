@@ -14,6 +14,7 @@ use crate::io::project::{IdentEntry, LoadSpec, OutputSpec, Project, ProjectFile,
 use crate::ui::state::session::{LoadFailure, Session, SessionRun};
 use crate::ui::state::setup::{ModelSetup, OutputSetup};
 use crate::workflow::OutputPlan;
+use crate::workflow::model_file::take_saved_clusters;
 use crate::workflow::runs::sources_by_role;
 
 /// The project file text for `session`, to be written at `project_path`; the notes say what a
@@ -156,8 +157,9 @@ fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
 
 /// A session from a project: its runs read with their roles (those that fail are returned as
 /// failures) and its segments, settings, clusters and effects (`add_effects` and `auto_effects`
-/// for every output the batch models).
-pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
+/// for every output the batch models); a saved model's clusters (`clusters_from`) are taken as the
+/// batch takes them, checked against the identification run's sample time.
+pub fn session_from_project(project: &Project) -> Result<(Session, Vec<LoadFailure>)> {
     let mut session = Session::default();
     let mut failures = Vec::new();
     for (source, role) in sources_by_role(project) {
@@ -166,41 +168,51 @@ pub fn session_from_project(project: &Project) -> (Session, Vec<LoadFailure>) {
             Err(failure) => failures.push(*failure),
         }
     }
-    session.setup.segments = project.segments.values().next().cloned();
-    session.setup.modelled = project.outputs.clone();
-    session.setup.steps_from = project.steps_from.clone();
+    let outputs: Vec<String> = session
+        .ident_run()
+        .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
+        .unwrap_or_default();
+    let mut project = project.clone();
+    if let Some((_, ident)) = session.ident_run() {
+        take_saved_clusters(&mut project, ident.run.dt_secs, &outputs)?;
+    }
+    session.setup = setup_from_project(&project, &outputs);
+    Ok((session, failures))
+}
+
+/// The setup a project describes; `ident_outputs` are the outputs of its identification run.
+fn setup_from_project(project: &Project, ident_outputs: &[String]) -> ModelSetup {
+    let mut setup = ModelSetup {
+        segments: project.segments.values().next().cloned(),
+        modelled: project.outputs.clone(),
+        steps_from: project.steps_from.clone(),
+        ..ModelSetup::default()
+    };
     let sections = project.settings.keys().chain(project.clusters.keys()).chain(project.segments.keys());
     let names: BTreeSet<&String> = sections.collect();
     for name in names {
         let plan = OutputPlan::of_project(project, name);
         // Segments of its own only when they are not the ones the Data view shows.
-        let segments = plan.segments.filter(|s| Some(s) != session.setup.segments.as_ref());
-        let setup = OutputSetup {
+        let segments = plan.segments.filter(|s| Some(s) != setup.segments.as_ref());
+        let output = OutputSetup {
             settings: plan.settings,
             clusters: plan.clusters,
             segments,
             ..OutputSetup::for_output(name)
         };
-        session.setup.outputs.insert(name.clone(), setup);
+        setup.outputs.insert(name.clone(), output);
     }
     // The effects apply to every output the batch models: the project's list, else every output of
     // the identification run.
     if !project.add_effects.is_empty() || project.auto_effects > 0 {
-        let outputs: Vec<String> = if project.outputs.is_empty() {
-            session
-                .ident_run()
-                .map(|(_, r)| r.run.outputs.iter().map(|c| c.name.clone()).collect())
-                .unwrap_or_default()
-        } else {
-            project.outputs.clone()
-        };
+        let outputs = if project.outputs.is_empty() { ident_outputs } else { &project.outputs[..] };
         for output in outputs {
-            let setup = session.setup.output_mut(&output);
-            setup.effects = project.add_effects.clone();
-            setup.auto_effects = project.auto_effects;
+            let output = setup.output_mut(output);
+            output.effects = project.add_effects.clone();
+            output.auto_effects = project.auto_effects;
         }
     }
-    (session, failures)
+    setup
 }
 
 fn load_source(source: &RunSource, role: RunRole) -> Result<SessionRun, Box<LoadFailure>> {

@@ -86,12 +86,16 @@ fn bode_curves(identified: &Identified) -> Vec<BodeCurve> {
             name: format!("segment {}", s.label),
             points: m.bode_response(&omegas),
             emphasis: false,
+            colour: None,
+            dashed: false,
         })
         .collect();
     curves.push(BodeCurve {
         name: "reduced model".into(),
         points: identified.model.wiener.linear.tf.bode_response(&omegas),
         emphasis: true,
+        colour: Some(figures::palette::REDUCED),
+        dashed: false,
     });
     curves
 }
@@ -125,6 +129,8 @@ fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
                 .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
                 .collect(),
             emphasis: kind == ModelKind::GrayBox,
+            colour: Some(figures::palette::model(kind)),
+            dashed: kind == ModelKind::Linear || kind.is_reference(),
         })
         .collect();
     let measured = EmpiricalBode {

@@ -142,10 +142,12 @@ fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
     Some(ChirpCurves { run: freq.run.clone(), curves, measured })
 }
 
-/// Draw the figures of one output into `dir`; returns the file names written and notes on failures.
+/// Draw the figures of one output (recorded in `unit`) into `dir`; returns the file names written
+/// and notes on failures.
 pub fn output_figures(
     dir: &Path,
     output: &str,
+    unit: &str,
     curves: &OutputCurves<'_>,
     boxes: &BTreeMap<ModelKind, BTreeMap<String, BoxStats>>,
 ) -> (Vec<String>, Vec<String>) {
@@ -173,7 +175,7 @@ pub fn output_figures(
         &model.steady_points,
         &curves.static_map,
         v_label,
-        output,
+        &figures::with_unit(output, unit),
     );
     keep(name, drawn);
     for traces in &curves.traces {

@@ -21,6 +21,7 @@ pub fn new_report(project: &Project, runs: &Runs, diagnostics: Vec<String>) -> R
         format_version: REPORT_FORMAT_VERSION,
         project: project.name.clone(),
         input: runs.ident.input.name.clone(),
+        input_unit: runs.ident.input.unit.clone(),
         runs: runs.roles(),
         outputs: BTreeMap::new(),
         noise_fit: None,

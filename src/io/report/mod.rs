@@ -123,6 +123,9 @@ pub struct Report {
     pub format_version: u32,
     pub project: String,
     pub input: String,
+    /// The input's unit ("" when unknown): the operating points' u* and dy/du are in it.
+    #[serde(default)]
+    pub input_unit: String,
     pub runs: BTreeMap<String, String>,
     pub outputs: BTreeMap<String, OutputReport>,
     pub noise_fit: Option<serde_json::Value>,
@@ -374,8 +377,9 @@ fn residuals_section(out: &mut String, residuals: &[ResidualReport], unit: &str)
     }
 }
 
-/// Operating points and the continuous-time equivalent, for a controller designer.
-fn control_section(out: &mut String, o: &OutputReport) {
+/// Operating points and the continuous-time equivalent, for a controller designer; u* is in
+/// `input_unit`, y* in the output's and dy/du in the output's per the input's.
+fn control_section(out: &mut String, o: &OutputReport, input_unit: &str) {
     if o.operating_points.is_empty() && o.continuous.is_none() {
         return;
     }
@@ -394,9 +398,11 @@ fn control_section(out: &mut String, o: &OutputReport) {
         out,
         "Local model at each point: K·G(z)/G(1), K the local gain dy/du, with the effects linearised there. \
          Poles as τ (real) or ωn, ζ (pairs), from their zero-order-hold equivalents.\n\n\
-         | point | u* | y*{unit} | dy/du | poles | −3 dB bandwidth (rad/s) | rise 10–90 % (s) | settling 2 % (s) | overshoot % |\n\
+         | point | u*{u_unit} | y*{unit} | dy/du [{gain_unit}] | poles | −3 dB bandwidth (rad/s) | rise 10–90 % (s) | settling 2 % (s) | overshoot % |\n\
          |---|---|---|---|---|---|---|---|---|",
-        unit = crate::core::run::bracketed_unit(&o.unit)
+        u_unit = crate::core::run::bracketed_unit(input_unit),
+        unit = crate::core::run::bracketed_unit(&o.unit),
+        gain_unit = gain_unit(&o.unit, input_unit),
     );
     let opt = |x: Option<f64>, digits: usize| x.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
     for p in &o.operating_points {
@@ -417,6 +423,17 @@ fn control_section(out: &mut String, o: &OutputReport) {
             opt(p.step.settling_s, 3),
             p.step.overshoot_pct
         );
+    }
+}
+
+/// The unit of a local gain dy/du: the output's per the input's ("rpm/V", "rpm/(gal/h)"); "per input
+/// unit" when the input's unit is unknown.
+pub fn gain_unit(output_unit: &str, input_unit: &str) -> String {
+    let output_unit = if output_unit.is_empty() { "1" } else { output_unit };
+    match input_unit {
+        "" => format!("{output_unit} per input unit"),
+        u if u.contains(['/', '·', ' ', '*']) => format!("{output_unit}/({u})"),
+        u => format!("{output_unit}/{u}"),
     }
 }
 
@@ -497,7 +514,7 @@ pub fn render_markdown(report: &Report) -> String {
                 );
             }
         }
-        control_section(&mut out, o);
+        control_section(&mut out, o, &report.input_unit);
         residuals_section(&mut out, &o.residuals, &o.unit);
     }
     table1_section(&mut out, report);

@@ -42,6 +42,10 @@ pub struct DiagnosisEntry {
     pub significance: String,
 }
 
+fn band_applies() -> bool {
+    true
+}
+
 fn physics_kind() -> String {
     "physics".to_owned()
 }
@@ -102,6 +106,12 @@ pub struct ResidualReport {
     pub noise_sigma_source: String,
     /// Share of samples outside the ±2σ band, % (about 4.6 % for a model as good as the sensor).
     pub outside_band_pct: f64,
+    /// Whether the band is this residual's noise: false when σ, estimated from the run, is not (the
+    /// residual's spectrum near Nyquist lies far above white noise of that σ, or its RMS is more
+    /// than a hundred times σ); the share outside then says nothing about the model (see the
+    /// summary and `core::residuals::BandFit`).
+    #[serde(default = "band_applies")]
+    pub noise_band_applies: bool,
     pub regimes: Vec<crate::core::residuals::RegimeRow>,
     /// Residual autocorrelation lags beyond the 99 % bound, s.
     pub acf_lags_beyond_99_secs: Vec<f64>,
@@ -341,8 +351,12 @@ fn residuals_section(out: &mut String, residuals: &[ResidualReport], unit: &str)
     }
     let _ = writeln!(out, "\n### Where it fails (residual = measured − final model)");
     for r in residuals {
-        let _ =
-            writeln!(out, "\n**{}**: {} (Noise σ from the {}.)\n", r.run, r.summary, r.noise_sigma_source);
+        let applies = if r.noise_band_applies { "" } else { "; the band does not apply here" };
+        let _ = writeln!(
+            out,
+            "\n**{}**: {} (Noise σ from the {}{applies}.)\n",
+            r.run, r.summary, r.noise_sigma_source
+        );
         let _ = writeln!(
             out,
             "| regime | share of samples % | RMSE {unit} | RMSPE % | bias {unit} | share of squared error % |\n|---|---|---|---|---|---|"

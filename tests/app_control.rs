@@ -25,6 +25,17 @@ fn the_control_view_schedules_the_model_and_follows_it() {
         points.iter().any(|p| matches!(&p.source, PointSource::SteadyRun(_))),
         "the sample's steady run gives a plateau point"
     );
+    // The table shows every row, the steady run's plateau (the last) inside the window, with the
+    // units of u* and of the local gain, the output's per the input's.
+    let plateau = harness.get_by_label("steady: steady").rect();
+    assert!(plateau.bottom() < 900.0 - 20.0, "the plateau's row lies below the fold: {plateau:?}");
+    harness.get_by_label("u* [gal/h]");
+    harness.get_by_label("dy/du [N/(gal/h)]");
+    assert_eq!(
+        jetid::ui::views::control::gain_legend(2.5, &jetid::io::report::gain_unit("rpm", "gal/h")),
+        "local gain dy/du (largest 2.5000e0 rpm/(gal/h))"
+    );
+    assert!(jetid::io::report::gain_unit("rpm", "").ends_with("per input unit"));
     // Thrust grows faster than linearly with fuel flow: the local gain rises along the range.
     assert!(points[8].gain > points[0].gain, "{} vs {}", points[8].gain, points[0].gain);
     harness.get_by_label("grid 5").click();

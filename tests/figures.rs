@@ -104,6 +104,8 @@ fn bode_figure() {
                 name: format!("segment {}", j + 1),
                 points: tf.bode_response(&omegas),
                 emphasis: false,
+                colour: None,
+                dashed: false,
             }
         })
         .collect();
@@ -112,12 +114,16 @@ fn bode_figure() {
         name: "reduced (gray box)".into(),
         points: reduced.bode_response(&omegas),
         emphasis: true,
+        colour: None,
+        dashed: false,
     });
     let linear = lowpass(0.95, C64::new(0.7, 0.2), 1.0);
     curves.push(BodeCurve {
         name: "linear baseline".into(),
         points: linear.bode_response(&omegas),
         emphasis: true,
+        colour: None,
+        dashed: false,
     });
     let emp_omegas = log_space(0.1, 100.0, 40);
     let truth = reduced.bode_response(&emp_omegas);

@@ -11,8 +11,8 @@ use jetid::core::identification::segment::SegmentSettings;
 use jetid::core::identification::settings::OutputSettings;
 use jetid::core::identification::wiener::WienerModel;
 use jetid::core::residuals::{
-    ExclusionReason, OperatingBands, Regime, ResidualAnalysis, ResidualError, ResidualSettings, SigmaSource,
-    analyse_residuals, summary,
+    BandFit, ExclusionReason, OperatingBands, Regime, ResidualAnalysis, ResidualError, ResidualSettings,
+    SigmaSource, analyse_residuals, summary,
 };
 use jetid::core::run::{Channel, Run};
 use jetid::io::csv_run::{LoadOptions, load_run};
@@ -92,6 +92,46 @@ fn noise_sigma_is_estimated_when_not_supplied() {
     let a = analyse_residuals(&sim.measured, SPEED, truth, None, &ResidualSettings::default()).unwrap();
     assert_eq!(a.band.sigma_source, SigmaSource::EstimatedFromSecondDifferences);
     assert!((a.band.sigma / SPEED_SIGMA_RPM - 1.0).abs() < 0.15, "{:?}", a.band);
+}
+
+#[test]
+fn an_estimated_noise_band_applies_to_white_sensor_noise_and_not_to_telemetry() {
+    let sim = validation_run(41, &[]);
+    let truth = &sim.truth.output(SPEED).unwrap().values;
+    // White sensor noise, and a model far off (a 5 % gain error): nearly every sample lies outside
+    // the band, and the band is right, σ̂ being the noise.
+    let off: Vec<f64> = truth.iter().map(|y| 0.95 * y).collect();
+    let a = analyse_residuals(&sim.measured, SPEED, &off, None, &ResidualSettings::default()).unwrap();
+    assert!(a.band.outside_fraction > 0.5, "{:?}", a.band);
+    assert!(a.band.applies(), "{:?}", a.band.fit);
+    assert!(
+        matches!(a.band.fit, BandFit::Consistent { excess_db } if excess_db.abs() < 3.0),
+        "{:?}",
+        a.band.fit
+    );
+    assert!(summary(&a).contains("outside the ±2σ noise band"), "{}", summary(&a));
+    // Telemetry like the JetCat ECU's: the speed in counts of 10 rpm, mostly a count of jitter and
+    // now and then a jump. The robust σ̂ of the second differences sees the counts, a few rpm, while
+    // the residual's fastest part carries the jumps: σ̂ is not its noise.
+    let mut telemetry = sim.measured.clone();
+    let channel = telemetry.outputs.iter_mut().find(|c| c.name == SPEED).unwrap();
+    let (jitter, jumps) = (gaussian(truth.len(), 3.0, 7), gaussian(truth.len(), 150.0, 8));
+    channel.values = truth
+        .iter()
+        .enumerate()
+        .map(|(k, y)| {
+            let noise = if k % 10 == 3 { jumps[k] } else { jitter[k] };
+            ((y + noise) / 10.0).round() * 10.0
+        })
+        .collect();
+    let a = analyse_residuals(&telemetry, SPEED, truth, None, &ResidualSettings::default()).unwrap();
+    assert!(!a.band.applies(), "{:?} σ = {}", a.band.fit, a.band.sigma);
+    let words = summary(&a);
+    assert!(words.contains("does not apply") && !words.contains("lie outside"), "{words}");
+    // A σ measured on a steady run is the sensor's: its band always applies.
+    let a = analyse_residuals(&telemetry, SPEED, truth, Some(SPEED_SIGMA_RPM), &ResidualSettings::default())
+        .unwrap();
+    assert_eq!(a.band.fit, BandFit::Measured);
 }
 
 #[test]

@@ -86,12 +86,16 @@ fn bode_curves(identified: &Identified) -> Vec<BodeCurve> {
             name: format!("segment {}", s.label),
             points: m.bode_response(&omegas),
             emphasis: false,
+            colour: None,
+            dashed: false,
         })
         .collect();
     curves.push(BodeCurve {
         name: "reduced model".into(),
         points: identified.model.wiener.linear.tf.bode_response(&omegas),
         emphasis: true,
+        colour: Some(figures::palette::REDUCED),
+        dashed: false,
     });
     curves
 }
@@ -125,6 +129,8 @@ fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
                 .map(|((w, m), p)| BodePoint { omega_rad_s: *w, mag_db: *m, phase_deg: *p })
                 .collect(),
             emphasis: kind == ModelKind::GrayBox,
+            colour: Some(figures::palette::model(kind)),
+            dashed: kind == ModelKind::Linear || kind.is_reference(),
         })
         .collect();
     let measured = EmpiricalBode {
@@ -136,10 +142,12 @@ fn chirp_curves(freq: &FrequencyComparison) -> Option<ChirpCurves> {
     Some(ChirpCurves { run: freq.run.clone(), curves, measured })
 }
 
-/// Draw the figures of one output into `dir`; returns the file names written and notes on failures.
+/// Draw the figures of one output (recorded in `unit`) into `dir`; returns the file names written
+/// and notes on failures.
 pub fn output_figures(
     dir: &Path,
     output: &str,
+    unit: &str,
     curves: &OutputCurves<'_>,
     boxes: &BTreeMap<ModelKind, BTreeMap<String, BoxStats>>,
 ) -> (Vec<String>, Vec<String>) {
@@ -167,7 +175,7 @@ pub fn output_figures(
         &model.steady_points,
         &curves.static_map,
         v_label,
-        output,
+        &figures::with_unit(output, unit),
     );
     keep(name, drawn);
     for traces in &curves.traces {

@@ -251,7 +251,8 @@ impl Batch<'_> {
         let (figs, figure_notes) = timings.time("figures", || {
             let curves =
                 figures::OutputCurves::of(identified, models, &runs.compared(), studies.frequency.as_ref());
-            figures::output_figures(self.out_dir, &output, &curves, &part.report.error_boxes)
+            let report = &part.report;
+            figures::output_figures(self.out_dir, &output, &report.unit, &curves, &report.error_boxes)
         });
         part.figures.extend(figs);
         part.notes.extend(figure_notes);

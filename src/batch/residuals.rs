@@ -70,6 +70,7 @@ pub fn residual_reports(
                 }
             },
             outside_band_pct: 100.0 * analysis.band.outside_fraction,
+            noise_band_applies: analysis.band.applies(),
             regimes: analysis.regimes.rows.clone(),
             acf_lags_beyond_99_secs: analysis
                 .autocorrelation

@@ -284,6 +284,18 @@ pub fn bracketed_unit(unit: &str) -> String {
     if unit.is_empty() { String::new() } else { format!(" [{unit}]") }
 }
 
+/// `name [unit]`, as axes and buttons label a channel; the name alone when the unit is unknown or
+/// when the name is the unit (a column `rpm` in rpm reads "rpm", not "rpm [rpm]").
+pub fn name_with_unit(name: &str, unit: &str) -> String {
+    if name_is_unit(name, unit) { name.to_owned() } else { format!("{name}{}", bracketed_unit(unit)) }
+}
+
+/// Whether a label would only repeat the name by giving the unit: the unit is unknown, or the
+/// channel is named for its unit alone.
+pub fn name_is_unit(name: &str, unit: &str) -> bool {
+    unit.is_empty() || name.trim().eq_ignore_ascii_case(unit.trim())
+}
+
 /// The unit implied by a canonical column-name suffix; empty when unknown.
 pub fn unit_from_column_name(name: &str) -> &'static str {
     let lower = name.to_ascii_lowercase();
@@ -321,6 +333,15 @@ mod tests {
             outputs: vec![Channel::new("rpm", (0..n).map(|k| k as f64).collect())],
             aux: vec![Channel::new("egt_c", vec![500.0; n])],
         }
+    }
+
+    #[test]
+    fn a_channel_named_for_its_unit_is_labelled_once() {
+        assert_eq!(name_with_unit("rpm", "rpm"), "rpm");
+        assert_eq!(name_with_unit("RPM", "rpm"), "RPM");
+        assert_eq!(name_with_unit("pump_V", "V"), "pump_V [V]");
+        assert_eq!(name_with_unit("shaft_speed_rpm", "rpm"), "shaft_speed_rpm [rpm]");
+        assert_eq!(name_with_unit("PR", ""), "PR");
     }
 
     #[test]

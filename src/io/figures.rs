@@ -258,9 +258,9 @@ pub(crate) fn tick_label(v: f64) -> String {
 }
 
 /// An axis label with its unit as the figures write it, "thrust_n (N)" like "time (s)"; the name
-/// alone when the unit is unknown.
+/// alone when the unit is unknown or is the name ("rpm", not "rpm (rpm)").
 pub fn with_unit(name: &str, unit: &str) -> String {
-    if unit.is_empty() { name.to_owned() } else { format!("{name} ({unit})") }
+    if crate::core::run::name_is_unit(name, unit) { name.to_owned() } else { format!("{name} ({unit})") }
 }
 
 /// `v` with `digits` significant digits, for numbers quoted in legends.

@@ -35,7 +35,7 @@ pub use correlation::{
 };
 pub use dropouts::InputDropouts;
 pub use regimes::{
-    Motion, NoiseBand, OperatingBand, OperatingBands, Regime, RegimeRow, RegimeTable, SampleRegimes,
+    BandFit, Motion, NoiseBand, OperatingBand, OperatingBands, Regime, RegimeRow, RegimeTable, SampleRegimes,
     SigmaSource,
 };
 pub use spectrum::ResidualSpectrum;
@@ -381,6 +381,7 @@ pub fn analyse_residuals(
         dt_secs,
     );
     let spectrum = spectrum::welch(&residual, settings.welch_segment_len, dt_secs);
+    let band = band.judged(&residual, &spectrum.freq_hz, &spectrum.psd_per_hz, dt_secs);
     let (candidates, excluded) = scan_candidates(run, output, settings);
     let channels = correlation::scan_channels(
         &residual,

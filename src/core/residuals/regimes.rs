@@ -25,6 +25,64 @@ pub enum SigmaSource {
     EstimatedFromSecondDifferences,
 }
 
+/// Share of the spectrum, by frequency up to Nyquist, whose level is compared with white noise of
+/// the estimated σ (the top quarter).
+const TOP_BAND_SHARE: f64 = 0.25;
+/// How far, in dB, the residual's spectrum near Nyquist may lie above white noise of the estimated
+/// σ before that σ is judged not to be the residual's noise.
+const NOISE_EXCESS_LIMIT_DB: f64 = 10.0;
+/// How many times the estimated σ the residual's RMS may be before the band is judged meaningless.
+const RESIDUAL_OVER_SIGMA_LIMIT: f64 = 100.0;
+
+/// Whether the band may be read as the measurement noise of this residual.
+///
+/// A σ measured on a steady run is the sensor's noise: its band applies. A σ estimated from the
+/// run itself is a robust scale of the output's sample-to-sample jitter, 1.4826·MAD(Δ²y)/√6: the
+/// measurement noise when that noise is white and Gaussian and the output is smooth at the sample
+/// scale. Test-bench telemetry often is neither, and a band from a failed estimate leaves every
+/// sample outside for any model, good or bad (the JetCat: 99 %). Two tests, either of which
+/// rejects the estimate:
+///
+/// 1. **The spectrum near Nyquist.** White noise of σ has the flat one-sided PSD 2σ²·dt. In the
+///    top quarter of the frequencies up to Nyquist, far above a spool's bandwidth of a few rad/s,
+///    the residual of a model the band describes is that noise. If the residual's median PSD there
+///    lies more than [`NOISE_EXCESS_LIMIT_DB`] above 2σ̂²·dt (10 dB: ten times the power), the
+///    residual's fastest part is not the noise σ̂ describes. The JetCat's speed is logged in counts
+///    of 10 rpm: half its second differences are 0 or ±10 rpm, so σ̂ = 6 rpm, while the largest 1 %
+///    reach 700 rpm (the ECU's jumps and the engine's fastest transients at 9.4 Hz); its residuals
+///    lie 16–17 dB above, those of the T07 test-cell runs 10–18 dB. The median over the top-quarter
+///    bins of a Welch estimate of white noise lies within about 2 dB of 2σ²·dt, so 10 dB leaves
+///    room for some model error there too; the simulated runs with white sensor noise sit within
+///    a decibel.
+/// 2. **The residual's own scale.** Samples interpolated between sparser logs (a resampled run)
+///    or smoothed by the logger have second differences near zero and a spectrum near Nyquist near
+///    zero too: test 1 passes while σ̂ is far below the sensor's noise. When the residual's RMS is
+///    more than [`RESIDUAL_OVER_SIGMA_LIMIT`] times σ̂, the ±2σ̂ band is ±2 % of the residual's
+///    scale: a line at zero on its plot that leaves nearly every sample outside whatever σ̂ is, so
+///    the share says nothing the RMS does not, and an estimate that far below the error is more
+///    likely to have failed than the sensor to be a hundred times better than the model (the
+///    pressure ratio of two resampled T07 runs: 1 900 and 2 400 times). A model far off on a run
+///    with white sensor noise stays well inside the limit: the hot-day speed model before its
+///    effects is off by 24 σ and leaves 98 % outside, and there the band is right — the share
+///    outside alone could not tell.
+///
+/// A σ̂ of zero (samples that mostly repeat) never applies.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum BandFit {
+    /// σ was measured on a steady run: the band is the sensor's noise.
+    Measured,
+    /// σ was estimated from the run, and the residual's spectrum near Nyquist lies `excess_db`
+    /// above white noise of that σ (at most [`NOISE_EXCESS_LIMIT_DB`]) and its RMS within
+    /// [`RESIDUAL_OVER_SIGMA_LIMIT`] times σ: the band applies.
+    Consistent { excess_db: f64 },
+    /// σ was estimated from the run, but the residual's spectrum near Nyquist lies `excess_db`
+    /// above white noise of that σ (`None`: σ̂ is zero): σ̂ is not the residual's noise.
+    NotTheNoise { excess_db: Option<f64> },
+    /// σ was estimated from the run, but the residual's RMS is `rms_over_sigma` times σ̂, more than
+    /// [`RESIDUAL_OVER_SIGMA_LIMIT`]: a band that narrow says nothing.
+    FarBelowTheResidual { rms_over_sigma: f64 },
+}
+
 /// The measurement-noise band around zero residual.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NoiseBand {
@@ -40,6 +98,13 @@ pub struct NoiseBand {
     pub outside_fraction: f64,
     /// Share Gaussian white noise alone would leave outside, 0–1 (4.55 % for ±2σ).
     pub expected_outside_fraction: f64,
+    /// Whether the band is the residual's noise (see [`BandFit`]).
+    #[serde(default = "measured")]
+    pub fit: BandFit,
+}
+
+fn measured() -> BandFit {
+    BandFit::Measured
 }
 
 impl NoiseBand {
@@ -53,7 +118,90 @@ impl NoiseBand {
             half_width,
             outside_fraction: outside as f64 / residual.len().max(1) as f64,
             expected_outside_fraction: erfc(band_sigmas / std::f64::consts::SQRT_2),
+            fit: BandFit::Measured,
         }
+    }
+
+    /// Judge an estimated σ against the `residual` and its spectrum `psd_per_hz` at `freq_hz`
+    /// (one-sided, unit²/Hz) for a run sampled every `dt_secs` (see [`BandFit`]). A supplied σ stays
+    /// measured; a spectrum without bins near Nyquist leaves that test passed.
+    pub(super) fn judged(
+        mut self,
+        residual: &[f64],
+        freq_hz: &[f64],
+        psd_per_hz: &[f64],
+        dt_secs: f64,
+    ) -> Self {
+        if self.sigma_source == SigmaSource::Supplied {
+            return self;
+        }
+        let white = 2.0 * self.sigma * self.sigma * dt_secs;
+        if !(white > 0.0 && white.is_finite()) {
+            self.fit = BandFit::NotTheNoise { excess_db: None };
+            return self;
+        }
+        let nyquist_hz = 0.5 / dt_secs;
+        let top: Vec<f64> = freq_hz
+            .iter()
+            .zip(psd_per_hz)
+            .filter(|(f, p)| **f >= (1.0 - TOP_BAND_SHARE) * nyquist_hz && p.is_finite())
+            .map(|(_, p)| *p)
+            .collect();
+        let excess_db =
+            if top.is_empty() { 0.0 } else { 10.0 * (super::signal::median(&top) / white).log10() };
+        let finite: Vec<f64> = residual.iter().copied().filter(|r| r.is_finite()).collect();
+        let rms = (finite.iter().map(|r| r * r).sum::<f64>() / finite.len().max(1) as f64).sqrt();
+        let rms_over_sigma = rms / self.sigma;
+        self.fit = if excess_db > NOISE_EXCESS_LIMIT_DB {
+            BandFit::NotTheNoise { excess_db: Some(excess_db) }
+        } else if rms_over_sigma > RESIDUAL_OVER_SIGMA_LIMIT {
+            BandFit::FarBelowTheResidual { rms_over_sigma }
+        } else {
+            BandFit::Consistent { excess_db }
+        };
+        self
+    }
+
+    /// Whether the band may be read as this residual's noise.
+    pub fn applies(&self) -> bool {
+        matches!(self.fit, BandFit::Measured | BandFit::Consistent { .. })
+    }
+
+    /// Why the band does not apply, in words; `None` when it does.
+    pub fn why_not(&self, unit: &str) -> Option<String> {
+        let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+        let sigma =
+            format!("σ = {}{unit}, estimated from the run's second differences,", significant3(self.sigma));
+        let why = match self.fit {
+            BandFit::Measured | BandFit::Consistent { .. } => return None,
+            BandFit::NotTheNoise { excess_db: Some(db) } => format!(
+                "{sigma} is not this residual's noise (the residual's spectrum near Nyquist lies {db:.0} dB \
+                 above white noise of that σ: quantised or non-Gaussian jitter, or motion faster than the \
+                 sampling)"
+            ),
+            BandFit::NotTheNoise { excess_db: None } => {
+                "the run's second differences give σ = 0 (samples that mostly repeat)".to_owned()
+            }
+            BandFit::FarBelowTheResidual { rms_over_sigma } => format!(
+                "{sigma} is {rms_over_sigma:.0} times below the residual's RMS (samples interpolated or \
+                 smoothed between sparser logs keep their second differences near zero)"
+            ),
+        };
+        Some(format!(
+            "the noise band does not apply: {why}, so the share of samples outside it says nothing about \
+             the model"
+        ))
+    }
+}
+
+/// Three significant figures, no exponent for everyday magnitudes.
+fn significant3(x: f64) -> String {
+    match x.abs() {
+        a if a >= 100.0 => format!("{x:.0}"),
+        a if a >= 10.0 => format!("{x:.1}"),
+        a if a >= 1.0 => format!("{x:.2}"),
+        a if a >= 0.001 => format!("{x:.3}"),
+        _ => format!("{x:.2e}"),
     }
 }
 

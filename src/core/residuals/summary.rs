@@ -35,16 +35,18 @@ fn overall(a: &ResidualAnalysis) -> String {
     let (rms, bias) =
         (whole.and_then(|r| r.rmse).unwrap_or(0.0), whole.and_then(|r| r.mean_error).unwrap_or(0.0));
     let b = &a.band;
+    let head =
+        format!("The {} residual has RMS {} {unit} and mean {} {unit}", a.output, fmt3(rms), fmt3(bias));
+    if let Some(why) = b.why_not(unit) {
+        return format!("{head}; {why}.");
+    }
     let estimated = match b.sigma_source {
         super::SigmaSource::Supplied => "",
         super::SigmaSource::EstimatedFromSecondDifferences => ", estimated from the run",
     };
     format!(
-        "The {} residual has RMS {} {unit} and mean {} {unit}; {:.1} % of the samples lie outside the \
-         ±{}σ noise band (σ = {} {unit}{estimated}), where noise alone would leave {:.1} %.",
-        a.output,
-        fmt3(rms),
-        fmt3(bias),
+        "{head}; {:.1} % of the samples lie outside the ±{}σ noise band (σ = {} {unit}{estimated}), where \
+         noise alone would leave {:.1} %.",
         100.0 * b.outside_fraction,
         b.band_sigmas,
         fmt3(b.sigma),

@@ -14,6 +14,9 @@ use crate::core::numerics::tf::BodePoint;
 pub const GOOD_COHERENCE: f64 = 0.8;
 const THIN_PX: u32 = 1;
 const THICK_PX: u32 = 3;
+/// Dash and gap of a dashed curve, pixels.
+const DASH_PX: u32 = 8;
+const GAP_PX: u32 = 5;
 
 /// One model's frequency response.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,6 +25,12 @@ pub struct BodeCurve {
     pub points: Vec<BodePoint>,
     /// Drawn thick (the reduced models); the others thin (the segment models).
     pub emphasis: bool,
+    /// The curve's own colour (a model's, the same in every figure), drawn at full strength; `None`
+    /// takes the next series colour (thin curves, faded) or emphasis colour (thick ones) in turn.
+    pub colour: Option<RGBColor>,
+    /// Drawn dashed (the linear model and the simple references, as the app's traces draw them): a
+    /// dashed curve over a thick one that it follows shows in the thick one's colour between dashes.
+    pub dashed: bool,
 }
 
 /// The empirical frequency response with its coherence, one value per frequency.
@@ -66,8 +75,9 @@ type BodeChart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<LogCoor
 
 /// Draws magnitude (dB) over phase (deg) against a logarithmic ω axis (rad/s).
 ///
-/// Curves with `emphasis` are drawn thick, the others thin; the empirical estimate as points,
-/// filled where its coherence reaches [`GOOD_COHERENCE`].
+/// Curves with `emphasis` are drawn thick and first, the others thin and over them, so a thin curve
+/// that follows a thick one still shows; the empirical estimate as points, filled where its
+/// coherence reaches [`GOOD_COHERENCE`].
 pub fn bode_png(
     path: &Path,
     title: &str,
@@ -127,8 +137,8 @@ fn draw_panel(
     let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
     let mut chart = chart_builder(area).build_cartesian_2d((w_lo..w_hi).log_scale(), y_lo..y_hi)?;
     house_style(chart.configure_mesh().x_desc("ω (rad/s)").y_desc(panel.desc())).draw()?;
-    // Thin curves first so the emphasised ones stay on top.
-    for pass_emphasis in [false, true] {
+    // Thick curves first: a thin curve drawn under a thick one that it follows would vanish.
+    for pass_emphasis in [true, false] {
         for (curve, color) in coloured(curves).filter(|(c, _)| c.emphasis == pass_emphasis) {
             draw_curve(&mut chart, panel, curve, color)?;
         }
@@ -139,12 +149,14 @@ fn draw_panel(
     Ok(())
 }
 
-/// Each curve with its colour: thin curves take the series colours in their order (matching the
-/// segment colours of the z-plane), emphasised ones the emphasis colours in theirs.
+/// Each curve with its colour: its own, or else thin curves take the series colours in their order
+/// (matching the segment colours of the z-plane), emphasised ones the emphasis colours in theirs.
 fn coloured(curves: &[BodeCurve]) -> impl Iterator<Item = (&BodeCurve, RGBColor)> {
     let (mut thin, mut thick) = (0, 0);
     curves.iter().map(move |c| {
-        let color = if c.emphasis {
+        let color = if let Some(colour) = c.colour {
+            colour
+        } else if c.emphasis {
             thick += 1;
             palette::emphasis(thick - 1)
         } else {
@@ -156,16 +168,29 @@ fn coloured(curves: &[BodeCurve]) -> impl Iterator<Item = (&BodeCurve, RGBColor)
 }
 
 fn draw_curve(chart: &mut BodeChart<'_, '_>, panel: Panel, curve: &BodeCurve, color: RGBColor) -> DrawResult {
-    let style =
-        if curve.emphasis { color.stroke_width(THICK_PX) } else { color.mix(0.7).stroke_width(THIN_PX) };
     let points: Vec<(f64, f64)> = curve
         .points
         .iter()
         .map(|p| (p.omega_rad_s, panel.of_point(p)))
         .filter(|(w, v)| in_view(*w, *v))
         .collect();
-    chart.draw_series(LineSeries::new(points, style))?;
+    let style = line_style(curve, color);
+    if curve.dashed {
+        chart.draw_series(DashedLineSeries::new(points, DASH_PX, GAP_PX, style))?;
+    } else {
+        chart.draw_series(LineSeries::new(points, style))?;
+    }
     Ok(())
+}
+
+/// Thick for emphasised curves; thin ones faded in a series colour, or at full strength and a
+/// little wider in their own colour (the models of a comparison, few and each to be told apart).
+fn line_style(curve: &BodeCurve, color: RGBColor) -> ShapeStyle {
+    match (curve.emphasis, curve.colour.is_some()) {
+        (true, _) => color.stroke_width(THICK_PX),
+        (false, true) => color.stroke_width(THIN_PX + 1),
+        (false, false) => color.mix(0.7).stroke_width(THIN_PX),
+    }
 }
 
 fn draw_empirical(chart: &mut BodeChart<'_, '_>, panel: Panel, e: &EmpiricalBode) -> DrawResult {
@@ -201,7 +226,10 @@ fn legend_entries(curves: &[BodeCurve], empirical: Option<&EmpiricalBode>) -> Ve
     for pass_emphasis in [true, false] {
         for (curve, color) in coloured(curves).filter(|(c, _)| c.emphasis == pass_emphasis) {
             let width = if curve.emphasis { THICK_PX } else { THIN_PX + 1 };
-            entries.push(LegendEntry::line(curve.name.clone(), color, width));
+            entries.push(LegendEntry::new(
+                curve.name.clone(),
+                Swatch::Line { color, width, dashed: curve.dashed },
+            ));
         }
     }
     entries

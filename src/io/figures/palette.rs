@@ -1,6 +1,8 @@
 //! Every colour the figures use.
 use plotters::style::RGBColor;
 
+use crate::core::compare::ModelKind;
+
 pub const BACKGROUND: RGBColor = RGBColor(255, 255, 255);
 pub const TEXT: RGBColor = RGBColor(30, 30, 30);
 pub const NOTE: RGBColor = RGBColor(120, 120, 120);
@@ -35,6 +37,10 @@ pub const SERIES: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
+/// The reduced model over the segment models' Bode curves: black, apart from every series colour
+/// the segments take (as the app draws it in white on its dark plots).
+pub const REDUCED: RGBColor = RGBColor(0, 0, 0);
+
 /// Colours of emphasised curves (the reduced models over the thin segment curves), used in turn.
 pub const EMPHASIS: [RGBColor; 5] = [
     RGBColor(200, 0, 0),
@@ -52,4 +58,19 @@ pub fn emphasis(i: usize) -> RGBColor {
 /// The `i`-th series colour, cycling.
 pub fn series(i: usize) -> RGBColor {
     SERIES[i % SERIES.len()]
+}
+
+/// Each model's colour in the figures that compare models: the gray-box in the first emphasis
+/// colour (it is drawn thick), every other model in a hue clearly apart from it and from each other
+/// (no second red: the linear model, whose curve often follows the gray-box's, is blue).
+pub fn model(kind: ModelKind) -> RGBColor {
+    match kind {
+        ModelKind::GrayBox => EMPHASIS[0],
+        ModelKind::Linear => RGBColor(31, 119, 180),
+        ModelKind::HammersteinWiener => RGBColor(148, 103, 189),
+        ModelKind::Nnarx => RGBColor(0, 150, 160),
+        ModelKind::Arx => RGBColor(127, 127, 127),
+        ModelKind::HammersteinArx => RGBColor(140, 86, 75),
+        ModelKind::StaticCubic => RGBColor(44, 160, 44),
+    }
 }

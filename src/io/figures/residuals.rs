@@ -7,8 +7,8 @@ use plotters::prelude::*;
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    Area, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, draw_note, label_font,
-    padded_range, palette, render, tick_label, titled_with_legend,
+    Area, DrawError, DrawResult, FIGURE_SIZE, FigureError, LIGHT_LINES, chart_builder, draw_note, label_font,
+    padded_range, palette, render, sig, tick_label, titled_with_legend,
 };
 use crate::core::residuals::{Correlogram, Regime, ResidualAnalysis};
 
@@ -35,23 +35,37 @@ pub fn residuals_png(
         residual_panel(trace, t_secs, a, &unit)?;
         regime_panel(regimes, a, &unit)?;
         correlation_panel(correlation, a)?;
-        spectrum_panel(spectrum, a)?;
+        let peak_drawn = spectrum_panel(spectrum, a)?;
         let mut entries = vec![
             LegendEntry::text("Residual (top left)"),
             LegendEntry::line("measured − model", palette::series(0), 1),
-            LegendEntry::line(format!("±{:.0}σ noise band", a.band.band_sigmas), BAND, 2),
-            LegendEntry::new("worst stretches", Swatch::Bar(STRETCH)),
-            LegendEntry::text("RMSE by regime,"),
-            LegendEntry::line("noise σ for scale", BAND, 2),
-            LegendEntry::text("Correlations:"),
-            LegendEntry::line("residual ACF", palette::series(0), 2),
         ];
+        if a.band.applies() {
+            entries.push(LegendEntry::line(format!("±{:.0}σ noise band", a.band.band_sigmas), BAND, 2));
+        }
+        entries.push(LegendEntry::new("worst stretches", Swatch::Bar(STRETCH)));
+        if a.band.applies() {
+            entries.push(LegendEntry::text("RMSE by regime,"));
+            entries.push(LegendEntry::line("noise σ for scale", BAND, 2));
+        } else {
+            // The band is not drawn: σ, estimated from the run, does not apply to this residual.
+            entries.push(LegendEntry::text("No noise band: σ estimated"));
+            entries.push(LegendEntry::text("  from the run does not"));
+            entries.push(LegendEntry::text("  apply (see the report)"));
+        }
+        entries.push(LegendEntry::text("Correlations:"));
+        entries.push(LegendEntry::line("residual ACF", palette::series(0), 2));
         if a.input_xcorr.is_some() {
             entries.push(LegendEntry::line("residual–input CCF", XCORR, 2));
         }
         entries.push(LegendEntry::line("99 % bounds", BAND, 1));
-        entries.push(LegendEntry::text("Spectrum (bottom right)"));
-        entries.push(LegendEntry::line("largest peak", palette::FIT, 1));
+        if peak_drawn {
+            entries.push(LegendEntry::text("Spectrum (bottom right)"));
+            entries.push(LegendEntry::new(
+                format!("largest peak {} Hz", sig(a.spectrum.peak_freq_hz, 2)),
+                Swatch::Ring(palette::FIT),
+            ));
+        }
         draw_legend(&legend_area, &entries)
     })
 }
@@ -60,8 +74,8 @@ fn residual_panel(area: &Area<'_>, t_secs: &[f64], a: &ResidualAnalysis, unit: &
     let Some((t_lo, t_hi)) = padded_range(t_secs.iter().copied(), 0.0) else {
         return draw_note(area, "no samples");
     };
-    let half = a.band.half_width;
-    let values = a.residual.iter().copied().chain([half, -half]);
+    let half = a.band.applies().then_some(a.band.half_width);
+    let values = a.residual.iter().copied().chain(half.into_iter().flat_map(|h| [h, -h]));
     let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
     let mut chart = chart_builder(area).build_cartesian_2d(t_lo..t_hi, y_lo..y_hi)?;
     chart
@@ -81,7 +95,7 @@ fn residual_panel(area: &Area<'_>, t_secs: &[f64], a: &ResidualAnalysis, unit: &
             .iter()
             .map(|s| Rectangle::new([(s.start_secs, y_lo), (s.end_secs, y_hi)], STRETCH.mix(0.5).filled())),
     )?;
-    for level in [half, -half] {
+    for level in half.into_iter().flat_map(|h| [h, -h]) {
         chart.draw_series(LineSeries::new([(t_lo, level), (t_hi, level)], BAND.stroke_width(2)))?;
     }
     let points = t_secs.iter().zip(&a.residual).filter(|(_, r)| r.is_finite()).map(|(t, r)| (*t, *r));
@@ -98,7 +112,8 @@ fn regime_panel(area: &Area<'_>, a: &ResidualAnalysis, unit: &str) -> DrawResult
     if rows.is_empty() {
         return draw_note(area, "no regime has samples");
     }
-    let peak = rows.iter().map(|(_, v)| *v).fold(a.band.sigma, f64::max).max(f64::MIN_POSITIVE);
+    let sigma = a.band.applies().then_some(a.band.sigma);
+    let peak = rows.iter().map(|(_, v)| *v).fold(sigma.unwrap_or(0.0), f64::max).max(f64::MIN_POSITIVE);
     let n = rows.len() as i32;
     let mut chart = chart_builder(area).build_cartesian_2d((0..n - 1).into_segmented(), 0.0..1.15 * peak)?;
     chart
@@ -127,10 +142,12 @@ fn regime_panel(area: &Area<'_>, a: &ResidualAnalysis, unit: &str) -> DrawResult
         bar
     }))?;
     // The noise σ for scale: a model error at the noise level is as good as the sensor allows.
-    chart.draw_series(LineSeries::new(
-        [(SegmentValue::Exact(0), a.band.sigma), (SegmentValue::Last, a.band.sigma)],
-        BAND.stroke_width(2),
-    ))?;
+    if let Some(sigma) = sigma {
+        chart.draw_series(LineSeries::new(
+            [(SegmentValue::Exact(0), sigma), (SegmentValue::Last, sigma)],
+            BAND.stroke_width(2),
+        ))?;
+    }
     Ok(())
 }
 
@@ -195,19 +212,23 @@ fn correlation_panel(area: &Area<'_>, a: &ResidualAnalysis) -> DrawResult {
     Ok(())
 }
 
-fn spectrum_panel(area: &Area<'_>, a: &ResidualAnalysis) -> DrawResult {
+/// The residual PSD in dB re 1 (unit)²/Hz, with its largest peak ringed (and marked by a vertical
+/// line); returns whether the peak was drawn.
+fn spectrum_panel(area: &Area<'_>, a: &ResidualAnalysis) -> Result<bool, DrawError> {
     let s = &a.spectrum;
+    let db = |p: f64| 10.0 * p.log10();
     let points: Vec<(f64, f64)> = s
         .freq_hz
         .iter()
         .zip(&s.psd_per_hz)
         .filter(|(f, p)| **f > 0.0 && f.is_finite() && **p > 0.0 && p.is_finite())
-        .map(|(f, p)| (*f, 10.0 * p.log10()))
+        .map(|(f, p)| (*f, db(*p)))
         .collect();
     let (Some((f_lo, f_hi)), Some((d_lo, d_hi))) =
         (padded_range(points.iter().map(|p| p.0), 0.0), padded_range(points.iter().map(|p| p.1), 0.05))
     else {
-        return draw_note(area, "no spectrum");
+        draw_note(area, "no spectrum")?;
+        return Ok(false);
     };
     let mut chart = chart_builder(area).build_cartesian_2d((f_lo..f_hi).log_scale(), d_lo..d_hi)?;
     chart
@@ -215,17 +236,30 @@ fn spectrum_panel(area: &Area<'_>, a: &ResidualAnalysis) -> DrawResult {
         .light_line_style(palette::GRID_LIGHT)
         .bold_line_style(palette::GRID_BOLD)
         .x_desc("frequency (Hz)")
-        .y_desc("residual PSD (dB)")
+        .y_desc(psd_label(&a.unit))
         .label_style(label_font())
         .y_label_formatter(&|v| tick_label(*v))
         .x_label_formatter(&|v| tick_label(*v))
         .draw()?;
-    chart.draw_series(LineSeries::new(points, palette::series(0).stroke_width(2)))?;
-    if s.peak_freq_hz > 0.0 && s.peak_freq_hz.is_finite() && s.peak_freq_hz > f_lo {
-        chart.draw_series(LineSeries::new(
-            [(s.peak_freq_hz, d_lo), (s.peak_freq_hz, d_hi)],
-            palette::FIT.stroke_width(1),
-        ))?;
+    chart.draw_series(LineSeries::new(points.iter().copied(), palette::series(0).stroke_width(2)))?;
+    // The peak is a bin of the curve; it may be the lowest drawn, on the panel's left edge, where a
+    // vertical line would hide under the axis: the ring shows wherever it is.
+    let peak =
+        points.iter().find(|(f, _)| (f - s.peak_freq_hz).abs() <= 1e-9 * s.peak_freq_hz.abs().max(1.0));
+    let Some(&(f_peak, d_peak)) = peak else { return Ok(false) };
+    chart.draw_series(LineSeries::new(
+        [(f_peak, d_lo), (f_peak, d_hi)],
+        palette::FIT.mix(0.6).stroke_width(1),
+    ))?;
+    chart.draw_series([Circle::new((f_peak, d_peak), 7, palette::FIT.stroke_width(2))])?;
+    Ok(true)
+}
+
+/// The PSD axis: what 0 dB is. The Welch estimate is one-sided, in the output's unit² per Hz.
+fn psd_label(unit: &str) -> String {
+    if unit.is_empty() {
+        "residual PSD (dB re 1 /Hz)".to_owned()
+    } else {
+        format!("residual PSD (dB re 1 {unit}²/Hz)")
     }
-    Ok(())
 }

@@ -4,13 +4,14 @@ use std::ops::Range;
 use std::path::Path;
 
 use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
-    FigureError, LIGHT_LINES, chart_builder, desc_font, font, house_style, label_font, padded_range, palette,
-    render_chart, sig, tick_label,
+    Area, DrawError, DrawResult, FigureError, LIGHT_LINES, chart_builder, desc_font, font, house_style,
+    label_font, padded_range, palette, render_chart, sig, tick_label,
 };
 use crate::core::numerics::metrics::BoxStats;
 
@@ -82,7 +83,8 @@ fn normal_curve(mean: f64, std: f64, scale: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// A category axis: category i spans [i, i + 1] and is labelled with its name at i + 0.5.
+/// A category axis: category i spans [i, i + 1] and is labelled with its name at i + 0.5. Drawn
+/// upwards, so the axis is reversed: the first name sits at the top.
 struct CategoryAxis {
     names: Vec<String>,
 }
@@ -107,65 +109,57 @@ impl Ranged for CategoryAxis {
 
 impl ValueFormatter<f64> for CategoryAxis {
     fn format_ext(&self, value: &f64) -> String {
-        let i = value.floor();
-        if i < 0.0 {
+        let from_top = self.names.len() as f64 - value.floor() - 1.0;
+        if from_top < 0.0 {
             return String::new();
         }
-        self.names.get(i as usize).cloned().unwrap_or_default()
+        self.names.get(from_top as usize).cloned().unwrap_or_default()
     }
 }
 
-/// Draws one box per entry: q1–q3 box, median line, whiskers, the minimum and maximum when they
-/// lie beyond the whiskers, and the number of points outside the whiskers.
+/// Widest a box label may make the label area, as a share of the chart area's width.
+const MAX_LABEL_SHARE: f64 = 0.5;
+
+/// Draws one box per entry, one row each, the first at the top, labelled at the left with its
+/// whole name (so a dozen long "model / run" names stay readable): q1–q3 box, median line,
+/// whiskers, the minimum and maximum when they lie beyond the whiskers, and the number of points
+/// outside the whiskers. Names of the form "group / name" are grouped: a line separates the groups.
 pub fn boxplot_png(
     path: &Path,
     title: &str,
     boxes: &[(String, BoxStats)],
-    y_label: &str,
+    value_label: &str,
 ) -> Result<(), FigureError> {
     let values =
         boxes.iter().flat_map(|(_, b)| [b.min, b.max, b.whisker_lo, b.whisker_hi, b.q1, b.q3, b.median]);
-    let y_range = padded_range(values, 0.08);
-    render_chart(path, title, y_range, "no data", |chart_area, legend_area, (y_lo, y_hi)| {
-        let axis = CategoryAxis { names: boxes.iter().map(|(n, _)| n.clone()).collect() };
-        let mut chart = chart_builder(chart_area).build_cartesian_2d(axis, y_lo..y_hi)?;
+    // Room at the right for the "n outside" notes.
+    let note_room = if boxes.iter().any(|(_, b)| b.outliers > 0) { NOTE_SHARE } else { 0.0 };
+    let x_range = padded_range(values, 0.08).map(|(lo, hi)| (lo, hi + note_room * (hi - lo)));
+    render_chart(path, title, x_range, "no data", |chart_area, legend_area, (x_lo, x_hi)| {
+        let names = fitted_labels(chart_area, boxes.iter().map(|(n, _)| n.as_str()))?;
+        let label_width = names.iter().map(|(_, w)| *w).max().unwrap_or(0);
+        let axis = CategoryAxis { names: names.into_iter().map(|(n, _)| n).collect() };
+        let mut chart = chart_builder(chart_area)
+            .y_label_area_size(label_width + LABEL_GAP_PX)
+            .build_cartesian_2d(x_lo..x_hi, axis)?;
         chart
             .configure_mesh()
-            .disable_x_mesh()
-            .y_desc(y_label)
-            .y_label_formatter(&|v| tick_label(*v))
+            .disable_y_mesh()
+            .x_desc(value_label)
+            .x_label_formatter(&|v| tick_label(*v))
             .label_style(label_font())
             .axis_desc_style(desc_font())
             .bold_line_style(palette::GRID_BOLD)
             .light_line_style(palette::GRID_LIGHT)
             .max_light_lines(LIGHT_LINES)
             .draw()?;
-        let line = |a: (f64, f64), b: (f64, f64), w: u32| {
-            PathElement::new(vec![a, b], palette::MEASURED.stroke_width(w))
-        };
+        let centre = |i: usize| boxes.len().saturating_sub(i + 1) as f64 + 0.5;
+        for i in group_starts(boxes) {
+            let y = centre(i) + 0.5;
+            chart.draw_series([PathElement::new(vec![(x_lo, y), (x_hi, y)], palette::REFERENCE.mix(0.4))])?;
+        }
         for (i, (_, b)) in boxes.iter().enumerate() {
-            let x = i as f64 + 0.5;
-            let (l, r) = (x - BOX_HALF_WIDTH, x + BOX_HALF_WIDTH);
-            chart.draw_series([Rectangle::new([(l, b.q1), (r, b.q3)], palette::FILL.mix(0.3).filled())])?;
-            chart.draw_series([Rectangle::new([(l, b.q1), (r, b.q3)], palette::FILL.stroke_width(2))])?;
-            chart.draw_series([
-                line((x, b.q3), (x, b.whisker_hi), 1),
-                line((x, b.q1), (x, b.whisker_lo), 1),
-                line((x - CAP_HALF_WIDTH, b.whisker_hi), (x + CAP_HALF_WIDTH, b.whisker_hi), 2),
-                line((x - CAP_HALF_WIDTH, b.whisker_lo), (x + CAP_HALF_WIDTH, b.whisker_lo), 2),
-                line((l, b.median), (r, b.median), 3),
-            ])?;
-            let extremes = [(b.min, b.min < b.whisker_lo), (b.max, b.max > b.whisker_hi)];
-            let beyond = extremes.into_iter().filter(|(v, out)| *out && v.is_finite());
-            chart.draw_series(
-                beyond.map(|(v, _)| Circle::new((x, v), 5, palette::MEASURED.stroke_width(2))),
-            )?;
-            if b.outliers > 0 && b.max.is_finite() {
-                let style = font(14.0).color(&palette::NOTE).pos(Pos::new(HPos::Center, VPos::Bottom));
-                let note = format!("{} outside", b.outliers);
-                let at = EmptyElement::at((x, b.max.max(b.whisker_hi))) + Text::new(note, (0, -8), style);
-                chart.plotting_area().draw(&at)?;
-            }
+            draw_box(&mut chart, centre(i), b)?;
         }
         let entries = [
             LegendEntry::new("quartiles q1–q3", Swatch::Bar(palette::FILL)),
@@ -177,4 +171,75 @@ pub fn boxplot_png(
         ];
         draw_legend(legend_area, &entries)
     })
+}
+
+/// Share of the value range added at the right for the "n outside" notes.
+const NOTE_SHARE: f64 = 0.12;
+/// Space between the labels and the axis, pixels.
+const LABEL_GAP_PX: u32 = 20;
+
+type BoxChart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, CategoryAxis>>;
+
+/// One horizontal box centred on `y`.
+fn draw_box(chart: &mut BoxChart<'_, '_>, y: f64, b: &BoxStats) -> DrawResult {
+    let line = |a: (f64, f64), c: (f64, f64), w: u32| {
+        PathElement::new(vec![a, c], palette::MEASURED.stroke_width(w))
+    };
+    let (lo, hi) = (y - BOX_HALF_WIDTH, y + BOX_HALF_WIDTH);
+    chart.draw_series([Rectangle::new([(b.q1, lo), (b.q3, hi)], palette::FILL.mix(0.3).filled())])?;
+    chart.draw_series([Rectangle::new([(b.q1, lo), (b.q3, hi)], palette::FILL.stroke_width(2))])?;
+    chart.draw_series([
+        line((b.q3, y), (b.whisker_hi, y), 1),
+        line((b.q1, y), (b.whisker_lo, y), 1),
+        line((b.whisker_hi, y - CAP_HALF_WIDTH), (b.whisker_hi, y + CAP_HALF_WIDTH), 2),
+        line((b.whisker_lo, y - CAP_HALF_WIDTH), (b.whisker_lo, y + CAP_HALF_WIDTH), 2),
+        line((b.median, lo), (b.median, hi), 3),
+    ])?;
+    let extremes = [(b.min, b.min < b.whisker_lo), (b.max, b.max > b.whisker_hi)];
+    let beyond = extremes.into_iter().filter(|(v, out)| *out && v.is_finite());
+    chart.draw_series(beyond.map(|(v, _)| Circle::new((v, y), 5, palette::MEASURED.stroke_width(2))))?;
+    if b.outliers > 0 && b.max.is_finite() {
+        let style = font(14.0).color(&palette::NOTE).pos(Pos::new(HPos::Left, VPos::Center));
+        let note = format!("{} outside", b.outliers);
+        let at = EmptyElement::at((b.max.max(b.whisker_hi), y)) + Text::new(note, (12, 0), style);
+        chart.plotting_area().draw(&at)?;
+    }
+    Ok(())
+}
+
+/// The indices where a new group starts: a box whose "group / …" prefix differs from the one before.
+fn group_starts(boxes: &[(String, BoxStats)]) -> impl Iterator<Item = usize> + '_ {
+    let group = |name: &str| name.split_once(" / ").map_or("", |(g, _)| g).to_owned();
+    boxes
+        .windows(2)
+        .enumerate()
+        .filter(move |(_, w)| match w {
+            [a, b] => group(&a.0) != group(&b.0),
+            _ => false,
+        })
+        .map(|(i, _)| i + 1)
+}
+
+/// Each label with its width in pixels, cut (and marked "…") where it would take more than
+/// [`MAX_LABEL_SHARE`] of the chart area's width.
+fn fitted_labels<'n>(
+    area: &Area<'_>,
+    names: impl Iterator<Item = &'n str>,
+) -> Result<Vec<(String, u32)>, DrawError> {
+    let (w, _) = area.dim_in_pixel();
+    let limit = (MAX_LABEL_SHARE * f64::from(w)) as u32;
+    let style = label_font();
+    names
+        .map(|name| {
+            let mut text = name.to_owned();
+            let mut width = area.estimate_text_size(&text, &style)?.0;
+            while width > limit && text.chars().count() > 2 {
+                let mut chars: Vec<char> = text.chars().collect();
+                chars.truncate(chars.len() - 2);
+                text = chars.into_iter().collect::<String>() + "…";
+                width = area.estimate_text_size(&text, &style)?.0;
+            }
+            Ok((text, width))
+        })
+        .collect()
 }

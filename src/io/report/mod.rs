@@ -42,6 +42,10 @@ pub struct DiagnosisEntry {
     pub significance: String,
 }
 
+fn band_applies() -> bool {
+    true
+}
+
 fn physics_kind() -> String {
     "physics".to_owned()
 }
@@ -102,6 +106,12 @@ pub struct ResidualReport {
     pub noise_sigma_source: String,
     /// Share of samples outside the ±2σ band, % (about 4.6 % for a model as good as the sensor).
     pub outside_band_pct: f64,
+    /// Whether the band is this residual's noise: false when σ, estimated from the run, is not (the
+    /// residual's spectrum near Nyquist lies far above white noise of that σ, or its RMS is more
+    /// than a hundred times σ); the share outside then says nothing about the model (see the
+    /// summary and `core::residuals::BandFit`).
+    #[serde(default = "band_applies")]
+    pub noise_band_applies: bool,
     pub regimes: Vec<crate::core::residuals::RegimeRow>,
     /// Residual autocorrelation lags beyond the 99 % bound, s.
     pub acf_lags_beyond_99_secs: Vec<f64>,
@@ -123,6 +133,9 @@ pub struct Report {
     pub format_version: u32,
     pub project: String,
     pub input: String,
+    /// The input's unit ("" when unknown): the operating points' u* and dy/du are in it.
+    #[serde(default)]
+    pub input_unit: String,
     pub runs: BTreeMap<String, String>,
     pub outputs: BTreeMap<String, OutputReport>,
     pub noise_fit: Option<serde_json::Value>,
@@ -338,8 +351,12 @@ fn residuals_section(out: &mut String, residuals: &[ResidualReport], unit: &str)
     }
     let _ = writeln!(out, "\n### Where it fails (residual = measured − final model)");
     for r in residuals {
-        let _ =
-            writeln!(out, "\n**{}**: {} (Noise σ from the {}.)\n", r.run, r.summary, r.noise_sigma_source);
+        let applies = if r.noise_band_applies { "" } else { "; the band does not apply here" };
+        let _ = writeln!(
+            out,
+            "\n**{}**: {} (Noise σ from the {}{applies}.)\n",
+            r.run, r.summary, r.noise_sigma_source
+        );
         let _ = writeln!(
             out,
             "| regime | share of samples % | RMSE {unit} | RMSPE % | bias {unit} | share of squared error % |\n|---|---|---|---|---|---|"
@@ -374,8 +391,9 @@ fn residuals_section(out: &mut String, residuals: &[ResidualReport], unit: &str)
     }
 }
 
-/// Operating points and the continuous-time equivalent, for a controller designer.
-fn control_section(out: &mut String, o: &OutputReport) {
+/// Operating points and the continuous-time equivalent, for a controller designer; u* is in
+/// `input_unit`, y* in the output's and dy/du in the output's per the input's.
+fn control_section(out: &mut String, o: &OutputReport, input_unit: &str) {
     if o.operating_points.is_empty() && o.continuous.is_none() {
         return;
     }
@@ -394,9 +412,11 @@ fn control_section(out: &mut String, o: &OutputReport) {
         out,
         "Local model at each point: K·G(z)/G(1), K the local gain dy/du, with the effects linearised there. \
          Poles as τ (real) or ωn, ζ (pairs), from their zero-order-hold equivalents.\n\n\
-         | point | u* | y*{unit} | dy/du | poles | −3 dB bandwidth (rad/s) | rise 10–90 % (s) | settling 2 % (s) | overshoot % |\n\
+         | point | u*{u_unit} | y*{unit} | dy/du [{gain_unit}] | poles | −3 dB bandwidth (rad/s) | rise 10–90 % (s) | settling 2 % (s) | overshoot % |\n\
          |---|---|---|---|---|---|---|---|---|",
-        unit = crate::core::run::bracketed_unit(&o.unit)
+        u_unit = crate::core::run::bracketed_unit(input_unit),
+        unit = crate::core::run::bracketed_unit(&o.unit),
+        gain_unit = gain_unit(&o.unit, input_unit),
     );
     let opt = |x: Option<f64>, digits: usize| x.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
     for p in &o.operating_points {
@@ -417,6 +437,17 @@ fn control_section(out: &mut String, o: &OutputReport) {
             opt(p.step.settling_s, 3),
             p.step.overshoot_pct
         );
+    }
+}
+
+/// The unit of a local gain dy/du: the output's per the input's ("rpm/V", "rpm/(gal/h)"); "per input
+/// unit" when the input's unit is unknown.
+pub fn gain_unit(output_unit: &str, input_unit: &str) -> String {
+    let output_unit = if output_unit.is_empty() { "1" } else { output_unit };
+    match input_unit {
+        "" => format!("{output_unit} per input unit"),
+        u if u.contains(['/', '·', ' ', '*']) => format!("{output_unit}/({u})"),
+        u => format!("{output_unit}/{u}"),
     }
 }
 
@@ -497,7 +528,7 @@ pub fn render_markdown(report: &Report) -> String {
                 );
             }
         }
-        control_section(&mut out, o);
+        control_section(&mut out, o, &report.input_unit);
         residuals_section(&mut out, &o.residuals, &o.unit);
     }
     table1_section(&mut out, report);

@@ -47,9 +47,9 @@ impl Trace {
         Self { name: channel.name.clone(), unit: channel.unit.clone(), kind, points }
     }
 
-    /// `name [unit]`, or the name alone when the unit is unknown.
+    /// `name [unit]`, or the name alone when the unit is unknown or is the name.
     pub fn axis_label(&self) -> String {
-        format!("{}{}", self.name, crate::core::run::bracketed_unit(&self.unit))
+        crate::core::run::name_with_unit(&self.name, &self.unit)
     }
 }
 

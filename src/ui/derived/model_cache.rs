@@ -283,9 +283,9 @@ impl OutputCache {
         }
     }
 
-    /// `name [unit]`.
+    /// `name [unit]`, or the name alone when the unit is unknown or is the name.
     pub fn label(&self) -> String {
-        format!("{}{}", self.name, crate::core::run::bracketed_unit(&self.unit))
+        crate::core::run::name_with_unit(&self.name, &self.unit)
     }
 
     fn update(

@@ -15,7 +15,12 @@ use crate::ui::theme;
 use crate::ui::widgets::model as model_ui;
 use crate::ui::widgets::plot as plot_util;
 
-const TABLE_HEIGHT: f32 = 230.0;
+/// The most the table takes of the view's height; beyond it the table scrolls.
+const MAX_TABLE_SHARE: f32 = 0.4;
+/// Space between the table's rows, points.
+const ROW_SPACING: f32 = 3.0;
+/// The least height of a plot row, points.
+const MIN_PLOT_HEIGHT: f32 = 140.0;
 const Y_AXIS_WIDTH: f32 = 64.0;
 /// Bode points of the local model.
 const BODE_POINTS: usize = 300;
@@ -80,7 +85,9 @@ pub fn control_ui(
     let unit = &view.output.unit;
     let input = &ident.run.input;
     let width = ui.available_width();
-    let plot_height = ((ui.available_height() - TABLE_HEIGHT) / 2.0 - 8.0).max(140.0);
+    // The table shows every row (the steady-run plateaus come last) and the plots share the rest.
+    let table_height = table_height(ui, points.len());
+    let plot_height = ((ui.available_height() - table_height) / 2.0 - 8.0).max(MIN_PLOT_HEIGHT);
     let half = (width - ui.spacing().item_spacing.x) / 2.0;
     ui.horizontal_top(|ui| {
         ui.allocate_ui(egui::vec2(half, plot_height), |ui| {
@@ -88,19 +95,36 @@ pub fn control_ui(
                 ui,
                 output,
                 points,
-                &format!("u*: {}{}", input.name, crate::core::run::bracketed_unit(&input.unit)),
-                unit,
+                &format!("u*: {}", crate::core::run::name_with_unit(&input.name, &input.unit)),
+                &crate::io::report::gain_unit(unit, &input.unit),
             )
         });
         ui.allocate_ui(egui::vec2(half, plot_height), |ui| step_plot(ui, output, points, state.selected));
     });
     bode_plots(ui, output, &points[state.selected], plot_height, unit, &input.unit);
-    table_ui(ui, points, &mut state.selected, unit);
+    table_ui(ui, points, &mut state.selected, table_height, unit, &input.unit);
 }
 
-/// Local gain and bandwidth against u*, each relative to its largest value (named in the legend):
-/// the shape of the schedule at a glance, the numbers in the table.
-fn schedule_plot(ui: &mut egui::Ui, output: &str, points: &[OperatingPoint], input_label: &str, unit: &str) {
+/// The height of the table with a header and `rows` rows, at most [`MAX_TABLE_SHARE`] of the view.
+fn table_height(ui: &egui::Ui, rows: usize) -> f32 {
+    let row = ui.spacing().interact_size.y.max(ui.text_style_height(&egui::TextStyle::Body)) + ROW_SPACING;
+    ((rows + 1) as f32 * row + ROW_SPACING).min(MAX_TABLE_SHARE * ui.available_height())
+}
+
+/// The schedule plot's legend entry of the local gain, with the largest gain in `gain_unit`.
+pub fn gain_legend(max_gain: f64, gain_unit: &str) -> String {
+    format!("local gain dy/du (largest {max_gain:.4e} {gain_unit})")
+}
+
+/// Local gain and bandwidth against u*, each relative to its largest value (named in the legend,
+/// the gain in `gain_unit`): the shape of the schedule at a glance, the numbers in the table.
+fn schedule_plot(
+    ui: &mut egui::Ui,
+    output: &str,
+    points: &[OperatingPoint],
+    input_label: &str,
+    gain_unit: &str,
+) {
     let grid: Vec<&OperatingPoint> = points.iter().filter(|p| p.source == PointSource::Grid).collect();
     let steady: Vec<&OperatingPoint> = points.iter().filter(|p| p.source != PointSource::Grid).collect();
     let max_gain = points.iter().map(|p| p.gain.abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
@@ -121,7 +145,7 @@ fn schedule_plot(ui: &mut egui::Ui, output: &str, points: &[OperatingPoint], inp
         .include_y(1.05)
         .legend(Legend::default().position(egui_plot::Corner::LeftBottom).follow_insertion_order(true))
         .show(ui, |plot_ui| {
-            let gain_name = format!("local gain dy/du (largest {max_gain:.4e} {unit} per input unit)");
+            let gain_name = gain_legend(max_gain, gain_unit);
             plot_ui.line(Line::new(gain_name.clone(), gain_of(&grid)).color(theme::MODEL).width(2.0));
             plot_ui.points(
                 Points::new(gain_name, gain_of(&grid))
@@ -231,7 +255,7 @@ fn bode_plots(
                         let name = if phase {
                             title.clone()
                         } else {
-                            format!("{title} [dB of {unit}/{input_unit}]")
+                            format!("{title} [dB of {}]", crate::io::report::gain_unit(unit, input_unit))
                         };
                         plot_ui.line(Line::new(name, points).color(theme::MODEL).width(2.0));
                         if let (false, Some(bw)) = (phase, p.bandwidth_rad_s) {
@@ -249,15 +273,23 @@ fn bode_plots(
     });
 }
 
-fn table_ui(ui: &mut egui::Ui, points: &[OperatingPoint], selected: &mut usize, unit: &str) {
+fn table_ui(
+    ui: &mut egui::Ui,
+    points: &[OperatingPoint],
+    selected: &mut usize,
+    height: f32,
+    unit: &str,
+    input_unit: &str,
+) {
     let opt = |x: Option<f64>| x.map_or("–".to_owned(), |v| format!("{v:.3}"));
-    egui::ScrollArea::vertical().max_height(TABLE_HEIGHT).show(ui, |ui| {
-        egui::Grid::new("control_table").striped(true).num_columns(9).spacing([14.0, 3.0]).show(ui, |ui| {
+    egui::ScrollArea::vertical().max_height(height).show(ui, |ui| {
+        let grid = egui::Grid::new("control_table").striped(true).num_columns(9).spacing([14.0, ROW_SPACING]);
+        grid.show(ui, |ui| {
             for head in [
                 "point".to_owned(),
-                "u*".to_owned(),
-                format!("y* [{unit}]"),
-                "dy/du".to_owned(),
+                format!("u*{}", crate::core::run::bracketed_unit(input_unit)),
+                format!("y*{}", crate::core::run::bracketed_unit(unit)),
+                format!("dy/du [{}]", crate::io::report::gain_unit(unit, input_unit)),
                 "poles".to_owned(),
                 "bandwidth [rad/s]".to_owned(),
                 "rise 10–90 % [s]".to_owned(),

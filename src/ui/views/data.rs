@@ -15,7 +15,7 @@ use crate::ui::widgets::segments::{self as segments_ui, EdgeDrag, SegmentOverlay
 
 /// Height below which plots stop shrinking and the view scrolls instead.
 const MIN_PLOT_HEIGHT: f32 = 110.0;
-/// Same y-axis width on every plot so that the time axes line up.
+/// The narrowest y axis; every plot takes the width of the widest one so that the time axes line up.
 const Y_AXIS_WIDTH: f32 = 64.0;
 
 #[derive(Default)]
@@ -166,6 +166,15 @@ fn plots_ui(
     let spacing = ui.spacing().item_spacing.y;
     let available = ui.available_height() - spacing * (count - 1.0);
     let height = (available / count).max(MIN_PLOT_HEIGHT);
+    // One y-axis width for all: egui_plot widens an axis to its widest tick label, which would
+    // shift each plot's time axis by the difference.
+    let y_axis_width = traces
+        .iter()
+        .map(|t| {
+            let (lo, hi) = value_range(t);
+            plot_util::y_axis_width(ui, lo, hi)
+        })
+        .fold(Y_AXIS_WIDTH, f32::max);
     // Plot ids include the run so each run opens fitted to its own data.
     let x_group = egui::Id::unique(("data_time_axis", run_index));
     egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
@@ -176,7 +185,7 @@ fn plots_ui(
                 .link_axis(x_group, [true, false])
                 .link_cursor(x_group, [true, false])
                 .y_axis_label(trace.axis_label())
-                .y_axis_min_width(Y_AXIS_WIDTH)
+                .y_axis_min_width(y_axis_width)
                 .x_grid_spacer(plot_util::grid_125_x)
                 .y_grid_spacer(plot_util::grid_125_y)
                 .y_axis_formatter(plot_util::range_label)
@@ -215,12 +224,18 @@ fn plots_ui(
     commands
 }
 
-/// A little above the highest sample of the trace.
-fn label_height(trace: &Trace) -> f64 {
-    let (lo, hi) = trace
+/// The lowest and highest finite sample of the trace (infinite when there is none).
+fn value_range(trace: &Trace) -> (f64, f64) {
+    trace
         .points
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.y), hi.max(p.y)));
+        .filter(|p| p.y.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.y), hi.max(p.y)))
+}
+
+/// A little above the highest sample of the trace.
+fn label_height(trace: &Trace) -> f64 {
+    let (lo, hi) = value_range(trace);
     if lo.is_finite() { hi + 0.12 * (hi - lo).max(1e-9) } else { 0.0 }
 }
 

@@ -45,6 +45,37 @@ pub fn range_label(mark: GridMark, range: &std::ops::RangeInclusive<f64>) -> Str
     format!("{:.*}", decimals, nearest)
 }
 
+/// Margin egui_plot's tick labels keep each side of their text on a y axis, points.
+const TICK_LABEL_MARGIN: f32 = 4.0;
+/// The gap egui_plot leaves beside a rotated axis label, as a share of its line height.
+const AXIS_LABEL_GAP: f32 = 0.25;
+
+/// The width a y axis labelled by [`range_label`] needs for a trace spanning `lo..=hi` (the tick
+/// labels at either end of the auto-fitted bounds, and the rotated axis label beside them), in
+/// points. Plots stacked over one time axis take the largest of their widths, so their plotting
+/// areas, and with them their time axes, line up.
+pub fn y_axis_width(ui: &egui::Ui, lo: f64, hi: f64) -> f32 {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return 0.0;
+    }
+    // egui_plot pads fitted bounds by a few percent; a tenth each side covers it.
+    let pad = if hi > lo { 0.1 * (hi - lo) } else { 0.1 * lo.abs().max(1.0) };
+    let (lo, hi) = (lo - pad, hi + pad);
+    let step = nice_125((hi - lo) / 8.0);
+    let ends = [(lo / step).ceil() * step, (hi / step).floor() * step];
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    let widest = ends
+        .iter()
+        .map(|v| {
+            let mark = GridMark { value: *v, step_size: step };
+            let text = range_label(mark, &(lo..=hi));
+            ui.painter().layout_no_wrap(text, font.clone(), egui::Color32::WHITE).size().x
+        })
+        .fold(0.0, f32::max);
+    let axis_label = ui.text_style_height(&egui::TextStyle::Body) * (1.0 + AXIS_LABEL_GAP);
+    widest + 2.0 * TICK_LABEL_MARGIN + axis_label
+}
+
 /// The smallest of 1, 2, 5 × 10ⁿ that is at least `value` (positive, finite).
 pub fn nice_125(value: f64) -> f64 {
     if !(value.is_finite() && value > 0.0) {

@@ -240,7 +240,9 @@ pub fn compare_ui(
     let comparison = &result.comparison;
     let unit = view.output.unit.as_str();
     let shown_run = state.run.clone();
+    let viewport_height = ui.available_height();
     let scroll = egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+        let top = ui.cursor().top();
         notes_ui(ui, comparison);
         ui.horizontal_top(|ui| {
             compare_table::table1_ui(ui, comparison, unit);
@@ -248,8 +250,15 @@ pub fn compare_ui(
             ui.vertical(|ui| compare_table::summary_ui(ui, comparison));
         });
         ui.separator();
+        // The plots take what the table leaves above the Monte Carlo row, so the whole view fits
+        // the window; on a short window they keep a readable height and the view scrolls.
+        let used = ui.cursor().top() - top;
+        let rest = viewport_height - used - compare_plots::monte_carlo_height(ui, comparison);
+        let plot_height = (rest - 2.0 * ui.spacing().item_spacing.y - SEPARATOR_HEIGHT)
+            .clamp(compare_plots::MIN_PLOT_HEIGHT, compare_plots::PLOT_HEIGHT);
         let label = view.output.label();
-        let selected = compare_plots::traces_and_frequency_ui(ui, comparison, shown_run.as_deref(), &label);
+        let selected =
+            compare_plots::traces_and_frequency_ui(ui, comparison, shown_run.as_deref(), &label, plot_height);
         ui.separator();
         compare_plots::monte_carlo_ui(ui, comparison, unit);
         selected
@@ -258,6 +267,9 @@ pub fn compare_ui(
         state.run = Some(run);
     }
 }
+
+/// Height of a separator with its spacing, points (egui's default).
+const SEPARATOR_HEIGHT: f32 = 6.0;
 
 /// The job's progress with Cancel, or what happened to it, or a stale-result warning with Recompute.
 fn status_ui(

@@ -12,22 +12,27 @@ use crate::ui::views::compare::table::{
 use crate::ui::widgets::plot as plot_util;
 
 const Y_AXIS_WIDTH: f32 = 64.0;
-const PLOT_HEIGHT: f32 = 320.0;
-const HISTOGRAM_HEIGHT: f32 = 165.0;
+/// Height of the traces and frequency-response row (keys included) when there is room for it.
+pub const PLOT_HEIGHT: f32 = 320.0;
+/// The least height that row shrinks to so the Monte Carlo row fits the window.
+pub const MIN_PLOT_HEIGHT: f32 = 220.0;
+const HISTOGRAM_HEIGHT: f32 = 125.0;
 
-/// The traces (left) and the chirp's frequency response (right); returns the run the user picked.
+/// The traces (left) and the chirp's frequency response (right), `height` tall with their keys;
+/// returns the run the user picked.
 pub fn traces_and_frequency_ui(
     ui: &mut egui::Ui,
     comparison: &OutputComparison,
     shown_run: Option<&str>,
     output_label: &str,
+    height: f32,
 ) -> Option<String> {
     let mut picked = None;
     ui.columns(2, |columns| {
         if let [left, right] = columns {
-            picked = traces_ui(left, comparison, shown_run, output_label);
+            picked = traces_ui(left, comparison, shown_run, output_label, height);
             match &comparison.frequency {
-                Some(freq) => frequency_ui(right, comparison, freq),
+                Some(freq) => frequency_ui(right, comparison, freq, height),
                 None => {
                     crate::ui::widgets::model::hint(
                         right,
@@ -45,6 +50,7 @@ fn traces_ui(
     comparison: &OutputComparison,
     shown_run: Option<&str>,
     output_label: &str,
+    height: f32,
 ) -> Option<String> {
     let runs = &comparison.runs;
     let shown = shown_run.and_then(|name| runs.iter().find(|r| r.run.name == name)).or(runs.first());
@@ -86,7 +92,7 @@ fn traces_ui(
     });
     let key_height = ui.cursor().top() - key_top;
     Plot::new(("compare_traces", &comparison.output, &shown.run.name))
-        .height(PLOT_HEIGHT - ui.spacing().interact_size.y - key_height)
+        .height(height - ui.spacing().interact_size.y - key_height)
         .x_axis_label("time [s]")
         .y_axis_label(output_label)
         .y_axis_min_width(Y_AXIS_WIDTH)
@@ -119,7 +125,7 @@ fn trace_style(model: ModelKind) -> (f32, bool) {
     (width, model == ModelKind::Linear || model.is_reference())
 }
 
-fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &FrequencyComparison) {
+fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &FrequencyComparison, height: f32) {
     ui.label(format!("Frequency response on '{}' (one Welch estimate for all)", freq.run)).on_hover_text(
         "Each model's simulation of the chirp input goes through the same Welch estimate as the measurement.",
     );
@@ -140,11 +146,13 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
         }
     });
     let key_height = ui.cursor().top() - key_top;
-    let height =
-        (PLOT_HEIGHT - ui.spacing().interact_size.y - ui.spacing().item_spacing.y - key_height) / 2.0;
+    let height = (height - ui.spacing().interact_size.y - ui.spacing().item_spacing.y - key_height) / 2.0;
     for phase in [false, true] {
+        // Short axis labels: each panel is half the row, shorter than "magnitude [dB]" on a window
+        // that also shows the table and the Monte Carlo row.
         let mut plot =
             plot_util::bode_panel(("compare_freq", phase, &comparison.output), group, height, phase)
+                .y_axis_label(if phase { "phase [°]" } else { "gain [dB]" })
                 .y_axis_min_width(Y_AXIS_WIDTH)
                 .show_axes([phase, true]);
         if phase {
@@ -175,6 +183,12 @@ fn frequency_ui(ui: &mut egui::Ui, comparison: &OutputComparison, freq: &Frequen
             }
         });
     }
+}
+
+/// Height of the Monte Carlo row: its title, each histogram's title and the histograms.
+pub fn monte_carlo_height(ui: &egui::Ui, comparison: &OutputComparison) -> f32 {
+    let line = ui.text_style_height(&egui::TextStyle::Body) + ui.spacing().item_spacing.y;
+    if comparison.monte_carlo.is_empty() { line } else { 2.0 * line + HISTOGRAM_HEIGHT }
 }
 
 /// One histogram per model with its normal fit, side by side.

@@ -6,7 +6,7 @@
 //!
 //! The analyses are computed once per model (keyed by the live model's id), for every scored run.
 use egui::RichText;
-use egui_plot::{Bar, BarChart, HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
+use egui_plot::{Bar, BarChart, HLine, Line, LineStyle, Plot, PlotPoints, Points, Span};
 
 use crate::core::residuals::{ChannelCorrelation, Regime, RegimeRow, ResidualAnalysis, summary_sentences};
 use crate::core::run::Run;
@@ -141,17 +141,31 @@ pub fn where_it_fails_ui(
 fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize) -> Vec<Command> {
     let mut commands = Vec::new();
     let band = &a.band;
-    hint(
-        ui,
-        &format!(
-            "Noise band ±{}σ = ±{} {}: {:.1} % of the samples lie outside it (noise alone: {:.1} %).",
-            band.band_sigmas,
-            at_noise_precision(band.half_width, band.sigma, false),
-            a.unit,
-            100.0 * band.outside_fraction,
-            100.0 * band.expected_outside_fraction
+    match band.why_not(&a.unit) {
+        None => hint(
+            ui,
+            &format!(
+                "Noise band ±{}σ = ±{} {} (dashed green): {:.1} % of the samples lie outside it (noise \
+                 alone: {:.1} %).",
+                band.band_sigmas,
+                at_noise_precision(band.half_width, band.sigma, false),
+                a.unit,
+                100.0 * band.outside_fraction,
+                100.0 * band.expected_outside_fraction
+            ),
         ),
-    );
+        Some(why) => {
+            // The summary above says why in full; the hover repeats it here.
+            ui.label(
+                RichText::new(
+                    "No noise band drawn: the noise σ estimated from the run does not apply to this \
+                     residual (see above).",
+                )
+                .color(theme::WARNING),
+            )
+            .on_hover_text(why);
+        }
+    }
     let height = (ui.available_height() - 190.0).max(200.0);
     Plot::new(("diagnosis_residual", &a.run, &a.output))
         .height(height)
@@ -159,26 +173,28 @@ fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize)
         .y_axis_label(format!("residual y − ŷ{}", crate::core::run::bracketed_unit(&a.unit)))
         .x_grid_spacer(plot_util::grid_125_x)
         .y_grid_spacer(plot_util::grid_125_y)
-        .legend(Legend::default().position(egui_plot::Corner::LeftTop))
+        // No legend: it covered the residual in one corner or another; the band is named above,
+        // the stretches below.
         .show(ui, |plot_ui| {
-            for stretch in &a.worst_stretches {
-                plot_ui.span(
-                    Span::new("worst stretches", stretch.start_secs..=stretch.end_secs)
-                        .fill(theme::WARNING.gamma_multiply(0.15))
-                        .border_width(0.0),
-                );
-            }
+            stretches_ui(plot_ui, &a.worst_stretches, numbers_height(&a.residual));
             let points: PlotPoints = run.t_secs.iter().zip(&a.residual).map(|(t, r)| [*t, *r]).collect();
             plot_ui.line(Line::new("residual", points).color(theme::MODEL).width(1.0));
-            for y in [band.half_width, -band.half_width] {
-                plot_ui.hline(
-                    HLine::new(format!("noise band ±{}σ", band.band_sigmas), y)
-                        .color(theme::OK)
-                        .style(LineStyle::Dashed { length: 6.0 }),
-                );
+            if band.applies() {
+                for y in [band.half_width, -band.half_width] {
+                    plot_ui.hline(
+                        HLine::new(format!("noise band ±{}σ", band.band_sigmas), y)
+                            .color(theme::OK)
+                            .style(LineStyle::Dashed { length: 6.0 }),
+                    );
+                }
             }
         });
-    ui.label(RichText::new("Worst stretches (click to see one in the Traces view)").strong());
+    ui.label(
+        RichText::new(
+            "Worst stretches, shaded and numbered in the plot (click one to see it in the Traces view)",
+        )
+        .strong(),
+    );
     egui::Grid::new("diagnosis_stretches").striped(true).num_columns(4).show(ui, |ui| {
         for (i, s) in a.worst_stretches.iter().enumerate() {
             let text = format!("{}. {:.1}–{:.1} s", i + 1, s.start_secs, s.end_secs);
@@ -198,6 +214,38 @@ fn residual_ui(ui: &mut egui::Ui, a: &ResidualAnalysis, run: &Run, index: usize)
         }
     });
     commands
+}
+
+/// The worst stretches shaded, each numbered as in the list below the plot (a name would not fit a
+/// stretch a few seconds wide).
+fn stretches_ui(
+    plot_ui: &mut egui_plot::PlotUi<'_>,
+    stretches: &[crate::core::residuals::Stretch],
+    top: f64,
+) {
+    let fill = theme::WARNING.gamma_multiply(0.15);
+    for (i, stretch) in stretches.iter().enumerate() {
+        // Unnamed: egui_plot writes a span's name inside it, cut to "worst stre…" on a few seconds.
+        plot_ui.span(Span::new("", stretch.start_secs..=stretch.end_secs).fill(fill).border_width(0.0));
+        if top.is_finite() {
+            let at = egui_plot::PlotPoint::new(0.5 * (stretch.start_secs + stretch.end_secs), top);
+            let number = RichText::new(format!("{}", i + 1))
+                .text_style(egui::TextStyle::Body)
+                .strong()
+                .color(theme::WARNING);
+            plot_ui.text(egui_plot::Text::new("", at, number).anchor(egui::Align2::CENTER_CENTER));
+        }
+    }
+}
+
+/// Where the stretch numbers sit: a little above the highest residual, so the plot's fitted bounds
+/// take them in (the plot's own last bounds would feed back and grow every frame).
+fn numbers_height(residual: &[f64]) -> f64 {
+    let (lo, hi) = residual
+        .iter()
+        .filter(|r| r.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
+    if lo.is_finite() { hi + 0.06 * (hi - lo).max(f64::MIN_POSITIVE) } else { f64::NAN }
 }
 
 /// The regime table, a bar picture of its RMSPE column, and the whole-run error of every run.
@@ -245,7 +293,13 @@ fn runs_table_ui(ui: &mut egui::Ui, all: &Analyses) {
             let whole = analysis.regimes.row(Regime::Run).and_then(|r| r.rmspe_pct);
             ui.label(&run.label);
             ui.label(RichText::new(whole.map_or("–".into(), |v| format!("{v:.3}"))).monospace());
-            ui.label(RichText::new(format!("{:.1}", 100.0 * analysis.band.outside_fraction)).monospace());
+            if analysis.band.applies() {
+                ui.label(RichText::new(format!("{:.1}", 100.0 * analysis.band.outside_fraction)).monospace());
+            } else {
+                ui.label(RichText::new("–").monospace()).on_hover_text(
+                    "The noise σ estimated from the run does not apply to this residual: no band",
+                );
+            }
             ui.end_row();
         }
     });

@@ -18,6 +18,7 @@ mod control;
 mod diagnosis;
 mod engine_family;
 mod export;
+mod export_parity;
 mod figures;
 mod identification;
 mod parser_props;

@@ -6,7 +6,7 @@
 //! the comparisons are skipped with a message, unless `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), where a
 //! missing tool fails the test.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use crate::common::jetid;
+use crate::common::{have_cc, have_python, jetid};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -24,31 +24,6 @@ fn ok(o: &Output, what: &str) -> String {
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
-}
-
-/// Whether `tool` can be used; when it cannot, says so and, with `JETID_REQUIRE_EXPORT_TOOLS=1`,
-/// fails.
-fn have(tool: &str, probe: &mut Command) -> bool {
-    let found = probe.output().is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(
-            std::env::var("JETID_REQUIRE_EXPORT_TOOLS").as_deref() != Ok("1"),
-            "{tool} is needed to test the exports (JETID_REQUIRE_EXPORT_TOOLS=1)"
-        );
-        eprintln!("SKIPPED: {tool} is not available, so the exported program is not run");
-    }
-    found
-}
-
-fn have_python() -> bool {
-    have(
-        "python3 with numpy and python-control",
-        Command::new("python3").args(["-c", "import numpy, control"]),
-    )
-}
-
-fn have_cc() -> bool {
-    have("a C compiler (cc)", Command::new("cc").arg("--version"))
 }
 
 /// A run file's header and columns.

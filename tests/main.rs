@@ -19,6 +19,7 @@ mod diagnosis;
 mod edges;
 mod engine_family;
 mod export;
+mod export_parity;
 mod figures;
 mod hostile;
 mod identification;

@@ -1,5 +1,5 @@
-//! Set-up shared by the integration tests: sample paths, the binary, the real-data folder, noise,
-//! and the app under a test harness.
+//! Set-up shared by the integration tests: sample paths, the binary, the tools the exported programs
+//! need, the real-data folder, noise, and the app under a test harness.
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -14,6 +14,38 @@ pub fn sample(path: &str) -> PathBuf {
 /// Run the `jetid` binary with `args`.
 pub fn jetid(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_jetid")).args(args).output().expect("jetid runs")
+}
+
+/// Run the `jetid` binary with `args` in the folder `dir` (paths in `args` relative to it).
+pub fn jetid_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_jetid")).current_dir(dir).args(args).output().expect("jetid runs")
+}
+
+/// Whether `tool` can be used, for the tests that run the exported programs; when it cannot, says
+/// so and, with `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), fails.
+pub fn have(tool: &str, probe: &mut Command) -> bool {
+    let found = probe.output().is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            std::env::var("JETID_REQUIRE_EXPORT_TOOLS").as_deref() != Ok("1"),
+            "{tool} is needed to test the exports (JETID_REQUIRE_EXPORT_TOOLS=1)"
+        );
+        eprintln!("SKIPPED: {tool} is not available, so the exported program is not run");
+    }
+    found
+}
+
+/// python3 with numpy and python-control, which the exported Python program needs.
+pub fn have_python() -> bool {
+    have(
+        "python3 with numpy and python-control",
+        Command::new("python3").args(["-c", "import numpy, control"]),
+    )
+}
+
+/// A C compiler, for the exported C program.
+pub fn have_cc() -> bool {
+    have("a C compiler (cc)", Command::new("cc").arg("--version"))
 }
 
 /// The shared real-data folder `name` beside the repository (`../shared/realdata/NAME`; real data

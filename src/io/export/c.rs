@@ -12,11 +12,13 @@ pub(super) fn render(plan: &Plan) -> String {
     }
     text.push_str(USAGE);
     text.push_str(&format!(
-        "\n#define JETID_DT {}\n#define JETID_DELAY_LINE {}\n#define JETID_FILTER_LEN {}\n#define JETID_INPUT \"{}\"\n",
+        "\n#define JETID_DT {}\n#define JETID_DELAY_LINE {}\n#define JETID_FILTER_LEN {}\n#define JETID_INPUT \"{}\"\n\
+         /* The model file, as `jetid predict` names it in messages. */\n#define JETID_MODEL_FILE {}\n",
         num(plan.dt_secs),
         plan.max_delay_line(),
         plan.max_filter_len(),
-        plan.input
+        plan.input,
+        string(&plan.source)
     ));
     text.push_str(RUNTIME);
     text.push_str("\n/* ---- The model: one parameter set, state type, init and step per output. ---- */\n");
@@ -24,8 +26,28 @@ pub(super) fn render(plan: &Plan) -> String {
         text.push_str(&output(out));
     }
     text.push_str(&outputs_table(plan));
+    text.push_str(READ_RUN);
     text.push_str(MAIN);
     text
+}
+
+/// A C string literal of any text: quotes, backslashes and bytes outside printable ASCII escaped
+/// (octal, three digits, so that no digit after one is read into it).
+fn string(text: &str) -> String {
+    let mut out = String::from("\"");
+    for b in text.bytes() {
+        match b {
+            b'"' | b'\\' => {
+                out.push('\\');
+                out.push(char::from(b));
+            }
+            // '?' escaped too: "??" starts a trigraph.
+            b' '..=b'~' if b != b'?' => out.push(char::from(b)),
+            _ => out.push_str(&format!("\\{b:03o}")),
+        }
+    }
+    out.push('"');
+    out
 }
 
 /// The arrays and the parameter struct of one filter, named `prefix_num`/`prefix_den`.
@@ -164,19 +186,32 @@ fn outputs_table(plan: &Plan) -> String {
 
 const USAGE: &str = r#" *
  * Build: cc -O2 -std=c99 -Wall -Werror THIS_FILE -lm -o model
- * Run:   ./model IN.csv OUT.csv [--calibrate]
- *   reads time_s, the input column (and ambient_temp_c, ambient_pressure_kpa when an output is
- *   corrected for inlet conditions) and writes time_s, the input and one column per output, as
- *   `jetid predict --model MODEL --input IN.csv --out OUT.csv` does. With --calibrate the measured
- *   output columns are read too, for calibration_drift's per-run offset, as
- *   `jetid predict ... --map output=NAME` does.
+ * Run:   ./model IN.csv OUT.csv [--calibrate] [--map ROLE=COLUMN]... [--sample-time S]
+ *                [--window START:END] [--quality COLUMN] [--invalid CHANNEL=V1,V2]... [--resample]
+ *   writes what `jetid predict --model MODEL --input IN.csv --out OUT.csv` (with the same options)
+ *   writes: time_s, the input and one column per output. IN.csv is read as jetid reads a run, and a
+ *   file jetid refuses is refused with jetid's message (exit status 1):
+ *   --map ROLE=COLUMN      the column of a role: time, input, output, aux (repeatable); by default
+ *                          time_s and fuel_flow_gph, and every other numeric column as auxiliary
+ *   --sample-time S        the sample time of a file without a time column
+ *   --window START:END     keep samples START..END (0-based, END excluded), or seconds: 12.5s:80s
+ *                          (`auto` is jetid's alone)
+ *   --quality COLUMN       a 0/1 column; samples marked 0 are interpolated (trimmed at the ends)
+ *   --invalid CH=V1,V2     values channel CH logs for "no reading": interpolated (repeatable)
+ *   --resample             merge repeated time stamps and resample an irregular time axis onto the
+ *                          median step, instead of refusing it
+ *   --calibrate            read the measured outputs for calibration_drift's per-run offset, as
+ *                          `jetid predict ... --map output=NAME` does
  * Embed: compile with -DJETID_NO_MAIN; per output NAME, jetid_NAME_state, jetid_NAME_init() and
  *   jetid_NAME_step() (one sample in, one sample out). calibration_drift's offset comes from the
  *   run's own steady holds of the measured output, so it needs the whole run in advance:
  *   jetid_NAME_calibration_offset() computes it before stepping (the main does so with --calibrate).
  * Needs libm only.
  */
+#include <ctype.h>
+#include <errno.h>
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -185,6 +220,8 @@ const USAGE: &str = r#" *
 "#;
 
 const RUNTIME: &str = include_str!("c/runtime.c");
+
+const READ_RUN: &str = include_str!("c/read_run.c");
 
 const MAIN: &str = include_str!("c/main.c");
 

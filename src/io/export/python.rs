@@ -10,7 +10,12 @@ pub(super) fn render(plan: &Plan) -> String {
         text.push_str(&format!("# {line}\n"));
     }
     text.push_str(USAGE);
-    text.push_str(&format!("\nDT = {}\nINPUT = {:?}\n\n", num(plan.dt_secs), plan.input));
+    text.push_str(&format!(
+        "\nDT = {}\nINPUT = {:?}\n# The model file, as `jetid predict` names it in messages.\nMODEL_FILE = {}\n\n",
+        num(plan.dt_secs),
+        plan.input,
+        string(&plan.source)
+    ));
     text.push_str(
         "# Per output: the numbers of every step of its signal path (see simulate()).\nOUTPUTS = {\n",
     );
@@ -19,20 +24,23 @@ pub(super) fn render(plan: &Plan) -> String {
     }
     text.push_str("}\n\n");
     text.push_str(
-        "# The linear block G(z) of each output (z^-1 coefficients padded to positive powers of z).\nTF = {\n",
+        "# The linear block G(z) of each output (z^-1 coefficients padded to positive powers of z); TF holds\n\
+         # them as control.TransferFunction objects, made when TF is first used (see __getattr__).\nTF_COEFFS = {\n",
     );
     for out in &plan.outputs {
         let (n, d) = out.tf.positive_powers();
-        text.push_str(&format!(
-            "    {:?}: control.TransferFunction({}, {}, DT),\n",
-            out.name,
-            list(&n, "[", "]"),
-            list(&d, "[", "]")
-        ));
+        text.push_str(&format!("    {:?}: ({}, {}),\n", out.name, list(&n, "[", "]"), list(&d, "[", "]")));
     }
     text.push_str("}\n");
     text.push_str(RUNTIME);
+    text.push_str(READ_RUN);
+    text.push_str(MAIN);
     text
+}
+
+/// A Python string literal of any text (a JSON string is one).
+fn string(text: &str) -> String {
+    serde_json::Value::from(text).to_string()
 }
 
 fn filter(f: &Filter) -> String {
@@ -111,16 +119,28 @@ fn split(linear: &Linear) -> Option<String> {
 }
 
 const USAGE: &str = r#"#
-# Run: python3 THIS_FILE IN.csv OUT.csv [--calibrate]
-#   reads time_s, the input column (and ambient_temp_c, ambient_pressure_kpa when an output is
-#   corrected for inlet conditions) and writes time_s, the input and one column per output, as
-#   `jetid predict --model MODEL --input IN.csv --out OUT.csv` does. With --calibrate the measured
-#   output columns are read too, for calibration_drift's per-run offset, as
-#   `jetid predict ... --map output=NAME` does.
+# Run: python3 THIS_FILE IN.csv OUT.csv [--calibrate] [--map ROLE=COLUMN]... [--sample-time S]
+#                   [--window START:END] [--quality COLUMN] [--invalid CHANNEL=V1,V2]... [--resample]
+#   writes what `jetid predict --model MODEL --input IN.csv --out OUT.csv` (with the same options)
+#   writes: time_s, the input and one column per output. IN.csv is read as jetid reads a run, and
+#   a file jetid refuses is refused with jetid's message (exit status 1):
+#   --map ROLE=COLUMN      the column of a role: time, input, output, aux (repeatable); by default
+#                          time_s and fuel_flow_gph, and every other numeric column as auxiliary
+#   --sample-time S        the sample time of a file without a time column
+#   --window START:END     keep samples START..END (0-based, END excluded), or seconds: 12.5s:80s
+#                          (`auto` is jetid's alone)
+#   --quality COLUMN       a 0/1 column; samples marked 0 are interpolated (trimmed at the ends)
+#   --invalid CH=V1,V2     values channel CH logs for "no reading": interpolated (repeatable)
+#   --resample             merge repeated time stamps and resample an irregular time axis onto
+#                          the median step, instead of refusing it
+#   --calibrate            read the measured outputs for calibration_drift's per-run offset, as
+#                          `jetid predict ... --map output=NAME` does
 # Import: simulate(u, aux, measured) -> {output: array}; operating_point(output, u_star) -> the
-#   local linear model as a control.TransferFunction. Needs numpy and python-control.
-import csv
+#   local linear model as a control.TransferFunction; load_run(path, LoadOptions()) reads a run
+#   file as jetid does. Needs numpy and python-control.
 import math
+import os
+import re
 import sys
 
 import control
@@ -128,3 +148,7 @@ import numpy as np
 "#;
 
 const RUNTIME: &str = include_str!("python/runtime.py");
+
+const READ_RUN: &str = include_str!("python/read_run.py");
+
+const MAIN: &str = include_str!("python/main.py");

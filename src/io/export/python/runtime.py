@@ -6,9 +6,21 @@ _KELVIN_FROM_CELSIUS = 273.15
 AMBIENT_CHANNELS = ("ambient_temp_c", "ambient_pressure_kpa")
 
 
+def __getattr__(name):
+    """TF, made on first use: python-control takes seconds to import, and reading and simulating a
+    run do not need it."""
+    if name != "TF":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import control
+
+    globals()["TF"] = {n: control.TransferFunction(num, den, DT) for n, (num, den) in TF_COEFFS.items()}
+    return globals()["TF"]
+
+
 def _round_half_away(x):
     """Rust's f64::round for x >= 0 (Python's round() rounds half to even)."""
-    return math.floor(x + 0.5)
+    whole = math.floor(x)
+    return whole + 1 if x - whole >= 0.5 else whole
 
 
 class _Filter:
@@ -334,6 +346,8 @@ def simulate(u, aux=None, measured=None, dt=DT):
 
 def _tf_zinv(num, den):
     """A control.TransferFunction from coefficients in z^-1 (padded to equal length)."""
+    import control
+
     n = max(len(num), len(den))
     return control.TransferFunction(list(num) + [0.0] * (n - len(num)), list(den) + [0.0] * (n - len(den)), DT)
 
@@ -379,62 +393,3 @@ def operating_point(output, u_star):
     k = static_map_slope(output, v_star) * g1
     num, den = local_dynamics(output, u_star)
     return _tf_zinv(k * num, den)
-
-
-def _median_step(t):
-    steps = sorted(b - a for a, b in zip(t, t[1:]))
-    if not steps:
-        return 0.0
-    mid = len(steps) // 2
-    m = 0.5 * (steps[mid - 1] + steps[mid]) if len(steps) % 2 == 0 else steps[mid]
-    return float("%.11e" % m)
-
-
-def _read_csv(path, columns):
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    if not rows:
-        raise ValueError(f"{path} is empty")
-    header = [h.strip() for h in rows[0]]
-    data = {}
-    for name in columns:
-        if name not in header:
-            raise ValueError(f"{path} has no column '{name}' (it has {', '.join(header)})")
-        i = header.index(name)
-        data[name] = [float(r[i]) for r in rows[1:] if any(c.strip() for c in r)]
-    return data
-
-
-def main(argv):
-    args = [a for a in argv[1:] if a != "--calibrate"]
-    calibrate = len(args) != len(argv) - 1
-    if len(args) != 2:
-        print(f"usage: {argv[0]} IN.csv OUT.csv [--calibrate]", file=sys.stderr)
-        return 2
-    wanted = ["time_s", INPUT]
-    if any(needs_ambient(name) for name in OUTPUTS):
-        wanted += list(AMBIENT_CHANNELS)
-    if calibrate:
-        wanted += [n for n in OUTPUTS if OUTPUTS[n]["calibration"] is not None]
-    data = _read_csv(args[0], wanted)
-    t = data["time_s"]
-    dt = _median_step(t)
-    if not abs(dt / DT - 1.0) <= 0.02:
-        print(f"error: {args[0]} is sampled every {dt} s but the model every {DT} s", file=sys.stderr)
-        return 1
-    aux = {c: data[c] for c in AMBIENT_CHANNELS if c in data}
-    measured = {n: data[n] for n in OUTPUTS if n in data}
-    y = simulate(data[INPUT], aux, measured, dt)
-    with open(args[1], "w", newline="") as f:
-        f.write(",".join(["time_s", INPUT] + list(OUTPUTS)) + "\n")
-        for k in range(len(t)):
-            f.write(",".join(repr(float(x)) for x in [t[k], data[INPUT][k]] + [y[n][k] for n in OUTPUTS]) + "\n")
-    return 0
-
-
-if __name__ == "__main__":
-    try:
-        sys.exit(main(sys.argv))
-    except (OSError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        sys.exit(1)

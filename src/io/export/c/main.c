@@ -132,9 +132,10 @@ static void jetid_check_run(const jetid_run *run, const char *file)
         jetid_add(&m, file);
         jetid_add(&m, " is sampled every ");
         jetid_add(&m, jetid_significant(run->dt, 5, a));
-        jetid_add(&m, " s but the model every ");
+        jetid_add(&m, " s but the model " JETID_MODEL_FILE " every ");
         jetid_add(&m, jetid_significant(JETID_DT, 5, b));
-        jetid_add(&m, " s; the model is discrete-time");
+        jetid_add(&m, " s; the model is discrete-time: resample the run (--resample puts an irregular log on its "
+                      "median step) or identify a model at its sample time");
         jetid_refuse(&m);
     }
 }

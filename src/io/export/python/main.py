@@ -82,8 +82,9 @@ def check_run(run, file):
         )
     if abs(run.dt / DT - 1.0) > 0.02:
         raise ValueError(
-            f"{file} is sampled every {_significant(run.dt, 5)} s but the model every {_significant(DT, 5)} s; the "
-            "model is discrete-time"
+            f"{file} is sampled every {_significant(run.dt, 5)} s but the model {MODEL_FILE} every "
+            f"{_significant(DT, 5)} s; the model is discrete-time: resample the run (--resample puts an irregular "
+            "log on its median step) or identify a model at its sample time"
         )
 
 

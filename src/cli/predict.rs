@@ -9,7 +9,7 @@ use clap::Args;
 use crate::core::identification::initial_state::InitialState;
 use crate::core::run::{Channel, InputCoverage, Run};
 use crate::io::csv_run::{load_run, write_run};
-use crate::io::model_file::{ModelFile, read_model};
+use crate::io::model_file::{ModelFile, OutputModel, read_model};
 use crate::io::paths::overwrites_input;
 
 #[derive(Debug, Args)]
@@ -77,7 +77,7 @@ fn check_coverage(model: &ModelFile, run: &Run, args: &PredictArgs) -> Result<()
 
 /// The parameter of largest magnitude in an output's model, with its path in model.json
 /// (`wiener.map.coeffs_scaled[2]`), to name when the model overflows.
-fn largest_parameter(out: &crate::io::model_file::OutputModel) -> (String, f64) {
+fn largest_parameter(out: &OutputModel) -> (String, f64) {
     fn walk(value: &serde_json::Value, path: String, best: &mut (String, f64)) {
         match value {
             serde_json::Value::Number(n) => {
@@ -131,6 +131,30 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     opts.input_only =
         InitialState::from(args.initial_state) == InitialState::Steady && opts.map.outputs.is_empty();
     let run = load_run(&args.input, &opts)?;
+    check_run_fits_model(&model, &run, args)?;
+    check_coverage(&model, &run, args)?;
+    let outputs = model.outputs.iter().map(|out| predict_output(out, &run, args)).collect::<Result<_>>()?;
+    let prediction = Run {
+        name: format!("{} predicted", run.name),
+        dt_secs: run.dt_secs,
+        t_secs: run.t_secs.clone(),
+        input: run.input.clone(),
+        outputs,
+        aux: Vec::new(),
+    };
+    write_run(&args.out, &prediction)?;
+    println!(
+        "wrote {} ({} samples, outputs: {})",
+        args.out.display(),
+        run.len(),
+        model.outputs.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+    );
+    Ok(())
+}
+
+/// The run drives the model as it was identified: the same input signal, the same sample time, and
+/// a model with at least one output.
+fn check_run_fits_model(model: &ModelFile, run: &Run, args: &PredictArgs) -> Result<()> {
     if run.input.name != model.input.name {
         bail!(
             "{} was identified from the input '{}', but {} gives '{}' as its input: a model driven by another \
@@ -154,51 +178,37 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     if model.outputs.is_empty() {
         bail!("{} holds no output model", args.model.display());
     }
-    check_coverage(&model, &run, args)?;
-    let mut outputs = Vec::new();
-    for out in &model.outputs {
-        let extended =
-            crate::core::effects::ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects)
-                .with_context(|| format!("{}: output '{}'", args.model.display(), out.name))?;
-        let initial = InitialState::from(args.initial_state);
-        if initial == InitialState::Estimated && run.output(&out.name).is_none() {
-            bail!(
-                "--initial-state estimated fits the start to the measured '{}', which {} does not hold \
-                 (map it with --map output=COLUMN, or use --initial-state steady)",
-                out.name,
-                args.input.display()
-            );
-        }
-        let y = extended
-            .simulate_scored(&run, initial)
-            .with_context(|| format!("simulating output '{}' on {}", out.name, args.input.display()))?;
-        if let Some(k) = y.iter().position(|v| !v.is_finite()) {
-            let (parameter, value) = largest_parameter(out);
-            bail!(
-                "{}: output '{}' overflows at sample {k} of {} (value {}): a parameter of the model is out of \
-                 range (the largest: {parameter} = {value:e}); identify the model again",
-                args.model.display(),
-                out.name,
-                args.input.display(),
-                y[k]
-            );
-        }
-        outputs.push(Channel { name: out.name.clone(), unit: out.unit.clone(), values: y });
-    }
-    let prediction = Run {
-        name: format!("{} predicted", run.name),
-        dt_secs: run.dt_secs,
-        t_secs: run.t_secs.clone(),
-        input: run.input.clone(),
-        outputs,
-        aux: Vec::new(),
-    };
-    write_run(&args.out, &prediction)?;
-    println!(
-        "wrote {} ({} samples, outputs: {})",
-        args.out.display(),
-        run.len(),
-        model.outputs.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
-    );
     Ok(())
+}
+
+/// One output's prediction on the run, its effects included; an output that overflows names the
+/// model's largest parameter.
+fn predict_output(out: &OutputModel, run: &Run, args: &PredictArgs) -> Result<Channel> {
+    let extended =
+        crate::core::effects::ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects)
+            .with_context(|| format!("{}: output '{}'", args.model.display(), out.name))?;
+    let initial = InitialState::from(args.initial_state);
+    if initial == InitialState::Estimated && run.output(&out.name).is_none() {
+        bail!(
+            "--initial-state estimated fits the start to the measured '{}', which {} does not hold \
+             (map it with --map output=COLUMN, or use --initial-state steady)",
+            out.name,
+            args.input.display()
+        );
+    }
+    let y = extended
+        .simulate_scored(run, initial)
+        .with_context(|| format!("simulating output '{}' on {}", out.name, args.input.display()))?;
+    if let Some(k) = y.iter().position(|v| !v.is_finite()) {
+        let (parameter, value) = largest_parameter(out);
+        bail!(
+            "{}: output '{}' overflows at sample {k} of {} (value {}): a parameter of the model is out of \
+             range (the largest: {parameter} = {value:e}); identify the model again",
+            args.model.display(),
+            out.name,
+            args.input.display(),
+            y[k]
+        );
+    }
+    Ok(Channel { name: out.name.clone(), unit: out.unit.clone(), values: y })
 }

@@ -257,8 +257,15 @@ pub fn compare_ui(
         let plot_height = (rest - 2.0 * ui.spacing().item_spacing.y - SEPARATOR_HEIGHT)
             .clamp(compare_plots::MIN_PLOT_HEIGHT, compare_plots::PLOT_HEIGHT);
         let label = view.output.label();
-        let selected =
-            compare_plots::traces_and_frequency_ui(ui, comparison, shown_run.as_deref(), &label, plot_height);
+        let selected = compare_plots::traces_and_frequency_ui(
+            ui,
+            &compare_plots::Row {
+                comparison,
+                shown_run: shown_run.as_deref(),
+                output_label: &label,
+                height: plot_height,
+            },
+        );
         ui.separator();
         compare_plots::monte_carlo_ui(ui, comparison, unit);
         selected

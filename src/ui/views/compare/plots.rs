@@ -18,21 +18,24 @@ pub const PLOT_HEIGHT: f32 = 320.0;
 pub const MIN_PLOT_HEIGHT: f32 = 220.0;
 const HISTOGRAM_HEIGHT: f32 = 125.0;
 
-/// The traces (left) and the chirp's frequency response (right), `height` tall with their keys;
-/// returns the run the user picked.
-pub fn traces_and_frequency_ui(
-    ui: &mut egui::Ui,
-    comparison: &OutputComparison,
-    shown_run: Option<&str>,
-    output_label: &str,
-    height: f32,
-) -> Option<String> {
+/// What the traces and frequency-response row shows: the output's comparison, the run the user
+/// picked for the traces (the first scored run when none), the output's axis label and the row's
+/// height with its keys.
+pub struct Row<'a> {
+    pub comparison: &'a OutputComparison,
+    pub shown_run: Option<&'a str>,
+    pub output_label: &'a str,
+    pub height: f32,
+}
+
+/// The traces (left) and the chirp's frequency response (right); returns the run the user picked.
+pub fn traces_and_frequency_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
     let mut picked = None;
     ui.columns(2, |columns| {
         if let [left, right] = columns {
-            picked = traces_ui(left, comparison, shown_run, output_label, height);
-            match &comparison.frequency {
-                Some(freq) => frequency_ui(right, comparison, freq, height),
+            picked = traces_ui(left, row);
+            match &row.comparison.frequency {
+                Some(freq) => frequency_ui(right, row.comparison, freq, row.height),
                 None => {
                     crate::ui::widgets::model::hint(
                         right,
@@ -45,13 +48,8 @@ pub fn traces_and_frequency_ui(
     picked
 }
 
-fn traces_ui(
-    ui: &mut egui::Ui,
-    comparison: &OutputComparison,
-    shown_run: Option<&str>,
-    output_label: &str,
-    height: f32,
-) -> Option<String> {
+fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
+    let Row { comparison, shown_run, output_label, height } = *row;
     let runs = &comparison.runs;
     let shown = shown_run.and_then(|name| runs.iter().find(|r| r.run.name == name)).or(runs.first());
     let Some(shown) = shown else {

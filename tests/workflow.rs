@@ -271,3 +271,65 @@ fn the_jetcat_project_with_its_loop_gives_the_same_model_in_the_batch_and_the_ap
     assert!(effects.as_array().is_some_and(|e| !e.is_empty()), "the loop took effects: {effects}");
     assert_close(&batch, &app, 1e-9, "model.json");
 }
+
+/// The JetCat project's text without its `steps_from` line, its run paths made absolute, written to
+/// `dir`: a closed-loop log whose set-point the user has not named.
+fn jetcat_without_steps_from(dir: &Path) -> PathBuf {
+    let project = sample("jetcat_p300/project.toml");
+    let folder = project.parent().unwrap().to_str().unwrap().to_owned();
+    let text = std::fs::read_to_string(&project).unwrap();
+    let text: String = text
+        .lines()
+        .filter(|line| !line.starts_with("steps_from"))
+        .map(|line| format!("{}\n", line.replace("path = \"../", &format!("path = \"{folder}/../"))))
+        .collect();
+    assert!(!text.contains("steps_from ="), "the line is gone");
+    let path = dir.join("jetcat_unnamed.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A closed-loop log whose set-point is not named: the set-point is found in the log and the runs
+/// are split on it, as on the channel the bundled project names, and the batch says so.
+#[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
+fn a_set_point_in_a_closed_loop_log_is_found_and_split_on() {
+    use jetid::io::project::load_project;
+    use jetid::workflow::runs::{StepsFrom, load_runs, segments};
+    let dir = tempfile::tempdir().unwrap();
+    let named = load_project(&sample("jetcat_p300/project.toml")).unwrap();
+    let unnamed = load_project(&jetcat_without_steps_from(dir.path())).unwrap();
+    assert_eq!(unnamed.steps_from, None);
+    let (named_runs, runs) = (load_runs(&named).unwrap(), load_runs(&unnamed).unwrap());
+    let StepsFrom::Found(found) = &runs.steps_from else {
+        panic!("no set-point found: {:?}", runs.steps_from)
+    };
+    assert_eq!(found.channel, "rpm_setpoint", "{found:?}");
+    assert!(runs.notes.iter().any(|n| n.contains("is a set-point")), "{:?}", runs.notes);
+    let split = |r: &jetid::workflow::runs::Runs| {
+        segments(&r.ident, &r.ident_junctions, None, r.steps_from.channel()).unwrap()
+    };
+    assert_eq!(split(&runs), split(&named_runs));
+}
+
+/// The same project without its set-point named gives the same model in the batch and the app.
+#[cfg(feature = "gui")]
+#[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
+fn the_jetcat_project_without_its_set_point_named_gives_the_same_model_in_the_batch_and_the_app() {
+    let dir = tempfile::tempdir().unwrap();
+    let (batch, app) = both_models(&jetcat_without_steps_from(dir.path()));
+    assert_close(&batch, &app, 1e-9, "model.json");
+}
+
+/// The bundled open-loop runs hold no set-point: their auxiliary channels are measured (noisy
+/// temperatures and pressures), so the steps are found on the input as before.
+#[test]
+fn no_set_point_is_found_in_open_loop_runs() {
+    use jetid::io::project::load_project;
+    use jetid::workflow::runs::{StepsFrom, load_runs};
+    for name in ["sr30", "hot_day", "soak"] {
+        let runs = load_runs(&load_project(&sample(&format!("{name}/project.toml"))).unwrap()).unwrap();
+        assert_eq!(runs.steps_from, StepsFrom::Input, "{name}");
+    }
+}

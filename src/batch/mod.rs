@@ -136,7 +136,7 @@ impl Batch<'_> {
     /// diagnose, compare, analyse the residuals and draw the figures.
     fn model_output(&self, output: &str, timings: &mut Timings) -> Result<OutputPart> {
         let (project, runs) = (self.project, self.runs);
-        let plan = OutputPlan::of_project(project, output);
+        let plan = OutputPlan::of_project(project, output).with_steps_from(&runs.steps_from);
         let identified = timings
             .time(&format!("identify_{output}"), || {
                 model::identify(&runs.ident, &runs.ident_junctions, &plan)

@@ -74,6 +74,13 @@ impl OutputPlan {
             effects: EffectPlan { by_hand: project.add_effects.clone(), auto_rounds: project.auto_effects },
         }
     }
+
+    /// The plan with its steps detected where [`runs::steps_from`] says (a set-point found in the
+    /// log when the project names none).
+    pub fn with_steps_from(mut self, steps: &runs::StepsFrom) -> Self {
+        self.steps_from = steps.channel().map(str::to_owned);
+        self
+    }
 }
 
 /// The segment fits of `output` (the input dead time estimated first when the settings ask).

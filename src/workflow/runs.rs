@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use crate::core::identification::error::PipelineError;
 use crate::core::identification::fits::{segments_for, step_signal};
 use crate::core::identification::segment::{Segment, SegmentSettings, auto_segments_joined};
+use crate::core::identification::set_point::{SetPoint, find_set_point};
 use crate::core::numerics::stats::significant;
 use crate::core::run::{Run, RunError, RunRole, join_runs};
 use crate::io::csv_run::load_run_with_notes;
@@ -25,6 +26,8 @@ pub struct Runs {
     pub ident: Run,
     /// Where each further identification run starts when several were joined.
     pub ident_junctions: Vec<usize>,
+    /// The channel the identification run's steps are detected on.
+    pub steps_from: StepsFrom,
     pub validate: Vec<Run>,
     /// Scored like the validation runs, never used to choose an effect or a refinement.
     pub held_out: Vec<Run>,
@@ -129,6 +132,54 @@ pub fn segments(
         .map_err(|source| PipelineError::Segment { run: run.name.clone(), source })
 }
 
+/// The channel the identification run's steps are detected on.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StepsFrom {
+    /// The input: no channel named, no set-point found.
+    Input,
+    /// The channel the project or the user named (`steps_from`).
+    Named(String),
+    /// A set-point channel found in the log ([`find_set_point`]).
+    Found(SetPoint),
+}
+
+impl StepsFrom {
+    /// The channel other than the input, if any.
+    pub fn channel(&self) -> Option<&str> {
+        match self {
+            Self::Input => None,
+            Self::Named(name) => Some(name),
+            Self::Found(set_point) => Some(&set_point.channel),
+        }
+    }
+
+    /// What was found, for the notes: the set-point and the evidence for it.
+    pub fn note(&self) -> Option<String> {
+        let Self::Found(set_point) = self else { return None };
+        Some(format!(
+            "segments detected from the steps of '{}' instead of the input: {}; name the channel to split on with \
+             steps_from (or give segments) to choose otherwise",
+            set_point.channel,
+            set_point.words()
+        ))
+    }
+}
+
+/// Where the identification run's steps are detected: on the channel `named` (the project's or the
+/// user's `steps_from`), else on a set-point found in the log when its steps give segments, else on
+/// the input. The batch and the app both ask here, so they split a run alike.
+pub fn steps_from(run: &Run, junctions: &[usize], named: Option<&str>) -> StepsFrom {
+    if let Some(name) = named {
+        return StepsFrom::Named(name.to_owned());
+    }
+    match find_set_point(run, junctions) {
+        Some(found) if segments(run, junctions, None, Some(&found.channel)).is_ok() => {
+            StepsFrom::Found(found)
+        }
+        _ => StepsFrom::Input,
+    }
+}
+
 /// A scored run whose sample time is not the identification run's.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error(
@@ -207,7 +258,9 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
             Grid::Off(off) => return Err(off.into()),
         }
     }
-    let mut runs = Runs { ident, ident_junctions, validate, held_out, chirp, steady, notes };
+    let steps_from = steps_from(&ident, &ident_junctions, project.steps_from.as_deref());
+    notes.extend(steps_from.note());
+    let mut runs = Runs { ident, ident_junctions, steps_from, validate, held_out, chirp, steady, notes };
     runs.name_apart(project);
     runs.note_reused_identification(project);
     runs.note_coverage();

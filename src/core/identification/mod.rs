@@ -1,6 +1,6 @@
 //! The identification chain, in the order the data flow through it; every step imports only the
 //! steps before it, and none imports `pipeline`, which runs the chain:
-//! - the building blocks: `segment`, `arx`, `cluster`, `cluster_proposal`, `static_map`,
+//! - the building blocks: `segment`, `set_point` (a set-point channel found in a log), `arx`, `cluster`, `cluster_proposal`, `static_map`,
 //!   `initial_state`, `wiener`, `refine`;
 //! - the chain's vocabulary: `settings` (how an output is identified), `error`, `fits` (the
 //!   segments and their ARX models);
@@ -17,6 +17,7 @@ pub mod cluster_proposal;
 pub mod initial_state;
 pub mod refine;
 pub mod segment;
+pub mod set_point;
 pub mod static_map;
 pub mod wiener;
 

@@ -30,6 +30,7 @@ use crate::ui::state::session::{Session, SessionRun};
 use crate::ui::state::setup::OutputSetup;
 use crate::workflow::model::{self, EffectPlan, ModelSource};
 use crate::workflow::products::bode_grid;
+use crate::workflow::runs::{self, StepsFrom};
 
 /// The identification run and everything identified from it.
 pub struct IdentCache {
@@ -46,7 +47,9 @@ pub struct IdentCache {
     /// How `run` was made from several runs, or why it could not be, in words.
     join_note: Option<String>,
     given_segments: Option<Vec<Segment>>,
-    steps_from: Option<String>,
+    /// The setup's `steps_from`, and where the steps are detected given it ([`runs::steps_from`]).
+    named_steps_from: Option<String>,
+    steps_from: StepsFrom,
     /// The segments in use: the user's (checked) or the detected ones.
     pub segments: Result<Vec<Segment>, Unavailable>,
     /// One entry per output of the identification run, in its column order.
@@ -70,19 +73,19 @@ impl IdentCache {
             _ => join_identification(&sources)?,
         };
         let given = session.setup.segments.clone();
-        let steps_from = session.setup.steps_from.clone();
+        let named_steps_from = session.setup.steps_from.clone();
+        let same_run =
+            old.as_ref().is_some_and(|o| Arc::ptr_eq(&o.run, &run) && o.named_steps_from == named_steps_from);
+        let steps_from = match &old {
+            Some(o) if same_run => o.steps_from.clone(),
+            _ => runs::steps_from(&run, &junctions, named_steps_from.as_deref()),
+        };
         let (segments, mut old_outputs) = match old {
-            Some(old)
-                if Arc::ptr_eq(&old.run, &run)
-                    && old.given_segments == given
-                    && old.steps_from == steps_from =>
-            {
-                (old.segments, old.outputs)
-            }
+            Some(old) if same_run && old.given_segments == given => (old.segments, old.outputs),
             Some(old) => {
-                (detect_or_check(&run, &junctions, given.as_deref(), steps_from.as_deref()), old.outputs)
+                (detect_or_check(&run, &junctions, given.as_deref(), steps_from.channel()), old.outputs)
             }
-            None => (detect_or_check(&run, &junctions, given.as_deref(), steps_from.as_deref()), Vec::new()),
+            None => (detect_or_check(&run, &junctions, given.as_deref(), steps_from.channel()), Vec::new()),
         };
         let outputs = run
             .outputs
@@ -94,13 +97,13 @@ impl IdentCache {
                     None => OutputCache::new(&channel.name, &channel.unit),
                 };
                 let scored = scored_runs(session, &run, &channel.name, &mut cache.notes, &cache.scored);
-                cache.notes.splice(0..0, join_note.iter().cloned());
+                cache.notes.splice(0..0, join_note.iter().cloned().chain(steps_from.note()));
                 let setup = session.setup.output(&channel.name);
                 // An output with segments of its own (from a project) is fitted on those.
                 let own = setup
                     .segments
                     .as_deref()
-                    .map(|given| detect_or_check(&run, &junctions, Some(given), steps_from.as_deref()));
+                    .map(|given| detect_or_check(&run, &junctions, Some(given), steps_from.channel()));
                 cache.update(&run, own.as_ref().unwrap_or(&segments), setup, scored);
                 if let Some(note) = cache.fits.as_ref().ok().and_then(|fits| model::few_segments_note(fits)) {
                     cache.notes.push(note);
@@ -117,6 +120,7 @@ impl IdentCache {
             junctions,
             join_note,
             given_segments: given,
+            named_steps_from,
             steps_from,
             segments,
             outputs,
@@ -172,9 +176,9 @@ impl IdentCache {
         self.outputs.iter().any(|o| o.finishing.is_some())
     }
 
-    /// The channel the segments' steps are detected on, when it is not the input.
-    pub fn steps_from(&self) -> Option<&str> {
-        self.steps_from.as_deref()
+    /// Where the segments' steps are detected: the input, a named channel or a set-point found.
+    pub fn steps_from(&self) -> &StepsFrom {
+        &self.steps_from
     }
 
     /// True when the segments were detected (the user has not moved them).

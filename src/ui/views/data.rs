@@ -12,6 +12,7 @@ use crate::ui::state::session::{Session, SessionRun};
 use crate::ui::theme;
 use crate::ui::widgets::plot as plot_util;
 use crate::ui::widgets::segments::{self as segments_ui, EdgeDrag, SegmentOverlay};
+use crate::workflow::runs::StepsFrom;
 
 /// Height below which plots stop shrinking and the view scrolls instead.
 const MIN_PLOT_HEIGHT: f32 = 110.0;
@@ -52,8 +53,11 @@ pub fn data_ui(
     if let Some(ident) = ident {
         let how = match (ident.segments_are_automatic(), ident.steps_from()) {
             (false, _) => "moved by hand".to_owned(),
-            (true, None) => "detected from the input steps".to_owned(),
-            (true, Some(channel)) => format!("detected from the steps of {channel}"),
+            (true, StepsFrom::Input) => "detected from the input steps".to_owned(),
+            (true, StepsFrom::Named(channel)) => format!("detected from the steps of {channel}"),
+            (true, StepsFrom::Found(set_point)) => {
+                format!("detected from the steps of {}, found to be a set-point", set_point.channel)
+            }
         };
         commands.extend(segments_header_ui(ui, &ident.segments, ident.segments_are_automatic(), &how));
     }

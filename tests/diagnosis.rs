@@ -496,3 +496,42 @@ fn a_cross_validation_fold_never_sees_the_responses_it_holds_out() {
         assert!(worst < 1e-6, "the held-out measurements moved the fold's fit by {worst}");
     }
 }
+
+/// The report's words agree with its table, on the soak sample, where a physical effect and a
+/// structural refinement are both significant: "structure is the missing piece" only when a
+/// structural refinement is the top significant entry (the one the loop takes), and no refinement
+/// is offered as a zero so far out that it shapes nothing.
+#[test]
+fn the_notes_agree_with_the_ranking() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let project = crate::common::sample("soak/project.toml");
+    let o = crate::common::jetid(&[
+        "--batch",
+        project.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("report.json")).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let notes: Vec<&str> =
+        report["diagnostics"].as_array().unwrap().iter().filter_map(|n| n.as_str()).collect();
+    for (name, output) in report["outputs"].as_object().unwrap() {
+        let entries = output["diagnosis"].as_array().unwrap();
+        let top = entries.iter().find(|e| e["significant"] == true);
+        let says_missing_piece = notes
+            .iter()
+            .any(|n| n.starts_with(&format!("diagnosis of '{name}': structure is the missing piece")));
+        let top_is_structure = top.is_some_and(|e| e["kind"] == "structure");
+        assert_eq!(says_missing_piece, top_is_structure, "{name}: top {top:?}, notes {notes:?}");
+        for entry in entries {
+            let evidence = entry["evidence"].as_str().unwrap();
+            if let Some(rest) = evidence.split("needs a zero at ").nth(1) {
+                let z: f64 = rest.split(':').next().unwrap().trim().parse().unwrap();
+                assert!(z.abs() <= 100.0, "{name}: a zero at {z} offered: {evidence}");
+            }
+        }
+    }
+}

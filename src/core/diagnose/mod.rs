@@ -415,13 +415,10 @@ impl Trials {
     /// The report: the trials ranked by validation RMSPE, and what the structure needs in words.
     fn into_report(mut self, bench: &Bench<'_>) -> DiagnosisReport {
         self.entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
-        let structure_note = self
-            .entries
-            .iter()
-            .find(|d| d.kind == DiagnosisKind::Structure && d.significant)
-            .map(|d| format!("structure is the missing piece: {}", d.evidence));
+        // The words follow the ranking: structure is "the missing piece" only when no physics ranks
+        // above it (the table and the loop take the top significant entry).
         let yardstick = bench.judge.yardstick;
-        DiagnosisReport {
+        let mut report = DiagnosisReport {
             output: bench.current.output.clone(),
             rmspe_current_pct: bench.judge.rmspe_before_pct,
             rmspe_refit_pct: mean_rmspe(&yardstick.validation),
@@ -429,7 +426,17 @@ impl Trials {
             held_out_segments: bench.folds.map_or(0, HeldOut::segments),
             entries: self.entries,
             skipped: self.skipped,
-            structure_note,
-        }
+            structure_note: None,
+        };
+        let top_is_physics = report.top_is_physics();
+        report.structure_note =
+            report.entries.iter().find(|d| d.kind == DiagnosisKind::Structure && d.significant).map(|d| {
+                if top_is_physics {
+                    format!("below the physics ranked first, the structure may also improve: {}", d.evidence)
+                } else {
+                    format!("structure is the missing piece: {}", d.evidence)
+                }
+            });
+        report
     }
 }

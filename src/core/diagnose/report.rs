@@ -155,11 +155,18 @@ pub struct DiagnosisReport {
     /// The effects not tried, with the reason.
     pub skipped: Vec<SkippedEffect>,
     /// When a structural refinement is significant: what the linear block or the map needs, in
-    /// words ("the linear block needs a pole pair near 2.31 rad/s (ζ 0.60)").
+    /// words that follow the ranking ("structure is the missing piece: the linear block needs a pole
+    /// pair near 2.31 rad/s (ζ 0.60)", or "below the physics ranked first, the structure may also
+    /// improve: …" when a physical effect ranks above it).
     pub structure_note: Option<String>,
 }
 
 impl DiagnosisReport {
+    /// Whether the top significant entry (the one the loop would take) is a physical effect.
+    pub fn top_is_physics(&self) -> bool {
+        self.entries.iter().find(|d| d.significant).is_some_and(|d| d.kind == DiagnosisKind::Physics)
+    }
+
     /// What the trials were judged on besides the validation runs, in one sentence.
     pub fn held_out_words(&self) -> String {
         match self.held_out_refit_pct {

@@ -25,8 +25,8 @@ pub(super) struct Scores {
 
 /// Why a trial's held-out errors were not computed: its validation error does not fall enough for
 /// any p-value to make it significant, so the dear refits would change nothing.
-pub(super) const NOT_CONSULTED: &str =
-    "not consulted: the validation error does not fall by the 10 % a significant change needs";
+pub(super) const NOT_CONSULTED: &str = "not consulted: the validation error does not fall by 10 % of the refitted \
+    current model's, which a significant change needs";
 
 /// Why a model has no held-out errors although the data have a cross-validation.
 const NOT_REFITTED: &str = "not available: the model could not be refitted on every fold (or it \

@@ -19,6 +19,25 @@ use crate::core::identification::cluster::natural_freq_and_damping;
 use crate::core::identification::direct_fit::{pair_guesses, real_pole_guesses};
 use crate::core::identification::words::root_words;
 
+/// A zero farther than this from the origin shapes nothing: the factor (z − z₀)/(1 − z₀) it adds
+/// stays within 2/|z₀| of 1 around the unit circle: under 2 % (0.2 dB) of gain and 0.6° of phase at
+/// every frequency, so it only rescales the gain the static map absorbs.
+const FAR_ZERO: f64 = 100.0;
+
+/// "the linear block needs a zero at 0.412", or, for a zero beyond [`FAR_ZERO`], that it only
+/// rescales the gain (the fit ran the zero away, so the structure does not need one).
+fn zero_words(z: f64) -> String {
+    if z.abs() > FAR_ZERO {
+        format!(
+            "a zero does not help: the fit puts it at {}, so far out that it changes the frequency response by \
+             under 2 %",
+            crate::core::numerics::stats::significant(z, 3)
+        )
+    } else {
+        format!("the linear block needs a zero at {z:.3}")
+    }
+}
+
 /// Real zeros a new zero is started from: a lead (0.9, 0.6), none (0), a lag (−0.5) — the span of
 /// what one zero beside the poles can do to a step response.
 const ZERO_GUESSES: [f64; 5] = [0.9, 0.6, 0.3, 0.0, -0.5];
@@ -176,10 +195,7 @@ fn describe(change: StructuralChange, s: &Structure, dt_secs: f64) -> String {
             let upper = s.poles.iter().rev().take(2).find(|z| z.im >= 0.0).copied();
             upper.map_or_else(String::new, |z| format!("the linear block needs a pole {}", words(z, true)))
         }
-        StructuralChange::Zero => s
-            .zeros
-            .last()
-            .map_or_else(String::new, |z| format!("the linear block needs a zero at {:.3}", z.re)),
+        StructuralChange::Zero => s.zeros.last().map_or_else(String::new, |z| zero_words(z.re)),
         StructuralChange::MapOrder => format!("the static map needs order {}", s.map_order),
         StructuralChange::ScheduledTimeConstant => String::new(),
     }

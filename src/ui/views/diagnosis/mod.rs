@@ -180,10 +180,11 @@ fn ranking_ui(
     applied: &[EffectId],
 ) -> Vec<Command> {
     let mut commands = Vec::new();
-    let physics_found = report.entries.iter().any(|e| e.significant && e.kind == DiagnosisKind::Physics);
     hint(ui, &format!("Judged on the validation runs; {}.", report.held_out_words()));
-    if let Some(note) = report.structure_note.as_ref().filter(|_| physics_found) {
-        hint(ui, &format!("The structure may also improve: {note}."));
+    if let Some(note) = report.structure_note.as_ref().filter(|_| report.top_is_physics()) {
+        let mut chars = note.chars();
+        let first = chars.next().map(|c| c.to_uppercase().collect::<String>()).unwrap_or_default();
+        hint(ui, &format!("{first}{}.", chars.as_str()));
     } else if let Some(note) = &report.structure_note {
         egui::Frame::group(ui.style()).show(ui, |ui| {
             ui.set_width(ui.available_width());

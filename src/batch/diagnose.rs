@@ -43,7 +43,7 @@ pub fn diagnose_output(
             evidence: d.evidence.clone(),
             p_value: Some(d.test.p_value),
             held_out_rmspe_pct: d.test.held_out.map(|h| h.rmspe_after_pct),
-            significance: d.test.words(),
+            significance: d.significance_words(),
         })
         .collect();
     Ok((entries, skipped))

@@ -114,7 +114,7 @@ pub fn auto_effects(
             rmspe_before_pct: top.rmspe_before_pct,
             rmspe_after_pct: top.rmspe_after_pct,
             evidence: top.evidence.clone(),
-            significance: top.test.words(),
+            significance: top.significance_words(),
         });
         sequence.model = top.model.clone();
         sequence.record(&format!("+{} (auto)", top.effect), validation, settings);

@@ -344,6 +344,7 @@ impl Bench<'_> {
             evidence,
             model,
             rival: None,
+            why_not: None,
         });
     }
 
@@ -379,6 +380,19 @@ impl Bench<'_> {
         let beats_structure = held
             .as_ref()
             .is_none_or(|r| r.test.passes() || (evidence_says_dead_time && r.test.reduction > 0.0));
+        let why_not = match (beats_current, evidence.supports, beats_structure, &held) {
+            (true, false, ..) => {
+                Some("not counted: its own evidence does not show the effect's signature".to_owned())
+            }
+            (true, true, false, Some(rival)) => Some(format!(
+                "not counted: it does not beat the best structural refinement, {} ({:.3} %), beyond noise (against \
+                 it: {})",
+                rival.id,
+                rival.rmspe_pct,
+                rival.test.words()
+            )),
+            _ => None,
+        };
         trials.entries.push(Diagnosis {
             effect: TrialId::Effect(id),
             kind: DiagnosisKind::Physics,
@@ -390,6 +404,7 @@ impl Bench<'_> {
             evidence: evidence.sentence,
             model,
             rival: held,
+            why_not,
         });
     }
 

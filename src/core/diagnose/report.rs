@@ -117,9 +117,21 @@ pub struct Diagnosis {
     pub model: ExtendedModel,
     /// For a physical effect: the best structural refinement it had to beat as well.
     pub rival: Option<StructureRival>,
+    /// Why a physical effect that beats the current model is still not counted, when the test's
+    /// words do not say it: its own evidence does not show its signature, or it does not beat the
+    /// best structural refinement.
+    pub why_not: Option<String>,
 }
 
 impl Diagnosis {
+    /// What the witnesses say, and why the trial is not counted when they alone do not explain it.
+    pub fn significance_words(&self) -> String {
+        match &self.why_not {
+            Some(why) => format!("{}; {why}", self.test.words()),
+            None => self.test.words(),
+        }
+    }
+
     /// Share of the validation RMSPE the effect removes (negative when it makes things worse).
     pub fn relative_reduction(&self) -> f64 {
         1.0 - self.rmspe_after_pct / self.rmspe_before_pct.max(f64::MIN_POSITIVE)

@@ -363,7 +363,7 @@ fn entry_ui(
         });
         ui.label(RichText::new(&entry.physics).italics());
         hint(ui, &entry.evidence);
-        hint(ui, &entry.test.words());
+        hint(ui, &entry.significance_words());
         if let Some(rival) = &entry.rival {
             let versus = format!("the best structural refinement, {} ({:.3} %)", rival.id, rival.rmspe_pct);
             let p = diagnose::p_text(rival.test.p_value);

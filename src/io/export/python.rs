@@ -137,13 +137,13 @@ const USAGE: &str = r#"#
 #                          `jetid predict ... --map output=NAME` does
 # Import: simulate(u, aux, measured) -> {output: array}; operating_point(output, u_star) -> the
 #   local linear model as a control.TransferFunction; load_run(path, LoadOptions()) reads a run
-#   file as jetid does. Needs numpy and python-control.
+#   file as jetid does. Needs numpy; TF and operating_point also python-control, imported only
+#   when they are used (it takes a second or two to load), so the command line starts at once.
 import math
 import os
 import re
 import sys
 
-import control
 import numpy as np
 "#;
 

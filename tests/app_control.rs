@@ -32,10 +32,10 @@ fn the_control_view_schedules_the_model_and_follows_it() {
     harness.get_by_label("u* [gal/h]");
     harness.get_by_label("dy/du [N/(gal/h)]");
     assert_eq!(
-        jetid::ui::views::control::gain_legend(2.5, &jetid::io::report::gain_unit("rpm", "gal/h")),
+        jetid::ui::views::control::gain_legend(2.5, &jetid::io::report::markdown::gain_unit("rpm", "gal/h")),
         "local gain dy/du (largest 2.5000e0 rpm/(gal/h))"
     );
-    assert!(jetid::io::report::gain_unit("rpm", "").ends_with("per input unit"));
+    assert!(jetid::io::report::markdown::gain_unit("rpm", "").ends_with("per input unit"));
     // Thrust grows faster than linearly with fuel flow: the local gain rises along the range.
     assert!(points[8].gain > points[0].gain, "{} vs {}", points[8].gain, points[0].gain);
     harness.get_by_label("grid 5").click();

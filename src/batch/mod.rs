@@ -237,7 +237,7 @@ impl Batch<'_> {
             residuals::residual_reports(self.out_dir, &output, models, &runs.scored(), sigma, notes)
         });
         out.residuals = residuals;
-        out.failing = crate::io::report::failing_models(out);
+        out.failing = crate::io::report::markdown::failing_models(out);
         (out.operating_points, out.continuous) = control::control_report(extended, runs, notes);
         part.figures.extend(figs);
         if runs.steady.is_some() && self.input_noise.is_some() {

@@ -9,9 +9,8 @@ use crate::core::identification::pipeline::Identified;
 use crate::core::numerics::metrics::Metrics;
 use crate::io::model_file::{ModelFile, write_model};
 use crate::io::project::Project;
-use crate::io::report::{
-    IdentSummary, OutputReport, REPORT_FORMAT_VERSION, Report, write_report_json, write_report_md,
-};
+use crate::io::report::markdown::write_report_md;
+use crate::io::report::{IdentSummary, OutputReport, REPORT_FORMAT_VERSION, Report, write_report_json};
 
 use crate::workflow::runs::Runs;
 

@@ -37,18 +37,10 @@ impl ResidualTrace {
 
 pub use crate::core::numerics::stats::mean;
 
-/// Pearson correlation; 0 when either signal is constant.
+/// Pearson correlation over the samples both have; 0 when either signal is constant.
 pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let (ma, mb) = (mean(a), mean(b));
-    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        sab += (x - ma) * (y - mb);
-        saa += (x - ma) * (x - ma);
-        sbb += (y - mb) * (y - mb);
-    }
-    if saa <= 0.0 || sbb <= 0.0 { 0.0 } else { sab / (saa * sbb).sqrt() }
+    crate::core::numerics::stats::pearson(&a[..n], &b[..n]).unwrap_or(0.0)
 }
 
 /// Correlation of `e[k]` with `x[k − lag]` over the samples where both exist.

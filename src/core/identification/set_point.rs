@@ -9,6 +9,7 @@
 //! lies in the same order as the set-point's levels, [`MIN_RANK_CORRELATION`] over at least
 //! [`MIN_HOLDS`] holds).
 use crate::core::identification::segment::SegmentSettings;
+use crate::core::numerics::stats::pearson;
 use crate::core::run::{Channel, Run};
 
 /// Share of consecutive samples in which a set-point repeats its value exactly. A set-point is
@@ -152,16 +153,7 @@ fn settled(y: &[f64], start: usize, end: usize, range: f64) -> Option<f64> {
 
 /// Spearman's rank correlation (ties get their mean rank); `None` when either side is constant.
 fn spearman(a: &[f64], b: &[f64]) -> Option<f64> {
-    let (ra, rb) = (ranks(a), ranks(b));
-    let n = ra.len() as f64;
-    let (ma, mb) = (ra.iter().sum::<f64>() / n, rb.iter().sum::<f64>() / n);
-    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
-    for (x, y) in ra.iter().zip(&rb) {
-        sab += (x - ma) * (y - mb);
-        saa += (x - ma) * (x - ma);
-        sbb += (y - mb) * (y - mb);
-    }
-    (saa > 0.0 && sbb > 0.0).then(|| sab / (saa * sbb).sqrt())
+    pearson(&ranks(a), &ranks(b))
 }
 
 fn ranks(x: &[f64]) -> Vec<f64> {

@@ -6,6 +6,20 @@ pub fn mean(x: &[f64]) -> f64 {
     if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }
 
+/// Pearson correlation of two equally long series; `None` when either has no spread.
+pub fn pearson(x: &[f64], y: &[f64]) -> Option<f64> {
+    let (mx, my) = (mean(x), mean(y));
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        let (da, db) = (a - mx, b - my);
+        sxy += da * db;
+        sxx += da * da;
+        syy += db * db;
+    }
+    let denom = (sxx * syy).sqrt();
+    (denom > f64::MIN_POSITIVE && denom.is_finite()).then(|| (sxy / denom).clamp(-1.0, 1.0))
+}
+
 /// Sum of squares ‖r‖² (the cost the Levenberg–Marquardt loops minimise).
 pub fn sum_of_squares(r: &[f64]) -> f64 {
     r.iter().map(|x| x * x).sum()

@@ -3,8 +3,9 @@
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-use super::signal::{autocorrelation_pair, centred, moving_average, normal_two_sided_p, pearson};
+use super::signal::{autocorrelation_pair, centred, moving_average, normal_two_sided_p};
 use crate::core::numerics::lstsq::solve_lstsq;
+use crate::core::numerics::stats::pearson;
 
 /// Two-sided 99 % point of the standard normal distribution.
 pub const Z_99: f64 = 2.576;

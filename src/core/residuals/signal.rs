@@ -22,20 +22,6 @@ pub(super) fn median(x: &[f64]) -> f64 {
     }
 }
 
-/// Pearson correlation of two equally long series; `None` when either has no spread.
-pub(super) fn pearson(x: &[f64], y: &[f64]) -> Option<f64> {
-    let (mx, my) = (mean(x), mean(y));
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        let (da, db) = (a - mx, b - my);
-        sxy += da * db;
-        sxx += da * da;
-        syy += db * db;
-    }
-    let denom = (sxx * syy).sqrt();
-    (denom > f64::MIN_POSITIVE && denom.is_finite()).then(|| (sxy / denom).clamp(-1.0, 1.0))
-}
-
 /// Centred moving average over `window` samples; the window shrinks at the ends.
 pub(super) fn moving_average(x: &[f64], window: usize) -> Vec<f64> {
     let half = window / 2;

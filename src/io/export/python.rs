@@ -10,33 +10,50 @@ pub(super) fn render(plan: &Plan) -> String {
         text.push_str(&format!("# {line}\n"));
     }
     text.push_str(USAGE);
-    text.push_str(&format!(
-        "\nDT = {}\nINPUT = {:?}\n# The model file, as `jetid predict` names it in messages.\nMODEL_FILE = {}\n\n",
-        num(plan.dt_secs),
-        plan.input,
-        string(&plan.source)
-    ));
-    text.push_str(
-        "# Per output: the numbers of every step of its signal path (see simulate()).\nOUTPUTS = {\n",
-    );
-    for out in &plan.outputs {
-        text.push_str(&format!("    {:?}: {},\n", out.name, output(out)));
-    }
-    text.push_str("}\n\n");
-    text.push_str(
-        "# The linear block G(z) of each output (z^-1 coefficients padded to positive powers of z); TF holds\n\
-         # them as control.TransferFunction objects, made when TF is first used (see __getattr__).\nTF_COEFFS = {\n",
-    );
-    for out in &plan.outputs {
-        let (n, d) = out.tf.positive_powers();
-        text.push_str(&format!("    {:?}: ({}, {}),\n", out.name, list(&n, "[", "]"), list(&d, "[", "]")));
-    }
-    text.push_str("}\n");
+    text.push_str(&constants(plan));
+    text.push_str(&outputs_dict(plan));
+    text.push_str(&tf_coeffs_dict(plan));
     text.push_str(RUNTIME);
     text.push_str(READ_RUN);
     text.push_str(MAIN);
     text
 }
+
+/// The sample time, the input's name and the model file's name.
+fn constants(plan: &Plan) -> String {
+    format!(
+        "\nDT = {}\nINPUT = {:?}\n# The model file, as `jetid predict` names it in messages.\nMODEL_FILE = {}\n\n",
+        num(plan.dt_secs),
+        plan.input,
+        string(&plan.source)
+    )
+}
+
+/// `OUTPUTS`: per output, the numbers of every step of its signal path.
+fn outputs_dict(plan: &Plan) -> String {
+    let entries: String =
+        plan.outputs.iter().map(|out| format!("    {:?}: {},\n", out.name, output(out))).collect();
+    format!("{OUTPUTS_COMMENT}OUTPUTS = {{\n{entries}}}\n\n")
+}
+
+/// `TF_COEFFS`: each output's linear block G(z) in positive powers of z.
+fn tf_coeffs_dict(plan: &Plan) -> String {
+    let entries: String = plan
+        .outputs
+        .iter()
+        .map(|out| {
+            let (n, d) = out.tf.positive_powers();
+            format!("    {:?}: ({}, {}),\n", out.name, list(&n, "[", "]"), list(&d, "[", "]"))
+        })
+        .collect();
+    format!("{TF_COEFFS_COMMENT}TF_COEFFS = {{\n{entries}}}\n")
+}
+
+const OUTPUTS_COMMENT: &str =
+    "# Per output: the numbers of every step of its signal path (see simulate()).\n";
+
+const TF_COEFFS_COMMENT: &str = "# The linear block G(z) of each output (z^-1 coefficients padded to positive powers of z); TF \
+    holds\n# them as control.TransferFunction objects, made when TF is first used (see __getattr__).\n";
 
 /// A Python string literal of any text (a JSON string is one).
 fn string(text: &str) -> String {

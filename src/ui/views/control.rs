@@ -96,7 +96,7 @@ pub fn control_ui(
                 output,
                 points,
                 &format!("u*: {}", crate::core::run::name_with_unit(&input.name, &input.unit)),
-                &crate::io::report::gain_unit(unit, &input.unit),
+                &crate::io::report::markdown::gain_unit(unit, &input.unit),
             )
         });
         ui.allocate_ui(egui::vec2(half, plot_height), |ui| step_plot(ui, output, points, state.selected));
@@ -255,7 +255,10 @@ fn bode_plots(
                         let name = if phase {
                             title.clone()
                         } else {
-                            format!("{title} [dB of {}]", crate::io::report::gain_unit(unit, input_unit))
+                            format!(
+                                "{title} [dB of {}]",
+                                crate::io::report::markdown::gain_unit(unit, input_unit)
+                            )
                         };
                         plot_ui.line(Line::new(name, points).color(theme::MODEL).width(2.0));
                         if let (false, Some(bw)) = (phase, p.bandwidth_rad_s) {
@@ -289,7 +292,7 @@ fn table_ui(
                 "point".to_owned(),
                 format!("u*{}", crate::core::run::bracketed_unit(input_unit)),
                 format!("y*{}", crate::core::run::bracketed_unit(unit)),
-                format!("dy/du [{}]", crate::io::report::gain_unit(unit, input_unit)),
+                format!("dy/du [{}]", crate::io::report::markdown::gain_unit(unit, input_unit)),
                 "poles".to_owned(),
                 "bandwidth [rad/s]".to_owned(),
                 "rise 10–90 % [s]".to_owned(),

@@ -142,7 +142,7 @@ fn detect(
         Some((i, d)) => format!(
             "rank {} {:+.0}% p={:.0e}{}",
             i + 1,
-            -100.0 * d.relative_reduction(),
+            -100.0 * d.test.reduction,
             d.test.p_value,
             if i == 0 { String::new() } else { format!(" (first: {})", best.effect) }
         ),

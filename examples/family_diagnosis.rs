@@ -73,24 +73,21 @@ fn main() -> Result<()> {
             );
             for d in report.entries.iter().take(4) {
                 println!(
-                    "    {:<20} {:<9} {} {:.3} → {:.3} p={:.1e}{}  | {}",
+                    "    {:<20} {:<9} {} {:.3} → {:.3} p={:.1e}  | {}",
                     d.effect,
                     d.kind.label(),
                     if d.significant { "SIG" } else { "   " },
                     d.rmspe_before_pct,
                     d.rmspe_after_pct,
                     d.test.p_value,
-                    d.rival.as_ref().map_or(String::new(), |r| format!(
-                        " vs {} p={:.1e} {:+.0}%",
-                        r.id,
-                        r.test.p_value,
-                        -100.0 * r.test.reduction
-                    )),
                     d.evidence
                 );
             }
             if let Some(note) = &report.structure_note {
                 println!("    NOTE {note}");
+            }
+            if let Some(note) = &report.attribution_note {
+                println!("    TIE {note}");
             }
         }
     }

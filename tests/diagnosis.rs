@@ -250,6 +250,31 @@ fn transport_delay_is_found() {
     }
 }
 
+/// Where a dead time and a pole pair explain the same residual (the identification barred from
+/// timing the dead time), the diagnosis says so: both named, with the numbers, the verdict and the
+/// bench experiment that would separate them; and a physical effect it does not count says why.
+#[test]
+fn two_explanations_of_one_residual_are_named_with_the_test_that_separates_them() {
+    let b = bench(&["transport_delay:delay_s=1.0"], 2);
+    let c = speed_without_dead_time(&b);
+    let report = diagnose(&c.model, &b.ident, &c.fits, &[&b.validation, &b.chirp], &c.settings).unwrap();
+    let note = report.attribution_note.as_deref().unwrap_or_else(|| panic!("no note: {}", summary(&report)));
+    // The trial the loop takes, and another trial of the report beside it.
+    let taken = report.entries.iter().find(|d| d.significant).unwrap().effect.name();
+    assert!(note.contains(taken), "{note}\ntaken: {taken}");
+    let others = report.entries.iter().filter(|d| d.effect.name() != taken && note.contains(d.effect.name()));
+    assert!(others.count() >= 1, "{note}");
+    assert!(note.contains("cannot be told apart") || note.contains("explain the same residual"), "{note}");
+    assert!(note.contains(" σ") && note.contains("A test that would separate them: "), "{note}");
+    assert!(
+        note.contains("is counted") || note.contains("is not counted") || note.contains("Taken: "),
+        "{note}"
+    );
+    for d in report.entries.iter().filter(|d| !d.significant && d.test.passes()) {
+        assert!(d.why_not.is_some() || d.kind == DiagnosisKind::Structure, "{} without a reason", d.effect);
+    }
+}
+
 /// With the default settings the identification itself times the dead time (the segment models fit
 /// best with the input late, and the kept roots do not explain the late start): the model carries it,
 /// within three samples of the simulator's.

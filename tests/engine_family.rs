@@ -11,7 +11,8 @@
 //! - **No false physics.** On effect-free engines no physical effect is significant on either
 //!   output, after the structural refinements the diagnosis proposes are taken (as a user would).
 //! - **Each effect is found.** An effect of the catalog hidden in engines of the family is the first
-//!   significant physics the workbench loop reaches on at least two engines (a dead time may instead
+//!   significant physics the workbench loop reaches on at least two engines (on shaft speed, and
+//!   on thrust for the effects before the spool tested there) (a dead time may instead
 //!   be timed by the identification itself; a stand resonance excited by random buffeting is found
 //!   by its spectral evidence), and nothing stops dead.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -26,6 +27,7 @@ use jetid::core::identification::reduce::{IdentData, count_of};
 use jetid::core::identification::segment::SegmentSettings;
 use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
+use jetid::core::parallel::on_two_threads;
 use jetid::core::run::Run;
 use jetid::sim::{DrawnEngine, Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};
 
@@ -76,23 +78,10 @@ fn identify(b: &Bench, output: &str) -> (Identified, OutputSettings) {
     (identified, settings)
 }
 
-/// Run `f` on each item on two threads (the machine's cores); results in order.
-fn parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let half = items.len().div_ceil(2);
-    std::thread::scope(|scope| {
-        let f = &f;
-        let handles: Vec<_> = items
-            .chunks(half.max(1))
-            .map(|chunk| scope.spawn(move || chunk.iter().map(f).collect::<Vec<R>>()))
-            .collect();
-        handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
-    })
-}
-
 #[test]
 fn the_automatic_speed_model_is_within_1_3_times_a_direct_fit_on_20_engines() {
     let seeds: Vec<u64> = (1..=ENGINES).collect();
-    let rows = parallel(&seeds, |&seed| {
+    let rows = on_two_threads(&seeds, |&seed| {
         let b = bench(seed, &[]);
         let (identified, settings) = identify(&b, SPEED);
         let truth = &b.validation.truth.output(SPEED).unwrap().values;
@@ -169,7 +158,7 @@ fn summary(report: &DiagnosisReport) -> String {
 #[test]
 fn no_effect_free_engine_gets_a_significant_effect() {
     let seeds: Vec<u64> = (1..=ENGINES).collect();
-    let failures: Vec<String> = parallel(&seeds, |&seed| {
+    let failures: Vec<String> = on_two_threads(&seeds, |&seed| {
         let b = bench(seed, &[]);
         [SPEED, THRUST]
             .into_iter()
@@ -208,7 +197,7 @@ fn found_on_benches(
     output: &str,
     found: impl Fn(&Bench, &DiagnosisReport) -> bool + Sync,
 ) -> (usize, String) {
-    let outcomes = parallel(&EFFECT_ENGINES, |&seed| {
+    let outcomes = on_two_threads(&EFFECT_ENGINES, |&seed| {
         let b = make(seed);
         let report = structure_first(&b, output);
         (found(&b, &report), format!("engine {seed}: {}", summary(&report)))
@@ -294,6 +283,24 @@ fn rate_limit_is_found_on_engines_of_the_family() {
     });
     eprintln!("rate_limit:\n{log}");
     assert!(count >= 2, "rate_limit found on {count} of {} engines:\n{log}", EFFECT_ENGINES.len());
+}
+
+/// Effects that act before the spool act on thrust too, and are found there: their signature is
+/// read on the shaft speed through the thrust model's spool, their benefit judged on thrust in
+/// units of the load cell's noise.
+#[test]
+fn rate_limit_is_found_on_thrust_too() {
+    let (count, log) = found_on("rate_limit", THRUST, |_, report| {
+        first_physics_is(report, "rate_limit")
+            && report.entries.iter().any(|d| d.effect.name() == "rate_limit" && d.evidence.contains(SPEED))
+    });
+    eprintln!("rate_limit on thrust:\n{log}");
+    assert!(count >= 2, "rate_limit found on thrust on {count} of {} engines:\n{log}", EFFECT_ENGINES.len());
+}
+
+#[test]
+fn thermal_soak_is_found_on_thrust_too() {
+    assert_found_on_two("thermal_soak", THRUST);
 }
 
 /// The bleed valve opens at 78,000 rpm (corrected), inside the top of every engine's range.

@@ -30,6 +30,7 @@ pub fn diagnose_output(
         .map(|s| format!("diagnosis of '{output}': {} not tried: {}", s.effect, s.reason))
         .chain(std::iter::once(format!("diagnosis of '{output}': {}", report.held_out_words())))
         .chain(report.structure_note.iter().map(|n| format!("diagnosis of '{output}': {n}")))
+        .chain(report.attribution_note.iter().map(|n| format!("diagnosis of '{output}': {n}")))
         .collect();
     let entries = report
         .entries
@@ -40,6 +41,7 @@ pub fn diagnose_output(
             significant: d.significant,
             rmspe_before_pct: d.rmspe_before_pct,
             rmspe_after_pct: d.rmspe_after_pct,
+            beyond_noise_after: Some(d.beyond_noise_after),
             evidence: d.evidence.clone(),
             p_value: Some(d.test.p_value),
             held_out_rmspe_pct: d.test.held_out.map(|h| h.rmspe_after_pct),

@@ -7,6 +7,7 @@ pub mod effects;
 pub mod identification;
 pub mod monte_carlo;
 pub mod numerics;
+pub mod parallel;
 pub mod residuals;
 pub mod run;
 pub mod running_window;

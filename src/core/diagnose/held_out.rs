@@ -13,11 +13,10 @@
 //! the current model refitted on the fold, then the trial's block or refinement added to that and
 //! searched from its own starting points ([`Recipe`]). Nothing a fold fits was chosen with its
 //! held-out samples in view.
-use super::mean_rmspe;
+use super::loss::{Errors, measurement_sigma};
 use crate::core::effects::{
     EffectId, ExtendedModel, FOLDS, FitData, StructuralChange, apply_effect, refine_structure, refit,
 };
-use crate::core::numerics::stats::sigma_from_first_differences;
 
 /// What a model is, as a fit to repeat on every fold.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,9 +34,8 @@ pub(super) struct HeldOut {
     folds: [FitData; FOLDS],
     /// The current model refitted on each fold (`None` where that fails).
     references: Vec<Option<ExtendedModel>>,
-    /// The measurement noise over each held-out response as a percentage error (RMS of
-    /// `100 σ / y`), in time order.
-    noise_pct: Vec<f64>,
+    /// The measurement noise σ of the identification run (see `loss`).
+    sigma: f64,
 }
 
 impl HeldOut {
@@ -50,30 +48,7 @@ impl HeldOut {
                 folds.iter().map(|fold| scope.spawn(move || refit(current, fold).ok())).collect();
             jobs.into_iter().map(|j| j.join().ok().flatten()).collect()
         });
-        let sigma = sigma_from_first_differences(&data.y);
-        let mut responses: Vec<(usize, usize)> =
-            folds.iter().flat_map(|f| f.held_out.iter().copied()).collect();
-        responses.sort_unstable();
-        let noise_pct = responses
-            .iter()
-            .map(|&(a, b)| {
-                let pct: Vec<f64> = data
-                    .y
-                    .get(a..b)
-                    .unwrap_or_default()
-                    .iter()
-                    .filter(|y| y.abs() > f64::MIN_POSITIVE)
-                    .map(|y| 100.0 * sigma / y)
-                    .collect();
-                mean_rmspe(&[pct])
-            })
-            .collect();
-        Some(Self { folds, references, noise_pct })
-    }
-
-    /// Noise of each held-out response, % (see the field).
-    pub(super) fn noise_pct(&self) -> &[f64] {
-        &self.noise_pct
+        Some(Self { folds, references, sigma: measurement_sigma(&data.y) })
     }
 
     /// Segments the cross-validation holds out, over both folds.
@@ -81,7 +56,7 @@ impl HeldOut {
         self.folds.iter().map(|f| f.held_out.len()).sum()
     }
 
-    /// Percentage errors of the model `recipe` makes, fitted on each fold, on each segment response
+    /// Errors (see `loss`) of the model `recipe` makes, fitted on each fold, on each segment response
     /// that fold held out, in time order (samples where the measurement is zero are left out, for
     /// every model alike). `None` when a fold cannot be fitted or simulated: the trial is then
     /// judged on the validation runs alone. The folds are fitted on threads of their own.
@@ -90,7 +65,7 @@ impl HeldOut {
     /// block takes each run's calibration from the run's own measured holds, so on the
     /// identification run it would read the held-out responses' answer, and a drift between test
     /// days is not something one day's steps can witness.
-    pub(super) fn errors(&self, recipe: Recipe) -> Option<Vec<Vec<f64>>> {
+    pub(super) fn errors(&self, recipe: Recipe) -> Option<Vec<Errors>> {
         let drift = |m: &ExtendedModel| m.effect(EffectId::CalibrationDrift).is_some();
         if recipe == Recipe::Effect(EffectId::CalibrationDrift) || self.references.iter().flatten().any(drift)
         {
@@ -102,7 +77,9 @@ impl HeldOut {
                 .iter()
                 .zip(&self.references)
                 .map(|(fold, reference)| {
-                    scope.spawn(move || fold_errors(&fit(recipe, reference.as_ref()?, fold)?, fold))
+                    scope.spawn(move || {
+                        fold_errors(&fit(recipe, reference.as_ref()?, fold)?, fold, self.sigma)
+                    })
                 })
                 .collect();
             jobs.into_iter().map(|j| j.join().ok().flatten()).collect()
@@ -116,8 +93,8 @@ impl HeldOut {
     }
 }
 
-/// A held-out response: its first sample and the percentage errors over it.
-type Response = (usize, Vec<f64>);
+/// A held-out response: its first sample and the errors over it.
+type Response = (usize, Errors);
 
 /// The model `recipe` makes on `fold`, from the current model refitted there.
 fn fit(recipe: Recipe, reference: &ExtendedModel, fold: &FitData) -> Option<ExtendedModel> {
@@ -128,15 +105,13 @@ fn fit(recipe: Recipe, reference: &ExtendedModel, fold: &FitData) -> Option<Exte
     }
 }
 
-/// The responses `fold` held out, with the errors of `fitted` (fitted on it).
-fn fold_errors(fitted: &ExtendedModel, fold: &FitData) -> Option<Vec<Response>> {
+/// The responses `fold` held out, with the errors of `fitted` (fitted on it) against the
+/// identification run's noise `sigma`.
+fn fold_errors(fitted: &ExtendedModel, fold: &FitData, sigma: f64) -> Option<Vec<Response>> {
     let y_hat = fitted.simulate(&fold.run).ok()?;
     let segment = |&(a, b): &(usize, usize)| {
-        let errors: Vec<f64> = (a..b.min(y_hat.len()).min(fold.y.len()))
-            .filter(|&k| fold.y[k].abs() > f64::MIN_POSITIVE)
-            .map(|k| 100.0 * (fold.y[k] - y_hat[k]) / fold.y[k])
-            .collect();
-        errors.iter().all(|e| e.is_finite()).then_some((a, errors))
+        let errors = Errors::of(&fold.y, &y_hat, a..b, sigma);
+        errors.finite().then_some((a, errors))
     };
     fold.held_out.iter().map(segment).collect()
 }

@@ -8,55 +8,56 @@
 //! yardstick, so a trial is credited only with what its block adds, never with what refitting alone
 //! gives (which matters when the current model was edited by hand or built for another output).
 //!
-//! **When an effect counts as significant.** Validation residuals of simulated models are strongly
+//! **One footing: the error beyond the noise.** Every decision reads the residuals in units of
+//! each run's measurement noise, `z = (y − ŷ)/σ`, never the percentage error: at idle thrust the
+//! sensor noise alone is 10–20 % of the value, and a percentage loss is dominated by those samples
+//! wherever the physics acts (see `loss`). The error a change must reduce is the error beyond the
+//! noise, `√(mean z² − 1)` per run (an estimate of the RMS error against the noiseless truth),
+//! averaged over the runs; the ranking follows it. RMSPE stays the metric the report shows.
+//!
+//! **When a trial beats the current model.** Validation residuals of simulated models are strongly
 //! autocorrelated, so a plain comparison of error sums says little. Each trial is compared with the
 //! refitted current model by a one-sided Diebold–Mariano test on the per-sample loss differences
-//! `d_k = |p_refit,k| − |p_trial,k|` (`p` the percentage error), with the Newey–West long-run
-//! variance (Bartlett kernel, bandwidth read from the autocorrelation of `d`, lags kept inside each
-//! run; see [`crate::core::effects::stats::diebold_mariano`]). The absolute loss is used rather than
-//! the squared one because squared errors of a simulated model are dominated by a handful of large
-//! transients, which leaves the test with a few effective observations and little power; the
-//! ranking itself stays on RMSPE. An effect is *significant* when `p < SIGNIFICANCE_LEVEL` (0.01)
-//! **and** it removes at least `MIN_RELATIVE_REDUCTION` (10 %) of the refitted model's validation
-//! RMSPE (and beats the current model): a real effect must be both beyond what noise gives and large
-//! enough to matter. The second condition also guards against the many-candidates problem (ten
-//! trials per diagnosis) and against the small structural gains any extra parameter buys on an
-//! engine that is not exactly a Wiener system.
+//! `d_k = |z_refit,k| − |z_trial,k|`, with the Newey–West long-run variance (Bartlett kernel,
+//! bandwidth read from the autocorrelation of `d`, lags kept inside each run; see
+//! [`crate::core::effects::stats::diebold_mariano`]). The absolute loss is used rather than the
+//! squared one because squared errors of a simulated model are dominated by a handful of large
+//! transients, which leaves the test with a few effective observations and little power. A trial
+//! beats the current model when `p < SIGNIFICANCE_LEVEL` (0.01) **and** it removes at least
+//! `MIN_RELATIVE_REDUCTION` (10 %) of the refitted model's error beyond the noise on the validation
+//! runs: a real effect must be both beyond what noise gives and large enough to matter. The second
+//! condition also guards against the many-candidates problem (a dozen trials per diagnosis) and
+//! against the small gains any extra parameter buys on an engine that is not exactly a Wiener
+//! system.
 //!
 //! **Two witnesses.** A validation run can be short (a minute, a handful of steps) while the
 //! identification data hold many more. Where they have at least six segments, a three-fold
 //! cross-validation over them (see `held_out` and [`FitData::folds`]) refits the current model and
 //! each trial without a third of the segment responses and simulates them through the responses it
-//! never saw. The held-out RMSPE of each response, before minus after, goes into a one-sided
+//! never saw. Each response's RMS error over the noise, before minus after, goes into a one-sided
 //! Wilcoxon signed-rank test (responses are the independent units; ranks let no single transient
 //! carry it). It counts only over the responses the trial actually moves (its prediction differs
 //! from the current model's by more than the measurement noise), and only when at least
 //! [`MIN_WITNESS_RESPONSES`] do: a rate limit the identification steps never reach, or a drift
 //! between test days, cannot be witnessed by them. The two one-sided p-values are then combined by
 //! Stouffer's method (equal weights), under which a witness against the trial counts against it.
-//! The p-value of the rule above is that combination; the 10 % reduction stays on the validation
-//! runs, the error a user sees. A structural refinement is a property of the engine and shows on
-//! every step, so this is where the second witness matters most.
+//! Structural refinements and physical effects are cross-validated alike, whenever their validation
+//! error falls enough for the p-value to matter.
 //!
-//! **Structure before physics.** Before any effect is credited, the model's own structure is
-//! refined the same way (one more real pole, pole pair or zero, one more static-map order; see
-//! [`StructuralChange`]), judged by the same rule. A physical effect is significant only when it
-//! also beats the best of these refinements by that rule (one-sided Diebold–Mariano on the loss
-//! differences against the refinement, p < 0.01, and at least 10 % of its RMSPE removed): a lag
-//! block or a dead time that only stands in for a missing pole pair is no evidence of physics. When
-//! a refinement is significant the report says what the model needs, in words.
+//! **One decision** ([`decide`]). Structural refinements (one more real pole, pole pair or zero,
+//! one more static-map order, a scheduled spool; see [`StructuralChange`]) and physical effects
+//! are judged by the same test against the current model. A trial counts when it beats the current
+//! model; a physical effect also needs its own evidence (read from the current model's residuals,
+//! or from the spool's for effects that act before it: `spool_witness`) to show its signature, and
+//! the data must prefer it to the best structural refinement. The trials that count are ranked by
+//! their error beyond the noise, and the loop takes the first. There is no exception for any effect.
 //!
-//! **The evidence must agree.** A physical effect is significant only when the current model's
-//! residuals also show its signature: its own evidence sentence does not say there is little or
-//! nothing (see [`crate::core::effects::Evidence`]). A trial fit alone can buy a few percent with
-//! any flexible block; the residual's signature is what tells which physics it is.
-//!
-//! **Dead time or lag: the ranking follows the evidence.** A dead time shifts the whole step
-//! response late; a lag starts it on time but slower (see
-//! [`crate::core::effects::transport_delay::Lateness`]). Poles can mimic either, so where the
-//! measured responses show the whole response shifted, a dead time that fits the validation runs
-//! better than the best structural refinement (and is significant against the current model) is
-//! credited even when the refinement comes within 10 % of it.
+//! **Attribution that says what it knows.** When the two best trials that count cannot be told
+//! apart (the better does not beat the other beyond noise on the same witnesses), or when the best
+//! physics is dropped because a structural refinement explains the same residual, the report says
+//! so with the numbers and names the experiment that would separate them (`Trials::settle_tie`,
+//! `Trials::prefer_physics_only_on_evidence`). Between two that count, the held-out responses
+//! decide; without them the ranking stands.
 use crate::core::effects::stats::ResidualTrace;
 use crate::core::effects::{
     AmbientCorrection, EffectError, EffectId, Evidence, ExtendedModel, FOLDS, FitData, MIN_HELD_OUT_SEGMENTS,
@@ -70,19 +71,33 @@ use crate::core::run::Run;
 mod edit;
 mod held_out;
 mod history;
+mod loss;
 mod report;
+mod spool_witness;
 mod witness;
 pub use edit::{Edit, edit};
 use held_out::{HeldOut, Recipe};
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
-pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, StructureRival, TrialId};
+pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, TrialId};
 pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
 use witness::{Judge, Scores, Verdict};
 
-/// Largest one-sided p-value of a significant effect.
+/// Largest one-sided p-value of a significant effect: with a dozen trials per diagnosis, the chance
+/// that noise alone makes one of them significant stays near 10 % (1 − 0.99¹²), and the 10 %
+/// reduction below takes most of that away.
 pub const SIGNIFICANCE_LEVEL: f64 = 0.01;
-/// Smallest share of the validation RMSPE a significant effect must remove.
+/// Smallest share of the refitted model's validation error beyond the noise a significant trial
+/// must remove: a change of a few percent of the error against the truth is below what a user can
+/// see in a trace or a controller design would notice.
 pub const MIN_RELATIVE_REDUCTION: f64 = 0.10;
+
+/// A structural refinement is an alternative explanation of the residual a physical effect must
+/// beat when the witnesses lean its way against the current model: its one-sided p-value is below
+/// one half (its combined normal score is positive, the evidence says it is more likely better
+/// than the current model than not). One they lean against (worse on the held-out responses, say)
+/// explains nothing, however its validation error compares; one that is better but not
+/// significant still explains what a physical effect would, and the physics must then do better.
+pub const RIVAL_LEVEL: f64 = 0.5;
 
 /// Errors of a diagnosis that stop it as a whole (a single effect that cannot be tried is skipped).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -251,7 +266,7 @@ pub fn diagnose_with_progress(
         return Err(DiagnoseError::NoValidationRuns);
     }
     let data = FitData::new(ident, fits, settings)?;
-    let before = pct_errors(current, validation, settings.initial_state)?;
+    let before = Scores::of(current, validation, settings.initial_state)?;
     let reference = refit(current, &data)?;
     let folds = HeldOut::of(&data, current);
     let mut yardstick = Scores::of(&reference, validation, settings.initial_state)?;
@@ -264,8 +279,12 @@ pub fn diagnose_with_progress(
         all_runs: std::iter::once(ident).chain(validation.iter().copied()).collect(),
         initial: settings.initial_state,
         folds: folds.as_ref(),
-        judge: Judge { yardstick: &yardstick, rmspe_before_pct: mean_rmspe(&before) },
+        judge: Judge { yardstick: &yardstick, current: &before },
         traces: residual_traces(current, &data, validation, settings.initial_state)?,
+        spool: spool_witness::spool_traces(
+            current,
+            &std::iter::once(&data.run).chain(validation.iter().copied()).collect::<Vec<_>>(),
+        )?,
     };
     let mut trials = Trials::default();
     // Structure first: what the model's own linear block and map can still do.
@@ -295,18 +314,21 @@ struct Bench<'a> {
     judge: Judge<'a>,
     /// The current model's residuals (the evidence is read from them).
     traces: Vec<ResidualTrace>,
+    /// The measured shaft speed against the current model's spool, when this output is another
+    /// (see `spool_witness`): where effects that act before the spool are read.
+    spool: Option<(String, Vec<ResidualTrace>)>,
 }
 
-/// The trials so far, and the best structural refinement a physical effect must beat.
+/// The trials so far.
 #[derive(Default)]
 struct Trials {
-    entries: Vec<Diagnosis>,
+    /// Each trial with its errors and how it is fitted (for the comparisons between trials).
+    entries: Vec<(Diagnosis, Scores, Recipe)>,
     skipped: Vec<SkippedEffect>,
-    rival: Option<(StructureRival, Scores, Recipe)>,
 }
 
 impl Bench<'_> {
-    /// One structural refinement, refitted, scored and judged; the best becomes the rival.
+    /// One structural refinement, refitted, scored and judged.
     fn try_structure(&self, change: StructuralChange, trials: &mut Trials) {
         let trial = refine_structure(self.reference, change, self.data)
             .map_err(DiagnoseError::from)
@@ -324,28 +346,29 @@ impl Bench<'_> {
                 return;
             }
         };
-        let Verdict { test, rmspe_after_pct, significant } = self.judge.verdict(&after);
-        let rmspe_before_pct = self.judge.rmspe_before_pct;
+        let Verdict { test, rmspe_after_pct, beyond_noise_after, significant } = self.judge.verdict(&after);
+        let rmspe_before_pct = self.judge.current.rmspe();
         let evidence = format!(
             "{words}: with it the validation error goes from {rmspe_before_pct:.3} % to {rmspe_after_pct:.3} %"
         );
-        if trials.rival.as_ref().is_none_or(|(r, ..)| rmspe_after_pct < r.rmspe_pct) {
-            let r = StructureRival { id: change, rmspe_pct: rmspe_after_pct, test };
-            trials.rival = Some((r, after.clone(), Recipe::Structure(change)));
-        }
-        trials.entries.push(Diagnosis {
-            effect: TrialId::Structure(change),
-            kind: DiagnosisKind::Structure,
-            physics: change.meaning().to_owned(),
-            significant,
-            rmspe_before_pct,
-            rmspe_after_pct,
-            test,
-            evidence,
-            model,
-            rival: None,
-            why_not: None,
-        });
+        trials.entries.push((
+            Diagnosis {
+                effect: TrialId::Structure(change),
+                kind: DiagnosisKind::Structure,
+                physics: change.meaning().to_owned(),
+                significant,
+                rmspe_before_pct,
+                rmspe_after_pct,
+                beyond_noise_before: self.judge.current.beyond_noise(),
+                beyond_noise_after,
+                test,
+                evidence,
+                model,
+                why_not: None,
+            },
+            after,
+            Recipe::Structure(change),
+        ));
     }
 
     /// One effect of the catalog, refitted, scored and judged against the current model and the
@@ -368,80 +391,50 @@ impl Bench<'_> {
                 return;
             }
         };
-        let Verdict { test, rmspe_after_pct, significant: beats_current } = self.judge.verdict(&after);
-        let evidence = id.evidence(&self.traces);
-        let held = self.held_against_rival(trials, &after, beats_current && evidence.supports);
-        // The ranking follows the evidence where a lag and a dead time compete: when the whole
-        // response is shifted late (not only its later part), a dead time that fits better than the
-        // best structural refinement is credited even if the refinement comes close: a pole placed
-        // to mimic a dead time is no evidence against one.
-        let evidence_says_dead_time = id == EffectId::TransportDelay
-            && crate::core::effects::transport_delay::lateness(&self.traces).whole_response_late();
-        let beats_structure = held
-            .as_ref()
-            .is_none_or(|r| r.test.passes() || (evidence_says_dead_time && r.test.reduction > 0.0));
-        let why_not = match (beats_current, evidence.supports, beats_structure, &held) {
-            (true, false, ..) => {
-                Some("not counted: its own evidence does not show the effect's signature".to_owned())
-            }
-            (true, true, false, Some(rival)) => Some(format!(
-                "not counted: it does not beat the best structural refinement, {} ({:.3} %), beyond noise (against \
-                 it: {})",
-                rival.id,
-                rival.rmspe_pct,
-                rival.test.words()
-            )),
-            _ => None,
-        };
-        trials.entries.push(Diagnosis {
-            effect: TrialId::Effect(id),
-            kind: DiagnosisKind::Physics,
-            physics: id.physics().to_owned(),
-            significant: beats_current && beats_structure && evidence.supports,
-            rmspe_before_pct: self.judge.rmspe_before_pct,
-            rmspe_after_pct,
-            test,
-            evidence: evidence.sentence,
-            model,
-            rival: held,
-            why_not,
-        });
-    }
-
-    /// The best structural refinement with the test of the effect `after` against it; its held-out
-    /// errors are computed when an effect that could count (`could_count`) needs them.
-    fn held_against_rival(
-        &self,
-        trials: &mut Trials,
-        after: &Scores,
-        could_count: bool,
-    ) -> Option<StructureRival> {
-        if let Some((_, errors, recipe)) = trials.rival.as_mut().filter(|_| could_count) {
-            errors.cross_validate(*recipe, self.folds);
-        }
-        trials.rival.as_ref().map(|(r, errors, _)| StructureRival {
-            test: Comparison::of(errors, after, self.judge.yardstick),
-            ..r.clone()
-        })
+        let Verdict { test, rmspe_after_pct, beyond_noise_after, significant: beats_current } =
+            self.judge.verdict(&after);
+        let evidence = spool_witness::evidence(id, &self.traces, self.spool.as_ref());
+        let (significant, why_not) = decide(beats_current, evidence.supports);
+        trials.entries.push((
+            Diagnosis {
+                effect: TrialId::Effect(id),
+                kind: DiagnosisKind::Physics,
+                physics: id.physics().to_owned(),
+                significant,
+                rmspe_before_pct: self.judge.current.rmspe(),
+                rmspe_after_pct,
+                beyond_noise_before: self.judge.current.beyond_noise(),
+                beyond_noise_after,
+                test,
+                evidence: evidence.sentence,
+                model,
+                why_not,
+            },
+            after,
+            Recipe::Effect(id),
+        ));
     }
 }
 
 impl Trials {
     /// The report: the trials ranked by validation RMSPE, and what the structure needs in words.
     fn into_report(mut self, bench: &Bench<'_>) -> DiagnosisReport {
-        self.entries.sort_by(|a, b| a.rmspe_after_pct.total_cmp(&b.rmspe_after_pct));
+        self.entries.sort_by(|a, b| a.0.beyond_noise_after.total_cmp(&b.0.beyond_noise_after));
+        let preference_note = self.prefer_physics_only_on_evidence(bench);
+        let attribution_note = self.settle_tie(bench).or(preference_note);
         // The words follow the ranking: structure is "the missing piece" only when no physics ranks
         // above it (the table and the loop take the top significant entry).
         let yardstick = bench.judge.yardstick;
         let mut report = DiagnosisReport {
             output: bench.current.output.clone(),
-            rmspe_current_pct: bench.judge.rmspe_before_pct,
-            rmspe_refit_pct: mean_rmspe(&yardstick.validation),
+            rmspe_current_pct: bench.judge.current.rmspe(),
+            rmspe_refit_pct: yardstick.rmspe(),
             held_out_refit_pct: yardstick.held_out_rmspe(),
             held_out_segments: bench.folds.map_or(0, HeldOut::segments),
-            entries: self.entries,
+            entries: self.entries.into_iter().map(|(d, ..)| d).collect(),
             skipped: self.skipped,
             structure_note: None,
+            attribution_note,
         };
         let top_is_physics = report.top_is_physics();
         report.structure_note =
@@ -453,5 +446,204 @@ impl Trials {
                 }
             });
         report
+    }
+
+    /// Rule 3 of [`decide`]: the data must prefer a physical effect that counts by rules 1 and 2
+    /// to the best structural refinement (lowest error beyond the noise among those the witnesses
+    /// lean towards, see [`RIVAL_LEVEL`]).
+    ///
+    /// - It beats the refinement beyond noise on the same witnesses: it is preferred.
+    /// - The refinement beats it so: it is not counted.
+    /// - Neither beats the other: the two explain the same residual, and the held-out
+    ///   identification responses decide, as between any two trials that cannot be told apart
+    ///   (see [`Trials::settle_tie`]): the physics keeps its place only when its held-out witness
+    ///   against the current model is counted and at least as strong as the refinement's. Where
+    ///   the held-out responses support both alike (seven responses all better give both the
+    ///   floor p = 1/128), the physics' own evidence, which agrees or it would not count, is the
+    ///   support the refinement lacks. Without a held-out witness of its own, a block with more
+    ///   freedom has not shown it explains more, and the physics is not counted.
+    ///
+    /// The note names both with the numbers and the experiment that would separate them, for the
+    /// first physics this touches among the trials that count.
+    fn prefer_physics_only_on_evidence(&mut self, bench: &Bench<'_>) -> Option<String> {
+        if !self.entries.iter().any(|e| e.0.significant && e.0.kind == DiagnosisKind::Physics) {
+            return None;
+        }
+        // The entries are ranked: the first structural refinement the witnesses lean towards, all
+        // of them consulted (its own test may have spared the held-out refits).
+        let yardstick = bench.judge.yardstick;
+        let rival = (0..self.entries.len()).find(|&i| {
+            let (d, scores, recipe) = &mut self.entries[i];
+            if d.kind != DiagnosisKind::Structure || d.test.p_value >= RIVAL_LEVEL {
+                return false;
+            }
+            scores.cross_validate(*recipe, bench.folds);
+            Comparison::of(yardstick, scores, yardstick).p_value < RIVAL_LEVEL
+        })?;
+        let (rival_entry, rival_scores) = (self.entries[rival].0.clone(), self.entries[rival].1.clone());
+        let rival_support = held_out_support(&Comparison::of(yardstick, &rival_scores, yardstick));
+        let mut note = None;
+        let first_counting = self.entries.iter().position(|e| e.0.significant);
+        for (i, (d, scores, _)) in self.entries.iter_mut().enumerate() {
+            if !(d.significant && d.kind == DiagnosisKind::Physics) {
+                continue;
+            }
+            let against = Comparison::of(&rival_scores, scores, yardstick);
+            if against.p_value < SIGNIFICANCE_LEVEL && against.reduction > 0.0 {
+                continue;
+            }
+            let rival_better = Comparison::of(scores, &rival_scores, yardstick).p_value < SIGNIFICANCE_LEVEL;
+            let own_support = held_out_support(&d.test);
+            let held_out_prefers =
+                own_support.is_some_and(|own| rival_support.is_none_or(|theirs| own <= theirs));
+            let support_words = format!(
+                "held-out support against the current model: {} for {}, {} for {}",
+                support_text(own_support),
+                d.effect,
+                support_text(rival_support),
+                rival_entry.effect
+            );
+            let kept = !rival_better && held_out_prefers;
+            if !kept {
+                d.significant = false;
+                d.why_not = Some(format!(
+                    "not counted: the data do not prefer it to the best structural refinement, {} ({:.2} σ beyond \
+                     the noise): {}; {support_words}",
+                    rival_entry.effect,
+                    rival_entry.beyond_noise_after,
+                    against.words()
+                ));
+            }
+            if note.is_none() && first_counting == Some(i) {
+                note = Some(format!(
+                    "{} and {} explain the same residual: error beyond the noise {:.2} σ against {:.2} σ (RMSPE \
+                     {:.3} % against {:.3} %), and the physics does not beat the structure beyond noise ({}); \
+                     {support_words}. {}. A test that would separate them: {}; {}",
+                    d.effect,
+                    rival_entry.effect,
+                    d.beyond_noise_after,
+                    rival_entry.beyond_noise_after,
+                    d.rmspe_after_pct,
+                    rival_entry.rmspe_after_pct,
+                    against.words(),
+                    if kept {
+                        format!("{} is counted: the held-out responses prefer it", d.effect)
+                    } else {
+                        format!(
+                            "{} is not counted: the physics is taken only when the data prefer it",
+                            d.effect
+                        )
+                    },
+                    d.effect.separating_test(),
+                    rival_entry.effect.separating_test()
+                ));
+            }
+        }
+        note
+    }
+
+    /// When the two best significant trials cannot be told apart (the better does not beat the
+    /// other beyond noise, [`SIGNIFICANCE_LEVEL`], on the same witnesses), the data do not say
+    /// which explains the residual, and the note says so with the numbers and the experiment that
+    /// would separate them. The held-out identification responses then decide: the runner-up is
+    /// put first (where the loop takes it) only when its held-out witness is the stronger (a lower
+    /// signed-rank p-value against the current model; a trial whose held-out responses do not
+    /// witness has no such support). Otherwise the ranking stands. The evidence cannot decide
+    /// here: a physical effect that counts already has its signature, and a structural refinement
+    /// claims no physics to have one of.
+    fn settle_tie(&mut self, bench: &Bench<'_>) -> Option<String> {
+        let mut significant =
+            self.entries.iter().enumerate().filter(|(_, e)| e.0.significant).map(|(i, _)| i);
+        let (first, second) = (significant.next()?, significant.next()?);
+        for i in [first, second] {
+            let (_, scores, recipe) = &mut self.entries[i];
+            scores.cross_validate(*recipe, bench.folds);
+        }
+        let apart = Comparison::of(&self.entries[second].1, &self.entries[first].1, bench.judge.yardstick);
+        if apart.p_value < SIGNIFICANCE_LEVEL {
+            return None;
+        }
+        let (a, b) = (&self.entries[first].0, &self.entries[second].0);
+        let support = |d: &Diagnosis| held_out_support(&d.test);
+        let held_out_words = |d: &Diagnosis| {
+            support(d)
+                .map_or_else(|| "no held-out witness".to_owned(), |p| format!("held-out p = {}", p_text(p)))
+        };
+        let runner_up_first = support(b).is_some_and(|pb| support(a).is_none_or(|pa| pb < pa));
+        let why = if runner_up_first {
+            format!(
+                "the held-out identification responses support it more ({} against {})",
+                held_out_words(b),
+                held_out_words(a)
+            )
+        } else if support(a).is_some() {
+            format!(
+                "it ranks first and the held-out responses support it at least as well ({} against {})",
+                held_out_words(a),
+                held_out_words(b)
+            )
+        } else {
+            "it ranks first and the held-out responses witness neither".to_owned()
+        };
+        let note = format!(
+            "{} and {} explain the same residual and cannot be told apart: error beyond the noise {:.2} σ \
+             against {:.2} σ (RMSPE {:.3} % against {:.3} %), and the better does not beat the other beyond \
+             noise ({}). Taken: {}, because {why}. A test that would separate them: {}; {}",
+            a.effect,
+            b.effect,
+            a.beyond_noise_after,
+            b.beyond_noise_after,
+            a.rmspe_after_pct,
+            b.rmspe_after_pct,
+            apart.words(),
+            if runner_up_first { b.effect } else { a.effect },
+            a.effect.separating_test(),
+            b.effect.separating_test()
+        );
+        if runner_up_first {
+            self.entries.swap(first, second);
+        }
+        Some(note)
+    }
+}
+
+/// The held-out witness's signed-rank p-value, when it counted.
+fn held_out_support(test: &Comparison) -> Option<f64> {
+    test.held_out.filter(|h| h.counted).map(|h| h.test.p_value)
+}
+
+/// "p = 0.0068", or "none" when the held-out responses do not witness.
+fn support_text(support: Option<f64>) -> String {
+    support.map_or_else(|| "none".to_owned(), |p| format!("p = {}", p_text(p)))
+}
+
+/// Whether a trial counts by the first two conditions (the third needs every trial; see below);
+/// with the ranking and `Trials::settle_tie` this is the whole decision.
+///
+/// 1. It beats the refitted current model beyond noise and by enough to matter
+///    ([`Comparison::passes`]: p < [`SIGNIFICANCE_LEVEL`] over the validation runs and the held-out
+///    responses, and at least [`MIN_RELATIVE_REDUCTION`] of the error beyond the noise removed).
+/// 2. A physical effect's own evidence, read from the current model's residuals, shows its
+///    signature: a flexible block buys a few percent anywhere; the signature says which physics
+///    it is.
+///
+/// 3. The data prefer it to the best structural refinement: it beats that refinement beyond noise
+///    on the same witnesses (see `Trials::prefer_physics_only_on_evidence`; no share is asked
+///    there: between two explanations of the same residual only which one the data prefer
+///    counts). A lag block or a dead time that only stands in for a missing pole pair is no
+///    evidence of physics.
+///
+/// The trials that count then compete on the same terms: the ranking by error beyond the noise,
+/// and where the two best cannot be told apart, the held-out responses. There is no exception for
+/// any effect.
+///
+/// Returns whether it counts, and why not when it beats the current model and still does not.
+fn decide(beats_current: bool, evidence_supports: bool) -> (bool, Option<String>) {
+    match (beats_current, evidence_supports) {
+        (true, true) => (true, None),
+        (true, false) => {
+            (false, Some("not counted: its own evidence does not show the effect's signature".to_owned()))
+        }
+        (false, _) => (false, None),
     }
 }

@@ -42,6 +42,37 @@ impl TrialId {
     }
 }
 
+impl TrialId {
+    /// The bench experiment that shows this trial's signature and not another's, in words.
+    pub fn separating_test(self) -> &'static str {
+        match self {
+            Self::Effect(EffectId::ThermalSoak) => "a 60 s hold after a large step (a soak keeps creeping)",
+            Self::Effect(EffectId::TransportDelay) => {
+                "a small fast step (a dead time shifts the whole response late, a lag starts on time)"
+            }
+            Self::Effect(EffectId::RateLimit) => {
+                "steps of several sizes (a rate limit caps the slope of the large ones only)"
+            }
+            Self::Effect(EffectId::AsymmetricDynamics) => {
+                "equal steps up and down at one operating point (only asymmetry makes them differ)"
+            }
+            Self::Effect(EffectId::CalibrationDrift) => {
+                "the same steady point on both test days (a drift moves it, dynamics do not)"
+            }
+            Self::Effect(EffectId::AmbientCorrection) => "runs on days of different ambient temperature",
+            Self::Effect(EffectId::SensorDynamics) => "a tap or chirp test of the stand alone",
+            Self::Effect(EffectId::StaticMapOrder) | Self::Structure(StructuralChange::MapOrder) => {
+                "a staircase of long holds across the range (the map's shape shows in the settled values)"
+            }
+            Self::Effect(EffectId::ScheduledTimeConstant)
+            | Self::Structure(StructuralChange::ScheduledTimeConstant) => {
+                "equal small steps at low and high power (a scheduled spool is slower at the low end)"
+            }
+            Self::Structure(_) => "a chirp across the model's band (a missing root shows at one frequency)",
+        }
+    }
+}
+
 impl fmt::Display for TrialId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
@@ -81,18 +112,6 @@ impl fmt::Display for DiagnosisKind {
     }
 }
 
-/// The best structural refinement a physical effect was held against.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StructureRival {
-    /// The structural refinement.
-    pub id: StructuralChange,
-    /// Its validation error, %.
-    pub rmspe_pct: f64,
-    /// The test of "the effect is no better than this refinement", with the share of the
-    /// refinement's error the effect removes.
-    pub test: Comparison,
-}
-
 /// One trial: the fitted extension, its validation score and the evidence.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diagnosis {
@@ -108,6 +127,12 @@ pub struct Diagnosis {
     pub rmspe_before_pct: f64,
     /// Validation error with the effect added and refitted, %.
     pub rmspe_after_pct: f64,
+    /// The same two errors beyond the measurement noise, in units of the noise: each validation
+    /// run's `√(mean((y − ŷ)/σ)² − 1)`, an estimate of the RMS error against the noiseless truth,
+    /// averaged over the runs. The decision and the ranking read these (see `loss`); RMSPE is what
+    /// the user compares.
+    pub beyond_noise_before: f64,
+    pub beyond_noise_after: f64,
     /// The test of "the extension is no better than the refitted current model", on the validation
     /// runs and the held-out identification data.
     pub test: Comparison,
@@ -115,11 +140,8 @@ pub struct Diagnosis {
     pub evidence: String,
     /// The current model with the effect added and refitted on the identification data.
     pub model: ExtendedModel,
-    /// For a physical effect: the best structural refinement it had to beat as well.
-    pub rival: Option<StructureRival>,
     /// Why a physical effect that beats the current model is still not counted, when the test's
-    /// words do not say it: its own evidence does not show its signature, or it does not beat the
-    /// best structural refinement.
+    /// words do not say it: its own evidence does not show its signature.
     pub why_not: Option<String>,
 }
 
@@ -130,11 +152,6 @@ impl Diagnosis {
             Some(why) => format!("{}; {why}", self.test.words()),
             None => self.test.words(),
         }
-    }
-
-    /// Share of the validation RMSPE the effect removes (negative when it makes things worse).
-    pub fn relative_reduction(&self) -> f64 {
-        1.0 - self.rmspe_after_pct / self.rmspe_before_pct.max(f64::MIN_POSITIVE)
     }
 }
 
@@ -171,6 +188,9 @@ pub struct DiagnosisReport {
     /// pair near 2.31 rad/s (ζ 0.60)", or "below the physics ranked first, the structure may also
     /// improve: …" when a physical effect ranks above it).
     pub structure_note: Option<String>,
+    /// When the two best significant trials cannot be told apart: both, with the numbers, which
+    /// one was put first and why, and the experiment that would separate them.
+    pub attribution_note: Option<String>,
 }
 
 impl DiagnosisReport {

@@ -1,7 +1,8 @@
 //! Two witnesses of a trial: the validation runs, and the identification data's segment responses
 //! held out by the cross-validation (see `held_out`), combined into one test.
 use super::held_out::{HeldOut, Recipe};
-use super::{DiagnoseError, MIN_RELATIVE_REDUCTION, SIGNIFICANCE_LEVEL, mean_rmspe, pct_errors};
+use super::loss::{Errors, mean_beyond_noise, mean_pct_rms, measurement_sigma, rms};
+use super::{DiagnoseError, MIN_RELATIVE_REDUCTION, SIGNIFICANCE_LEVEL, measured};
 use crate::core::effects::ExtendedModel;
 use crate::core::effects::stats::{
     DmTest, SignedRankTest, diebold_mariano, signed_rank_test, stouffer_combined,
@@ -9,24 +10,22 @@ use crate::core::effects::stats::{
 use crate::core::identification::initial_state::InitialState;
 use crate::core::run::Run;
 
-/// A model's percentage errors on the evidence: each validation run, and each segment response
+/// A model's errors on the evidence (see `loss`): each validation run, and each segment response
 /// of the identification data held out by the cross-validation when there is one.
 #[derive(Clone, Debug)]
 pub(super) struct Scores {
-    pub(super) validation: Vec<Vec<f64>>,
-    held_out: Option<Vec<Vec<f64>>>,
+    pub(super) validation: Vec<Errors>,
+    held_out: Option<Vec<Errors>>,
     /// Why there are no held-out errors although there is a cross-validation.
     held_out_note: Option<&'static str>,
-    /// The measurement noise over each held-out response, % (see [`HeldOut::noise_pct`]).
-    noise_pct: Vec<f64>,
     /// Whether the cross-validation was run on the model (see [`Scores::cross_validate`]).
     tried: bool,
 }
 
 /// Why a trial's held-out errors were not computed: its validation error does not fall enough for
 /// any p-value to make it significant, so the dear refits would change nothing.
-pub(super) const NOT_CONSULTED: &str = "not consulted: the validation error does not fall by 10 % of the refitted \
-    current model's, which a significant change needs";
+pub(super) const NOT_CONSULTED: &str = "not consulted: the validation error beyond the noise does not fall by 10 % \
+    of the refitted current model's, which a significant change needs";
 
 /// Why a model has no held-out errors although the data have a cross-validation.
 const NOT_REFITTED: &str = "not available: the model could not be refitted on every fold (or it \
@@ -40,13 +39,28 @@ impl Scores {
         validation: &[&Run],
         initial: InitialState,
     ) -> Result<Self, DiagnoseError> {
-        Ok(Self {
-            validation: pct_errors(model, validation, initial)?,
-            held_out: None,
-            held_out_note: None,
-            noise_pct: Vec::new(),
-            tried: false,
-        })
+        let validation = validation
+            .iter()
+            .map(|run| {
+                let y = measured(run, &model.output)?;
+                let y_hat = model
+                    .simulate_scored(run, initial)
+                    .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
+                Ok(Errors::of(y, &y_hat, 0..y.len(), measurement_sigma(y)))
+            })
+            .collect::<Result<_, DiagnoseError>>()?;
+        Ok(Self { validation, held_out: None, held_out_note: None, tried: false })
+    }
+
+    /// The validation error the decision compares: each run's error beyond its measurement noise,
+    /// in units of the noise, averaged over the runs (see `loss`).
+    pub(super) fn beyond_noise(&self) -> f64 {
+        mean_beyond_noise(&self.validation)
+    }
+
+    /// The validation RMSPE, averaged over the runs, % (the reported metric).
+    pub(super) fn rmspe(&self) -> f64 {
+        mean_pct_rms(&self.validation)
     }
 
     /// Add the held-out errors of the model `recipe` makes (whose validation errors these are), once.
@@ -54,7 +68,6 @@ impl Scores {
         let Some(folds) = folds.filter(|_| !self.tried) else { return };
         self.tried = true;
         self.held_out = folds.errors(recipe);
-        self.noise_pct = folds.noise_pct().to_vec();
         self.held_out_note = if self.held_out.is_some() { None } else { Some(NOT_REFITTED) };
     }
 
@@ -65,17 +78,20 @@ impl Scores {
         }
     }
 
-    /// Share of this model's validation RMSPE that `after` removes (negative when it adds error).
+    /// Share of this model's validation error beyond the noise that `after` removes (negative
+    /// when it adds error).
+    ///
+    /// The share is taken of the error beyond the noise, or of the noise itself (1 in these units)
+    /// when the error beyond it is smaller: near the noise floor the excess is a small difference of
+    /// two estimates, and a change worth a tenth of it would be a change nobody can see in a trace,
+    /// well below what the sensor itself resolves.
     fn validation_reduction(&self, after: &Self) -> f64 {
-        1.0 - mean_rmspe(&after.validation) / mean_rmspe(&self.validation).max(f64::MIN_POSITIVE)
+        (self.beyond_noise() - after.beyond_noise()) / self.beyond_noise().max(1.0)
     }
 
     /// RMSPE over every held-out sample, %.
     pub(super) fn held_out_rmspe(&self) -> Option<f64> {
-        self.held_out.as_ref().map(|segments| {
-            let all: Vec<f64> = segments.iter().flatten().copied().collect();
-            mean_rmspe(&[all])
-        })
+        self.held_out.as_ref().map(|responses| rms(&all_of(responses, |e| &e.pct)))
     }
 }
 
@@ -128,14 +144,14 @@ impl Comparison {
     /// judged on the responses the effect changes, not on those only the refinement changes: that
     /// the identification steps never reach a rate limit says nothing about the limit.
     pub(super) fn of(before: &Scores, after: &Scores, current: &Scores) -> Self {
-        let loss = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(pa, pb)| pa.abs() - pb.abs()).collect();
+        let loss = |a: &Errors, b: &Errors| {
+            a.noise.iter().zip(&b.noise).map(|(za, zb)| za.abs() - zb.abs()).collect()
+        };
         let d_runs: Vec<Vec<f64>> =
             before.validation.iter().zip(&after.validation).map(|(a, b)| loss(a, b)).collect();
         let validation = diebold_mariano(&d_runs);
         let held_out = match (&before.held_out, &after.held_out, &current.held_out) {
-            (Some(a), Some(b), Some(c)) if a.len() == b.len() && c.len() == b.len() => {
-                Some(witness(a, b, c, &current.noise_pct))
-            }
+            (Some(a), Some(b), Some(c)) if a.len() == b.len() && c.len() == b.len() => Some(witness(a, b, c)),
             _ => None,
         };
         let p_value = match held_out.filter(|h| h.counted) {
@@ -185,32 +201,34 @@ impl Comparison {
 }
 
 /// The held-out witness of `b` against `a` (errors per response), counting the responses on
-/// which `b`'s predictions differ from the current model's (`c`) by more than the noise: `c − b`
-/// is `100 (ŷ_b − ŷ_c)/y`, so its RMS is the change of prediction, which must exceed the noise
-/// `noise_pct` to be seen at all.
-fn witness(a: &[Vec<f64>], b: &[Vec<f64>], c: &[Vec<f64>], noise_pct: &[f64]) -> HeldOutWitness {
-    let rms = |x: &[f64]| mean_rmspe(&[x]);
-    let noise = noise_pct.iter().chain(std::iter::repeat(&0.0));
+/// which `b`'s predictions differ from the current model's (`c`) by more than the measurement
+/// noise: `c − b` is `(ŷ_b − ŷ_c)/σ`, so its RMS is the change of prediction in units of the noise,
+/// which must exceed 1 to be seen at all. Each response's difference is its RMS error over the
+/// noise, first model minus second.
+fn witness(a: &[Errors], b: &[Errors], c: &[Errors]) -> HeldOutWitness {
     let d: Vec<f64> = a
         .iter()
         .zip(b)
         .zip(c)
-        .zip(noise)
-        .filter(|(((_, y), z), noise)| {
-            let change: Vec<f64> = z.iter().zip(y.iter()).map(|(p, q)| p - q).collect();
-            rms(&change) > **noise
+        .filter(|((_, b), c)| {
+            let change: Vec<f64> = c.noise.iter().zip(&b.noise).map(|(zc, zb)| zc - zb).collect();
+            rms(&change) > 1.0
         })
-        .map(|(((x, y), _), _)| rms(x) - rms(y))
+        .map(|((a, b), _)| rms(&a.noise) - rms(&b.noise))
         .collect();
     let test = signed_rank_test(&d);
-    let all = |s: &[Vec<f64>]| rms(&s.iter().flatten().copied().collect::<Vec<f64>>());
     HeldOutWitness {
-        rmspe_before_pct: all(a),
-        rmspe_after_pct: all(b),
+        rmspe_before_pct: rms(&all_of(a, |e| &e.pct)),
+        rmspe_after_pct: rms(&all_of(b, |e| &e.pct)),
         responses: a.len(),
         counted: test.n >= MIN_WITNESS_RESPONSES,
         test,
     }
+}
+
+/// One list of every response's errors, in the units `pick` takes.
+fn all_of(responses: &[Errors], pick: impl Fn(&Errors) -> &Vec<f64>) -> Vec<f64> {
+    responses.iter().flat_map(|e| pick(e).iter().copied()).collect()
 }
 
 /// A p-value to four places, or in scientific notation below 10⁻⁴.
@@ -221,7 +239,8 @@ pub fn p_text(p: f64) -> String {
 /// The significance rule of the module documentation, against the refitted current model.
 pub(super) struct Judge<'a> {
     pub(super) yardstick: &'a Scores,
-    pub(super) rmspe_before_pct: f64,
+    /// The current model (not refitted) on the validation runs.
+    pub(super) current: &'a Scores,
 }
 
 /// A trial judged against the refitted current model.
@@ -229,6 +248,8 @@ pub(super) struct Verdict {
     pub(super) test: Comparison,
     /// The trial's validation RMSPE, %.
     pub(super) rmspe_after_pct: f64,
+    /// The trial's validation error over the noise (see `loss`).
+    pub(super) beyond_noise_after: f64,
     pub(super) significant: bool,
 }
 
@@ -238,7 +259,7 @@ impl Judge<'_> {
     /// no held-out evidence can make it significant, and the refits are spared.
     pub(super) fn consult(&self, after: &mut Scores, recipe: Recipe, folds: Option<&HeldOut>) {
         let reduction = self.yardstick.validation_reduction(after);
-        if reduction >= MIN_RELATIVE_REDUCTION && mean_rmspe(&after.validation) < self.rmspe_before_pct {
+        if reduction >= MIN_RELATIVE_REDUCTION && after.beyond_noise() < self.current.beyond_noise() {
             after.cross_validate(recipe, folds);
         } else {
             after.skip_cross_validation(folds, NOT_CONSULTED);
@@ -250,8 +271,8 @@ impl Judge<'_> {
     /// runs' own error falls below the current model's.
     pub(super) fn verdict(&self, after: &Scores) -> Verdict {
         let test = Comparison::of(self.yardstick, after, self.yardstick);
-        let rmspe_after_pct = mean_rmspe(&after.validation);
-        let significant = test.passes() && rmspe_after_pct < self.rmspe_before_pct;
-        Verdict { test, rmspe_after_pct, significant }
+        let beyond_noise_after = after.beyond_noise();
+        let significant = test.passes() && beyond_noise_after < self.current.beyond_noise();
+        Verdict { test, rmspe_after_pct: after.rmspe(), beyond_noise_after, significant }
     }
 }

@@ -48,17 +48,37 @@ impl AsymmetricDynamics {
 /// The lags (s) of the measurement behind the model on two classes of samples: the residual
 /// regressed on the model's rate of change (`e ≈ −lag·dŷ/dt`), with one lag for the samples `first`
 /// picks and one for the rest. `None` when the response never moves.
-fn split_lags(traces: &[ResidualTrace], first: impl Fn(f64, f64) -> bool) -> Option<(f64, f64)> {
+///
+/// With `level_term`, the regression also has a lag that grows linearly with the operating level
+/// (the model's output, centred on the middle of its range): a spool whose time constant follows
+/// the operating point lags more at the low end, and since falls end low and rises end high its
+/// falls look slower although each direction is as fast as the other at any one level. The two
+/// lags returned are then the direction's own, at the middle of the range.
+fn split_lags(
+    traces: &[ResidualTrace],
+    first: impl Fn(f64, f64) -> bool,
+    level_term: bool,
+) -> Option<(f64, f64)> {
+    let (lo, hi) = traces
+        .iter()
+        .flat_map(|t| t.y_hat.iter())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(*y), b.max(*y)));
+    let (middle, half) = (0.5 * (lo + hi), (0.5 * (hi - lo)).max(f64::MIN_POSITIVE));
     let (mut rows, mut e) = (Vec::new(), Vec::new());
     for t in traces {
         let rate: Vec<f64> = diff(&t.y_hat).iter().map(|d| d / t.dt_secs).collect();
         for ((r, ek), level) in rate.iter().zip(t.residual()).zip(&t.y_hat) {
             let ours = first(*r, *level);
-            rows.push([if ours { *r } else { 0.0 }, if ours { 0.0 } else { *r }, 1.0]);
+            let by_level = if level_term { *r * (level - middle) / half } else { 0.0 };
+            rows.push([if ours { *r } else { 0.0 }, if ours { 0.0 } else { *r }, by_level, 1.0]);
             e.push(ek);
         }
     }
-    let a = faer::Mat::from_fn(rows.len(), 3, |i, j| rows.get(i).map_or(0.0, |r| r[j]));
+    let columns = if level_term { 4 } else { 3 };
+    let a = faer::Mat::from_fn(rows.len(), columns, |i, j| {
+        let j = if !level_term && j == 2 { 3 } else { j };
+        rows.get(i).map_or(0.0, |r| r[j])
+    });
     let sol = solve_lstsq(&a, &e).ok()?;
     Some((-sol.x.first().copied().unwrap_or(0.0), sol.x.get(1).map_or(0.0, |c| -c)))
 }
@@ -72,9 +92,11 @@ fn lag_clause(lag_secs: f64, model: &str) -> String {
     format!("{verb} {model} by {amount}")
 }
 
-/// How far the measurement lags the model while the model's response rises and while it falls.
+/// How far the measurement lags the model while the model's response rises and while it falls, at
+/// the same operating level (see `split_lags`): asymmetry is a difference between directions that
+/// a time constant following the operating point does not explain.
 pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
-    let Some((lag_up, lag_down)) = split_lags(traces, |rate, _| rate > 0.0) else {
+    let Some((lag_up, lag_down)) = split_lags(traces, |rate, _| rate > 0.0, true) else {
         return Evidence::none("the response never moves");
     };
     let differ = (lag_down - lag_up).abs() > LAG_DIFFERENCE_SECS;
@@ -85,7 +107,7 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     };
     Evidence {
         sentence: format!(
-            "measured response {} while it rises and {} while it falls: {meaning}",
+            "measured response {} while it rises and {} while it falls (at the same operating level): {meaning}",
             lag_clause(lag_up, "the model"),
             lag_clause(lag_down, "it")
         ),
@@ -98,7 +120,7 @@ pub(super) fn level_evidence(traces: &[ResidualTrace]) -> Evidence {
     let mut levels: Vec<f64> = traces.iter().flat_map(|t| t.y_hat.iter().copied()).collect();
     levels.sort_by(f64::total_cmp);
     let Some(&middle) = levels.get(levels.len() / 2) else { return Evidence::none("no response to look at") };
-    let Some((lag_low, lag_high)) = split_lags(traces, |_, level| level < middle) else {
+    let Some((lag_low, lag_high)) = split_lags(traces, |_, level| level < middle, false) else {
         return Evidence::none("the response never moves");
     };
     let differ = (lag_low - lag_high).abs() > LAG_DIFFERENCE_SECS;

@@ -212,6 +212,23 @@ impl EffectId {
         self.info().physics
     }
 
+    /// Whether the block acts before the spool that every output follows: on the fuel (a meter's
+    /// calibration, the line's dead time, the ECU's acceleration schedule) or on the spool's own
+    /// dynamics (soak, asymmetric or scheduled spool time constants). Its signature is then the
+    /// spool's, and it is read where the spool is measured (see `core::diagnose::spool_witness`).
+    /// Ambient correction is not among them: it corrects each output by its own exponent.
+    pub fn acts_before_spool(self) -> bool {
+        matches!(
+            self,
+            Self::CalibrationDrift
+                | Self::TransportDelay
+                | Self::ThermalSoak
+                | Self::RateLimit
+                | Self::AsymmetricDynamics
+                | Self::ScheduledTimeConstant
+        )
+    }
+
     /// The evidence for the block, computed from the current model's residuals on the given runs
     /// (identification range and validation runs).
     pub fn evidence(self, traces: &[stats::ResidualTrace]) -> Evidence {

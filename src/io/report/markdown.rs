@@ -368,19 +368,22 @@ pub fn render_markdown(report: &Report) -> String {
         if !o.diagnosis.is_empty() {
             let _ = writeln!(
                 out,
-                "\n### Diagnosis\n\nStructural refinements of the model are tried before physics: an effect counts \
-                 only when it beats the current model and the best refinement. Each trial is judged on the \
-                 validation runs and, where the identification data have enough segments, on the segment \
-                 responses a cross-validation held out (the 'held-out' column).\n\n\
-                 | effect | kind | significant | RMSPE before % | after % | held-out after % | p | evidence | witnesses |\n\
-                 |---|---|---|---|---|---|---|---|---|"
+                "\n### Diagnosis\n\nStructural refinements and physical effects are judged alike, by their error \
+                 beyond the measurement noise (in units of the noise, 'beyond noise'; the ranking follows it): \
+                 an effect counts only when it beats the current model, its evidence agrees and the data \
+                 prefer it to the best refinement. Each trial is judged on the validation runs and, where the \
+                 identification data have enough segments, on the segment responses a cross-validation held \
+                 out (the 'held-out' column).\n\n\
+                 | effect | kind | significant | RMSPE before % | after % | beyond noise after | held-out after % | p | evidence | witnesses |\n\
+                 |---|---|---|---|---|---|---|---|---|---|"
             );
             for d in &o.diagnosis {
                 let held_out = d.held_out_rmspe_pct.map_or_else(|| "–".to_owned(), |h| format!("{h:.4}"));
                 let p = d.p_value.map_or_else(|| "–".to_owned(), crate::core::diagnose::p_text);
+                let beyond = d.beyond_noise_after.map_or_else(|| "–".to_owned(), |b| format!("{b:.2} σ"));
                 let _ = writeln!(
                     out,
-                    "| {} | {} | {} | {:.4} | {:.4} | {held_out} | {p} | {} | {} |",
+                    "| {} | {} | {} | {:.4} | {:.4} | {beyond} | {held_out} | {p} | {} | {} |",
                     d.effect,
                     d.kind,
                     d.significant,

@@ -27,6 +27,10 @@ pub struct DiagnosisEntry {
     pub significant: bool,
     pub rmspe_before_pct: f64,
     pub rmspe_after_pct: f64,
+    /// The validation error after the change beyond the measurement noise, in units of the noise
+    /// (what the decision and the ranking compare; see `core::diagnose`).
+    #[serde(default)]
+    pub beyond_noise_after: Option<f64>,
     pub evidence: String,
     /// One-sided p-value of "the effect does not reduce the error": the Diebold–Mariano test on the
     /// validation runs, combined with the held-out identification responses when they witness.

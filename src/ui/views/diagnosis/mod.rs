@@ -195,6 +195,15 @@ fn ranking_ui(
             ));
         });
     }
+    if let Some(note) = &report.attribution_note {
+        egui::Frame::group(ui.style()).show(ui, |ui| {
+            ui.set_width(ui.available_width());
+            ui.label(
+                RichText::new("Two explanations the data cannot tell apart").strong().color(theme::WARNING),
+            );
+            ui.label(format!("{note}."));
+        });
+    }
     egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
         for (rank, entry) in report.entries.iter().enumerate() {
             if let Some(command) = entry_ui(ui, output, rank, entry, applied) {
@@ -324,10 +333,11 @@ fn entry_ui(
             ui.label(RichText::new(entry.kind.label()).small().color(theme::HINT));
             ui.label(
                 RichText::new(format!(
-                    "RMSPE {:.3} % → {:.3} %  ({:+.1} %)",
+                    "RMSPE {:.3} % → {:.3} %   beyond noise {:.2} σ → {:.2} σ",
                     entry.rmspe_before_pct,
                     entry.rmspe_after_pct,
-                    -100.0 * entry.relative_reduction()
+                    entry.beyond_noise_before,
+                    entry.beyond_noise_after
                 ))
                 .monospace(),
             );
@@ -364,17 +374,6 @@ fn entry_ui(
         ui.label(RichText::new(&entry.physics).italics());
         hint(ui, &entry.evidence);
         hint(ui, &entry.significance_words());
-        if let Some(rival) = &entry.rival {
-            let versus = format!("the best structural refinement, {} ({:.3} %)", rival.id, rival.rmspe_pct);
-            let p = diagnose::p_text(rival.test.p_value);
-            let reduction = rival.test.reduction;
-            let text = if reduction > 0.0 {
-                format!("beats {versus} by {:.1} % (p = {p})", 100.0 * reduction)
-            } else {
-                format!("loses to {versus}: its error is {:.1} % higher (p = {p})", -100.0 * reduction)
-            };
-            hint(ui, &text);
-        }
     });
     command
 }

@@ -1,0 +1,140 @@
+//! The missing-physics loop on engines of the small-turbojet family, on both outputs: for each
+//! hidden effect (and for effect-free engines), what the loop takes in `ROUNDS` rounds and the
+//! held-out error against the noiseless truth of a third run, before and after the loop, beside the
+//! same engine's error without the effect.
+//!
+//! `cargo run --release --no-default-features --example attribution_study -- [effects|free] [ENGINES]`
+//! (`effects`: every hidden effect on engines 3, 7, 11; `free`: effect-free engines 1..=ENGINES).
+use anyhow::{Context, Result};
+use jetid::core::diagnose::{EffectSequence, apply_in_order, auto_effects};
+use jetid::core::effects::ExtendedModel;
+use jetid::core::identification::fits::segments_for;
+use jetid::core::identification::pipeline::identify_output;
+use jetid::core::identification::segment::SegmentSettings;
+use jetid::core::identification::settings::OutputSettings;
+use jetid::core::numerics::metrics::metrics;
+use jetid::core::parallel::on_two_threads;
+use jetid::core::run::Run;
+use jetid::sim::{Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};
+
+const ROUNDS: usize = 3;
+const OUTPUTS: [&str; 2] = ["shaft_speed_rpm", "thrust_n"];
+
+/// A bench session: identification, validation and chirp runs for the loop, a third run to score.
+struct Bench {
+    ident: Run,
+    validation: Run,
+    chirp: Run,
+    scored: SimOutput,
+}
+
+fn bench(seed: u64, first_day: &[Effect], second_day: &[Effect]) -> Result<Bench> {
+    let engine = EngineFamily::small_turbojets().draw(seed);
+    let run = |kind: TestKind, noise_seed: u64, effects: &[Effect]| -> Result<SimOutput> {
+        Ok(simulate(
+            &SimConfig::for_test(kind.name(), kind, noise_seed)?
+                .on_engine(&engine)
+                .with_effects(effects.to_vec()),
+        )?)
+    };
+    Ok(Bench {
+        ident: run(TestKind::Ident, seed, first_day)?.measured,
+        validation: run(TestKind::Validation, seed + 1000, second_day)?.measured,
+        chirp: run(TestKind::Chirp, seed + 2000, first_day)?.measured,
+        scored: run(TestKind::Validation, seed + 3000, second_day)?,
+    })
+}
+
+/// The loop on one output: what it took, and the scored run's error before and after, %.
+fn loop_on(b: &Bench, output: &str) -> Result<(Vec<String>, f64, f64)> {
+    let settings = OutputSettings::for_output(output);
+    let segments = segments_for(&b.ident, None, &SegmentSettings::default())?;
+    let identified = identify_output(&b.ident, output, &settings, &segments, None)?;
+    let base = ExtendedModel::from_gray_box(&identified.model);
+    let validation = [&b.validation, &b.chirp];
+    let mut sequence: EffectSequence =
+        apply_in_order(&base, &[], &b.ident, &identified.fits, &settings, &validation);
+    let rounds =
+        auto_effects(&mut sequence, ROUNDS, &b.ident, &identified.fits, &settings, &validation, &mut |_| {
+            true
+        })?;
+    let truth = &b.scored.truth.output(output).context("truth")?.values;
+    let score = |m: &ExtendedModel| -> Result<f64> {
+        Ok(metrics(truth, &m.simulate_scored(&b.scored.measured, settings.initial_state)?)?.rmspe_pct)
+    };
+    let mut taken: Vec<String> =
+        rounds.iter().map(|r| format!("{}({})", r.added, short(&r.significance))).collect();
+    if let (Ok(id), Some(report)) = (std::env::var("SHOW"), &sequence.final_diagnosis) {
+        for d in report.entries.iter().filter(|d| d.effect.name() == id) {
+            taken.push(format!(
+                "[{} {:.2}→{:.2}σ p={:.1e} {} | {} | {}]",
+                d.effect,
+                d.beyond_noise_before,
+                d.beyond_noise_after,
+                d.test.p_value,
+                d.significant,
+                d.evidence,
+                d.significance_words()
+            ));
+        }
+    }
+    Ok((taken, score(&base)?, score(&sequence.model)?))
+}
+
+/// The p-value the decision read: the combined one when the held-out responses witness.
+fn short(words: &str) -> String {
+    let p =
+        |s: &str| s.split("p = ").nth(1).map(|t| t.split([';', ')', ' ']).next().unwrap_or("").to_owned());
+    words.split("together ").nth(1).and_then(p).or_else(|| p(words)).unwrap_or_default()
+}
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let mode = args.get(1).map_or("effects", String::as_str);
+    let engines: u64 = args.get(2).map_or(Ok(20), |s| s.parse()).context("engines")?;
+    let specs: Vec<&str> = match mode {
+        "free" => vec![""],
+        "one" => vec![args.get(3).map_or("", String::as_str)],
+        _ => vec![
+            "thermal_soak",
+            "asymmetric_dynamics",
+            "ambient_correction",
+            "rate_limit",
+            "static_map_order:bleed_rpm=78000,gain=8",
+            "transport_delay:delay_s=0.9",
+            "calibration_drift:offset_gph=0.2",
+        ],
+    };
+    let seeds: Vec<u64> = if mode == "free" { (1..=engines).collect() } else { vec![3, 7, 11] };
+    let cases: Vec<(&str, u64)> = specs.iter().flat_map(|s| seeds.iter().map(move |e| (*s, *e))).collect();
+    let rows = on_two_threads(&cases, |&(spec, seed)| -> Result<String> {
+        let effect: Vec<Effect> = if spec.is_empty() { vec![] } else { vec![spec.parse()?] };
+        let drift = spec.starts_with("calibration_drift");
+        let b = if drift { bench(seed, &[], &effect)? } else { bench(seed, &effect, &effect)? };
+        let clean = bench(seed, &[], &[])?;
+        let mut line = String::new();
+        for output in OUTPUTS {
+            let (taken, before, after) = loop_on(&b, output)?;
+            let (_, _, clean_after) =
+                if spec.is_empty() { (vec![], 0.0, after) } else { loop_on(&clean, output)? };
+            line += &format!(
+                "| {} | {seed} | {output} | {} | {before:.3} | {after:.3} | {clean_after:.3} | {:.2} |\n",
+                if spec.is_empty() { "none" } else { spec.split(':').next().unwrap_or(spec) },
+                taken.join(" "),
+                after / clean_after
+            );
+        }
+        Ok(line)
+    });
+    println!(
+        "| effect | engine | output | taken | scored before % | after % | effect-free after % | ratio |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for row in rows {
+        match row {
+            Ok(r) => print!("{r}"),
+            Err(e) => println!("| failed: {e} |"),
+        }
+    }
+    Ok(())
+}

@@ -301,15 +301,16 @@ fn method_hint(ui: &mut egui::Ui) {
     hint(
         ui,
         &format!(
-            "Each effect is added to the current model, refitted on the identification run and \
-             scored on the validation runs. Significant: a one-sided Diebold–Mariano test on \
-             |% error| against the refitted current model, combined (Stouffer) with a signed-rank \
-             test over the identification steps a cross-validation held out when at least {} of \
-             them are changed by the effect, gives p < {} and the validation RMSPE falls by at \
-             least {:.0} %. Structural refinements (one more pole, pole pair or zero, \
-             the map's order, a scheduled time constant) are tried too; a physical effect counts \
-             only when it also beats the best of them by the same rule and its own evidence shows \
-             its signature.",
+            "Each effect and structural refinement (one more pole, pole pair or zero, the map's \
+             order, a scheduled time constant) is added to the current model, refitted on the \
+             identification run and scored on the validation runs by its error beyond the \
+             measurement noise (in units of σ; the ranking follows it). Significant: a one-sided \
+             Diebold–Mariano test on |error|/σ against the refitted current model, combined \
+             (Stouffer) with a signed-rank test over the identification steps a cross-validation \
+             held out when at least {} of them are changed, gives p < {} and at least {:.0} % of \
+             the error beyond the noise is removed. A physical effect counts only when its own \
+             evidence shows its signature and the data prefer it to the best refinement; effects \
+             before the spool are read on the shaft speed when this output is another.",
             diagnose::MIN_WITNESS_RESPONSES,
             diagnose::SIGNIFICANCE_LEVEL,
             100.0 * diagnose::MIN_RELATIVE_REDUCTION

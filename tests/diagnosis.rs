@@ -601,3 +601,46 @@ fn an_effect_that_looks_significant_but_is_not_counted_says_why() {
     }
     eprintln!("{looked_at} entries looked significant but were not counted, each with its reason");
 }
+
+/// The loop a project with `auto_effects = 3` runs on one output of a simulated engine of the
+/// family (`jetid simulate --engine SEED --effect SPEC --seed 101` / `--seed 102`): what it took.
+fn loop_on_family_engine(engine: u64, spec: &str, output: &str) -> Vec<String> {
+    use jetid::core::diagnose::{apply_in_order, auto_effects};
+    let drawn = jetid::sim::EngineFamily::small_turbojets().draw(engine);
+    let effect: Effect = spec.parse().unwrap();
+    let run = |kind: TestKind, seed: u64| {
+        let cfg = SimConfig::for_test(kind.name(), kind, seed).unwrap().on_engine(&drawn);
+        simulate(&cfg.with_effects(vec![effect.clone()])).unwrap().measured
+    };
+    let (ident, validation) = (run(TestKind::Ident, 101), run(TestKind::Validation, 102));
+    let settings = OutputSettings::for_output(output);
+    let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap();
+    let identified = identify_output(&ident, output, &settings, &segments, None).unwrap();
+    let base = ExtendedModel::from_gray_box(&identified.model);
+    let runs = [&validation];
+    let mut sequence = apply_in_order(&base, &[], &ident, &identified.fits, &settings, &runs);
+    let rounds =
+        auto_effects(&mut sequence, 3, &ident, &identified.fits, &settings, &runs, &mut |_| true).unwrap();
+    rounds.iter().map(|r| r.added.name().to_owned()).collect()
+}
+
+/// The ECU's acceleration schedule acts before the spool: on engine 8 of the family the loop takes
+/// it on shaft speed and on thrust, whose evidence is read on the speed through the thrust model's
+/// spool and whose gain is judged on thrust in units of its own noise.
+#[test]
+fn a_rate_limit_is_taken_on_both_outputs() {
+    for output in [SPEED, THRUST] {
+        let taken = loop_on_family_engine(8, "rate_limit", output);
+        assert!(taken.iter().any(|t| t == "rate_limit"), "{output}: the loop took {taken:?}");
+    }
+}
+
+/// A kink in the static map (engine 3, a bleed valve) changes the settled values, not the timing:
+/// the loop takes no dead time for it on either output.
+#[test]
+fn a_map_kink_is_not_read_as_a_dead_time() {
+    for output in [SPEED, THRUST] {
+        let taken = loop_on_family_engine(3, "static_map_order", output);
+        assert!(!taken.iter().any(|t| t == "transport_delay"), "{output}: the loop took {taken:?}");
+    }
+}

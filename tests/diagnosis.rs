@@ -644,3 +644,22 @@ fn a_map_kink_is_not_read_as_a_dead_time() {
         assert!(!taken.iter().any(|t| t == "transport_delay"), "{output}: the loop took {taken:?}");
     }
 }
+
+/// The loop's record of a round says why it took that trial when its diagnosis could not tell two
+/// explanations apart (what report.md's notes and the app's loop list show).
+#[test]
+fn a_loop_round_keeps_the_words_of_its_attribution() {
+    use jetid::core::diagnose::{apply_in_order, auto_effects};
+    let b = bench(&["transport_delay:delay_s=1.0"], 2);
+    let c = speed_without_dead_time(&b);
+    let runs = [&b.validation, &b.chirp];
+    let first = diagnose(&c.model, &b.ident, &c.fits, &runs, &c.settings).unwrap();
+    let mut sequence = apply_in_order(&c.model, &[], &b.ident, &c.fits, &c.settings, &runs);
+    let rounds =
+        auto_effects(&mut sequence, 1, &b.ident, &c.fits, &c.settings, &runs, &mut |_| true).unwrap();
+    let round = rounds.first().unwrap_or_else(|| panic!("nothing taken: {}", summary(&first)));
+    // This bench's first diagnosis cannot tell the dead time from a pole pair (see the test above).
+    assert_eq!(round.attribution, first.attribution_note);
+    let words = round.attribution.as_deref().unwrap_or_else(|| panic!("no words: {}", summary(&first)));
+    assert!(words.contains(round.added.name()), "{words}");
+}

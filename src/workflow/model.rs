@@ -201,6 +201,7 @@ impl Effects {
                 round.evidence,
                 round.significance
             ));
+            notes.extend(round.attribution.iter().map(|a| format!("'{output}': round {}: {a}", round.added)));
         }
         notes.extend(self.sequence.history_gaps.iter().map(|gap| format!("'{output}': {gap}")));
         notes

@@ -82,6 +82,10 @@ pub struct AutoRound {
     pub evidence: String,
     /// What made it significant: the witnesses' tests, in words (see [`super::Comparison::words`]).
     pub significance: String,
+    /// When that round's diagnosis could not tell it from another explanation: both, with the
+    /// numbers, why this one was taken and the experiment that would separate them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub attribution: Option<String>,
 }
 
 /// The missing-physics loop run on `sequence`'s model for up to `rounds` rounds: diagnose, add the
@@ -115,6 +119,7 @@ pub fn auto_effects(
             rmspe_after_pct: top.rmspe_after_pct,
             evidence: top.evidence.clone(),
             significance: top.significance_words(),
+            attribution: report.attribution_note.clone(),
         });
         sequence.model = top.model.clone();
         sequence.record(&format!("+{} (auto)", top.effect), validation, settings);

@@ -94,6 +94,9 @@ fn loop_ui(ui: &mut egui::Ui, output: &str, cache: &OutputCache, live: &LiveMode
             .color(theme::OK),
         );
         hint(ui, &format!("{}; {}", round.evidence, round.significance));
+        if let Some(attribution) = &round.attribution {
+            hint(ui, &format!("{attribution}."));
+        }
     }
     for note in live.effects.notes.iter().filter(|n| n.contains("stopped after")) {
         hint(ui, note);

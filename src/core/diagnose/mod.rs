@@ -68,6 +68,7 @@ use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
+mod decision;
 mod edit;
 mod held_out;
 mod history;
@@ -75,6 +76,7 @@ mod loss;
 mod report;
 mod spool_witness;
 mod witness;
+use decision::{Trials, decide};
 pub use edit::{Edit, edit};
 use held_out::{HeldOut, Recipe};
 pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
@@ -124,23 +126,6 @@ pub enum DiagnoseError {
     Effect(#[from] EffectError),
 }
 
-/// Percentage errors of a model on each run.
-pub(crate) fn pct_errors(
-    model: &ExtendedModel,
-    runs: &[&Run],
-    initial: InitialState,
-) -> Result<Vec<Vec<f64>>, DiagnoseError> {
-    runs.iter()
-        .map(|run| {
-            let y = measured(run, &model.output)?;
-            let y_hat = model
-                .simulate_scored(run, initial)
-                .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
-            Ok(y.iter().zip(&y_hat).map(|(y, yh)| 100.0 * (y - yh) / y).collect())
-        })
-        .collect()
-}
-
 fn measured<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], DiagnoseError> {
     let y = run
         .output(output)
@@ -156,24 +141,13 @@ fn measured<'a>(run: &'a Run, output: &str) -> Result<&'a [f64], DiagnoseError> 
     Ok(y)
 }
 
-/// The validation error: the RMSPE of each run, averaged over the runs, % (every test counts the
-/// same, as the paper reports its time-domain validation and its chirp side by side).
-pub(crate) fn mean_rmspe<E: AsRef<[f64]>>(errors: &[E]) -> f64 {
-    let per_run: Vec<f64> = errors
-        .iter()
-        .map(AsRef::as_ref)
-        .map(|e| (e.iter().map(|p| p * p).sum::<f64>() / e.len().max(1) as f64).sqrt())
-        .collect();
-    per_run.iter().sum::<f64>() / per_run.len().max(1) as f64
-}
-
 /// Validation error of a model: the runs' RMSPE averaged over the runs, %.
 pub fn validation_rmspe(
     model: &ExtendedModel,
     validation: &[&Run],
     initial: InitialState,
 ) -> Result<f64, DiagnoseError> {
-    Ok(mean_rmspe(&pct_errors(model, validation, initial)?))
+    Ok(Scores::of(model, validation, initial)?.rmspe())
 }
 
 /// Why an effect cannot be tried on these runs, if it cannot.
@@ -319,14 +293,6 @@ struct Bench<'a> {
     spool: Option<(String, Vec<ResidualTrace>)>,
 }
 
-/// The trials so far.
-#[derive(Default)]
-struct Trials {
-    /// Each trial with its errors and how it is fitted (for the comparisons between trials).
-    entries: Vec<(Diagnosis, Scores, Recipe)>,
-    skipped: Vec<SkippedEffect>,
-}
-
 impl Bench<'_> {
     /// One structural refinement, refitted, scored and judged.
     fn try_structure(&self, change: StructuralChange, trials: &mut Trials) {
@@ -413,237 +379,5 @@ impl Bench<'_> {
             after,
             Recipe::Effect(id),
         ));
-    }
-}
-
-impl Trials {
-    /// The report: the trials ranked by validation RMSPE, and what the structure needs in words.
-    fn into_report(mut self, bench: &Bench<'_>) -> DiagnosisReport {
-        self.entries.sort_by(|a, b| a.0.beyond_noise_after.total_cmp(&b.0.beyond_noise_after));
-        let preference_note = self.prefer_physics_only_on_evidence(bench);
-        let attribution_note = self.settle_tie(bench).or(preference_note);
-        // The words follow the ranking: structure is "the missing piece" only when no physics ranks
-        // above it (the table and the loop take the top significant entry).
-        let yardstick = bench.judge.yardstick;
-        let mut report = DiagnosisReport {
-            output: bench.current.output.clone(),
-            rmspe_current_pct: bench.judge.current.rmspe(),
-            rmspe_refit_pct: yardstick.rmspe(),
-            held_out_refit_pct: yardstick.held_out_rmspe(),
-            held_out_segments: bench.folds.map_or(0, HeldOut::segments),
-            entries: self.entries.into_iter().map(|(d, ..)| d).collect(),
-            skipped: self.skipped,
-            structure_note: None,
-            attribution_note,
-        };
-        let top_is_physics = report.top_is_physics();
-        report.structure_note =
-            report.entries.iter().find(|d| d.kind == DiagnosisKind::Structure && d.significant).map(|d| {
-                if top_is_physics {
-                    format!("below the physics ranked first, the structure may also improve: {}", d.evidence)
-                } else {
-                    format!("structure is the missing piece: {}", d.evidence)
-                }
-            });
-        report
-    }
-
-    /// Rule 3 of [`decide`]: the data must prefer a physical effect that counts by rules 1 and 2
-    /// to the best structural refinement (lowest error beyond the noise among those the witnesses
-    /// lean towards, see [`RIVAL_LEVEL`]).
-    ///
-    /// - It beats the refinement beyond noise on the same witnesses: it is preferred.
-    /// - The refinement beats it so: it is not counted.
-    /// - Neither beats the other: the two explain the same residual, and the held-out
-    ///   identification responses decide, as between any two trials that cannot be told apart
-    ///   (see [`Trials::settle_tie`]): the physics keeps its place only when its held-out witness
-    ///   against the current model is counted and at least as strong as the refinement's. Where
-    ///   the held-out responses support both alike (seven responses all better give both the
-    ///   floor p = 1/128), the physics' own evidence, which agrees or it would not count, is the
-    ///   support the refinement lacks. Without a held-out witness of its own, a block with more
-    ///   freedom has not shown it explains more, and the physics is not counted.
-    ///
-    /// The note names both with the numbers and the experiment that would separate them, for the
-    /// first physics this touches among the trials that count.
-    fn prefer_physics_only_on_evidence(&mut self, bench: &Bench<'_>) -> Option<String> {
-        if !self.entries.iter().any(|e| e.0.significant && e.0.kind == DiagnosisKind::Physics) {
-            return None;
-        }
-        // The entries are ranked: the first structural refinement the witnesses lean towards, all
-        // of them consulted (its own test may have spared the held-out refits).
-        let yardstick = bench.judge.yardstick;
-        let rival = (0..self.entries.len()).find(|&i| {
-            let (d, scores, recipe) = &mut self.entries[i];
-            if d.kind != DiagnosisKind::Structure || d.test.p_value >= RIVAL_LEVEL {
-                return false;
-            }
-            scores.cross_validate(*recipe, bench.folds);
-            Comparison::of(yardstick, scores, yardstick).p_value < RIVAL_LEVEL
-        })?;
-        let (rival_entry, rival_scores) = (self.entries[rival].0.clone(), self.entries[rival].1.clone());
-        let rival_support = held_out_support(&Comparison::of(yardstick, &rival_scores, yardstick));
-        let mut note = None;
-        let first_counting = self.entries.iter().position(|e| e.0.significant);
-        for (i, (d, scores, _)) in self.entries.iter_mut().enumerate() {
-            if !(d.significant && d.kind == DiagnosisKind::Physics) {
-                continue;
-            }
-            let against = Comparison::of(&rival_scores, scores, yardstick);
-            if against.p_value < SIGNIFICANCE_LEVEL && against.reduction > 0.0 {
-                continue;
-            }
-            let rival_better = Comparison::of(scores, &rival_scores, yardstick).p_value < SIGNIFICANCE_LEVEL;
-            let own_support = held_out_support(&d.test);
-            let held_out_prefers =
-                own_support.is_some_and(|own| rival_support.is_none_or(|theirs| own <= theirs));
-            let support_words = format!(
-                "held-out support against the current model: {} for {}, {} for {}",
-                support_text(own_support),
-                d.effect,
-                support_text(rival_support),
-                rival_entry.effect
-            );
-            let kept = !rival_better && held_out_prefers;
-            if !kept {
-                d.significant = false;
-                d.why_not = Some(format!(
-                    "not counted: the data do not prefer it to the best structural refinement, {} ({:.2} σ beyond \
-                     the noise): {}; {support_words}",
-                    rival_entry.effect,
-                    rival_entry.beyond_noise_after,
-                    against.words()
-                ));
-            }
-            if note.is_none() && first_counting == Some(i) {
-                note = Some(format!(
-                    "{} and {} explain the same residual: error beyond the noise {:.2} σ against {:.2} σ (RMSPE \
-                     {:.3} % against {:.3} %), and the physics does not beat the structure beyond noise ({}); \
-                     {support_words}. {}. A test that would separate them: {}; {}",
-                    d.effect,
-                    rival_entry.effect,
-                    d.beyond_noise_after,
-                    rival_entry.beyond_noise_after,
-                    d.rmspe_after_pct,
-                    rival_entry.rmspe_after_pct,
-                    against.words(),
-                    if kept {
-                        format!("{} is counted: the held-out responses prefer it", d.effect)
-                    } else {
-                        format!(
-                            "{} is not counted: the physics is taken only when the data prefer it",
-                            d.effect
-                        )
-                    },
-                    d.effect.separating_test(),
-                    rival_entry.effect.separating_test()
-                ));
-            }
-        }
-        note
-    }
-
-    /// When the two best significant trials cannot be told apart (the better does not beat the
-    /// other beyond noise, [`SIGNIFICANCE_LEVEL`], on the same witnesses), the data do not say
-    /// which explains the residual, and the note says so with the numbers and the experiment that
-    /// would separate them. The held-out identification responses then decide: the runner-up is
-    /// put first (where the loop takes it) only when its held-out witness is the stronger (a lower
-    /// signed-rank p-value against the current model; a trial whose held-out responses do not
-    /// witness has no such support). Otherwise the ranking stands. The evidence cannot decide
-    /// here: a physical effect that counts already has its signature, and a structural refinement
-    /// claims no physics to have one of.
-    fn settle_tie(&mut self, bench: &Bench<'_>) -> Option<String> {
-        let mut significant =
-            self.entries.iter().enumerate().filter(|(_, e)| e.0.significant).map(|(i, _)| i);
-        let (first, second) = (significant.next()?, significant.next()?);
-        for i in [first, second] {
-            let (_, scores, recipe) = &mut self.entries[i];
-            scores.cross_validate(*recipe, bench.folds);
-        }
-        let apart = Comparison::of(&self.entries[second].1, &self.entries[first].1, bench.judge.yardstick);
-        if apart.p_value < SIGNIFICANCE_LEVEL {
-            return None;
-        }
-        let (a, b) = (&self.entries[first].0, &self.entries[second].0);
-        let support = |d: &Diagnosis| held_out_support(&d.test);
-        let held_out_words = |d: &Diagnosis| {
-            support(d)
-                .map_or_else(|| "no held-out witness".to_owned(), |p| format!("held-out p = {}", p_text(p)))
-        };
-        let runner_up_first = support(b).is_some_and(|pb| support(a).is_none_or(|pa| pb < pa));
-        let why = if runner_up_first {
-            format!(
-                "the held-out identification responses support it more ({} against {})",
-                held_out_words(b),
-                held_out_words(a)
-            )
-        } else if support(a).is_some() {
-            format!(
-                "it ranks first and the held-out responses support it at least as well ({} against {})",
-                held_out_words(a),
-                held_out_words(b)
-            )
-        } else {
-            "it ranks first and the held-out responses witness neither".to_owned()
-        };
-        let note = format!(
-            "{} and {} explain the same residual and cannot be told apart: error beyond the noise {:.2} σ \
-             against {:.2} σ (RMSPE {:.3} % against {:.3} %), and the better does not beat the other beyond \
-             noise ({}). Taken: {}, because {why}. A test that would separate them: {}; {}",
-            a.effect,
-            b.effect,
-            a.beyond_noise_after,
-            b.beyond_noise_after,
-            a.rmspe_after_pct,
-            b.rmspe_after_pct,
-            apart.words(),
-            if runner_up_first { b.effect } else { a.effect },
-            a.effect.separating_test(),
-            b.effect.separating_test()
-        );
-        if runner_up_first {
-            self.entries.swap(first, second);
-        }
-        Some(note)
-    }
-}
-
-/// The held-out witness's signed-rank p-value, when it counted.
-fn held_out_support(test: &Comparison) -> Option<f64> {
-    test.held_out.filter(|h| h.counted).map(|h| h.test.p_value)
-}
-
-/// "p = 0.0068", or "none" when the held-out responses do not witness.
-fn support_text(support: Option<f64>) -> String {
-    support.map_or_else(|| "none".to_owned(), |p| format!("p = {}", p_text(p)))
-}
-
-/// Whether a trial counts by the first two conditions (the third needs every trial; see below);
-/// with the ranking and `Trials::settle_tie` this is the whole decision.
-///
-/// 1. It beats the refitted current model beyond noise and by enough to matter
-///    ([`Comparison::passes`]: p < [`SIGNIFICANCE_LEVEL`] over the validation runs and the held-out
-///    responses, and at least [`MIN_RELATIVE_REDUCTION`] of the error beyond the noise removed).
-/// 2. A physical effect's own evidence, read from the current model's residuals, shows its
-///    signature: a flexible block buys a few percent anywhere; the signature says which physics
-///    it is.
-///
-/// 3. The data prefer it to the best structural refinement: it beats that refinement beyond noise
-///    on the same witnesses (see `Trials::prefer_physics_only_on_evidence`; no share is asked
-///    there: between two explanations of the same residual only which one the data prefer
-///    counts). A lag block or a dead time that only stands in for a missing pole pair is no
-///    evidence of physics.
-///
-/// The trials that count then compete on the same terms: the ranking by error beyond the noise,
-/// and where the two best cannot be told apart, the held-out responses. There is no exception for
-/// any effect.
-///
-/// Returns whether it counts, and why not when it beats the current model and still does not.
-fn decide(beats_current: bool, evidence_supports: bool) -> (bool, Option<String>) {
-    match (beats_current, evidence_supports) {
-        (true, true) => (true, None),
-        (true, false) => {
-            (false, Some("not counted: its own evidence does not show the effect's signature".to_owned()))
-        }
-        (false, _) => (false, None),
     }
 }

@@ -180,11 +180,12 @@ fn sr30_models_have_the_papers_structure() {
     let slowest = thrust_poles.iter().max_by(|a, b| a.norm().total_cmp(&b.norm())).unwrap();
     assert!(slowest.im.abs() < 1e-9 && (0.92..=0.96).contains(&slowest.re), "thrust poles {thrust_poles:?}");
     // Thrust is a static function of spool speed seen through a fast load cell and stand, so its
-    // model's slower dynamics are those of the speed model, found independently from its own roots.
-    for p in thrust_poles.iter().filter(|p| p.im > 1e-9) {
-        let nearest = poles.iter().map(|q| (p - q).norm()).fold(f64::INFINITY, f64::min);
-        assert!(nearest < 0.05, "thrust pole {p} has no counterpart among the speed poles {poles:?}");
-    }
+    // model's slowest pole is the speed model's spool pole, found independently from its own roots.
+    // (The pole pairs are not compared: the pair stands in for the fuel system and, once its circle
+    // follows the data, for what the fixed linear block misses of the operating-point-dependent
+    // spool, which the two outputs weigh differently.)
+    let spool = real.iter().copied().fold(0.0_f64, f64::max);
+    assert!((slowest.re - spool).abs() < 0.02, "thrust's slowest pole {slowest} against the speed's {spool}");
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {

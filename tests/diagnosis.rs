@@ -302,6 +302,35 @@ fn the_identification_finds_a_dead_time_and_no_lag_stands_in_for_it() {
     }
 }
 
+/// The simulator's own fuel-line delay (0.45 s, four samples) on the default engine: the segment
+/// models see it (they fit best with the input several samples later than on the engine without
+/// it), and the reduced model keeps it instead of a pole pair slowed to imitate it. The continuous-time
+/// model and every operating point a controller is designed on carry at least that wait.
+#[test]
+fn the_fuel_line_delay_of_the_simulator_is_in_the_model() {
+    use jetid::core::control::d2c::d2c_zoh;
+    use jetid::core::control::operating_point::{identified_range, operating_points};
+    for seed in [1, 2, 3] {
+        let b = bench(&["transport_delay"], seed);
+        let truth = 0.45;
+        let settings = OutputSettings::for_output(SPEED);
+        let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
+        let identified = identify_output(&b.ident, SPEED, &settings, &segments, None).unwrap();
+        let dead_time = identified.proposal.as_ref().unwrap().dead_time.clone();
+        let dt = b.ident.dt_secs;
+        let kept = dead_time.in_model() as f64 * dt;
+        assert!((kept - truth).abs() <= 1.5 * dt, "seed {seed}: {}", dead_time.sentence());
+        let model = ExtendedModel::from_gray_box(&identified.model);
+        let continuous = d2c_zoh(&model.wiener.linear.tf).unwrap();
+        assert!(continuous.delay_secs >= truth - 0.5 * dt, "seed {seed}: {continuous:?}");
+        let points = operating_points(&model, identified_range(&b.ident.input.values), &[]).unwrap();
+        for p in &points {
+            let delay = p.continuous.as_ref().map(|c| c.delay_secs);
+            assert!(delay.is_some_and(|d| d >= truth - 0.5 * dt), "seed {seed}, u = {}: {delay:?}", p.u);
+        }
+    }
+}
+
 /// The kink sits above 80,000 rpm, which the chirp never reaches, so the third run is a validation
 /// run; there the base model's own error stays, so the whole error falls by a fifth to a quarter,
 /// not by half. A bleed gain of 4 is no longer found: a static map one order higher (a structural

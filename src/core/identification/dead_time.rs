@@ -35,6 +35,17 @@ pub enum DeadTimeDecision {
     RootPreferred { gain: Gain },
     /// Kept by the forward selection.
     Kept { gain: Gain },
+    /// Kept beside the roots for the late start they leave: the model without it starts
+    /// [`LATE_START_SAMPLES`] or more before the segment models say the responses start, its roots
+    /// have stretched towards a slower rise to cover the gap, and the model without it does not
+    /// predict the held-out segments better.
+    KeptForLateStart {
+        /// How late the model without it starts (the segment models' estimator on its own responses), samples.
+        model_nk: usize,
+        /// Held-out errors without and with it, output units.
+        held_out_without: f64,
+        held_out_with: f64,
+    },
     /// Kept in place of a root that only stood in for it.
     KeptForRoot {
         /// Held-out errors with that root and with the dead time instead, output units.
@@ -46,7 +57,10 @@ pub enum DeadTimeDecision {
 impl DeadTimeDecision {
     /// Whether the model carries the dead time.
     pub fn kept(&self) -> bool {
-        matches!(self, Self::Given | Self::Kept { .. } | Self::KeptForRoot { .. })
+        matches!(
+            self,
+            Self::Given | Self::Kept { .. } | Self::KeptForRoot { .. } | Self::KeptForLateStart { .. }
+        )
     }
 }
 
@@ -69,6 +83,14 @@ impl fmt::Display for DeadTimeDecision {
                 )
             }
             Self::Kept { gain } => write!(f, "kept: {gain}"),
+            Self::KeptForLateStart { model_nk, held_out_without, held_out_with } => write!(
+                f,
+                "kept for the late start: without it the model's own responses start {model_nk} samples \
+                 late, earlier than the segments', and its pole pairs stretch to cover the gap; the held-out \
+                 segments cannot tell the two apart or prefer the dead time: error from {} to {} with it",
+                fmt_error(*held_out_without),
+                fmt_error(*held_out_with)
+            ),
             Self::KeptForRoot { held_out_without, held_out_with } => write!(
                 f,
                 "kept in place of a root that only stood in for it: held-out error from {} to {} with \
@@ -79,6 +101,14 @@ impl fmt::Display for DeadTimeDecision {
         }
     }
 }
+
+/// The least late start, samples, that the roots must leave unexplained before a dead time is kept for
+/// it without lowering the held-out error ([`DeadTimeDecision::KeptForLateStart`]). The data's delay
+/// and the model's are read by the same estimator ([`apparent_nk`]), which picks a whole number of
+/// samples: a true start between two samples reads as either neighbour, so each reading is good to
+/// one sample and their difference to two. Three or more samples is a start the model reaches by a
+/// slower rise instead of a wait.
+pub const LATE_START_SAMPLES: usize = 3;
 
 /// The input dead time the reduced model may carry (a fuel line and valve delay), as a candidate of
 /// the proposal like a root: what the segment ARX models say, and what the cross-validation said.
@@ -133,8 +163,21 @@ pub(super) fn with_dead_time(
     groups: &[RootGroup],
     excess: usize,
 ) -> Option<(Polished, usize)> {
+    dead_time_guesses(data, groups, excess.saturating_sub(1)..=excess + 1, REFINED_GUESSES)
+        .into_iter()
+        .min_by(|a, b| a.0.assembled.rms().total_cmp(&b.0.assembled.rms()))
+}
+
+/// The whole delays in `delays` (at least one sample, at most [`MAX_DEAD_TIME_SECS`]), screened on
+/// the identification error with `groups` as they are; the best `guesses` polished with the roots.
+pub(super) fn dead_time_guesses(
+    data: &IdentData,
+    groups: &[RootGroup],
+    delays: std::ops::RangeInclusive<usize>,
+    guesses: usize,
+) -> Vec<(Polished, usize)> {
     let max = ((MAX_DEAD_TIME_SECS / data.fits.dt_secs).round() as usize).max(1);
-    let mut screened: Vec<(f64, usize)> = (excess.saturating_sub(1).max(1)..=(excess + 1).min(max))
+    let mut screened: Vec<(f64, usize)> = ((*delays.start()).max(1)..=(*delays.end()).min(max))
         .filter_map(|d| {
             assemble_groups(&data.with_delay(d), groups, data.settings.static_order)
                 .ok()
@@ -144,9 +187,9 @@ pub(super) fn with_dead_time(
     screened.sort_by(|a, b| a.0.total_cmp(&b.0));
     screened
         .into_iter()
-        .take(REFINED_GUESSES)
+        .take(guesses)
         .filter_map(|(_, d)| fitted(&data.with_delay(d), groups).map(|p| (p, d)))
-        .min_by(|a, b| a.0.assembled.rms().total_cmp(&b.0.assembled.rms()))
+        .collect()
 }
 
 /// Low-frequency group delay of a root group, s: τ for a real pole, 2ζ/ωn for a pair (the slope of

@@ -8,8 +8,8 @@
 //! - the automatic proposal: `words` (how its numbers read), `parsimony` (when a candidate beats
 //!   the simpler model), `cross_validation` (held-out errors across segments), `dead_time` (the
 //!   input delay as a candidate), `direct_fit` (free roots when no cluster gives a model),
-//!   `verdict` (what became of each candidate), `selection` (the forward selection) and
-//!   `structure` (the proposal);
+//!   `verdict` (what became of each candidate), `selection` (the forward selection), `follow` (a
+//!   circle follows a root the polish stops on its rim) and `structure` (the proposal);
 //! - `pipeline`: the chain for one output and the live path.
 pub mod arx;
 pub mod cluster;
@@ -30,6 +30,7 @@ pub mod reduce;
 pub mod cross_validation;
 pub mod dead_time;
 pub mod direct_fit;
+pub mod follow;
 pub mod parsimony;
 pub mod selection;
 pub mod structure;

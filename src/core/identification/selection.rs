@@ -5,7 +5,8 @@
 use crate::core::identification::cluster::{ClusterEval, RootKind};
 use crate::core::identification::cross_validation::{cross_validate, fitted};
 use crate::core::identification::dead_time::{
-    DeadTimeDecision, DeadTimeVerdict, apparent_nk, group_delay_secs, with_dead_time,
+    DeadTimeDecision, DeadTimeVerdict, LATE_START_SAMPLES, apparent_nk, dead_time_guesses, group_delay_secs,
+    with_dead_time,
 };
 use crate::core::identification::parsimony::{
     Gain, MIN_RELATIVE_REDUCTION, Noise, model_error_reduction, pooled, too_little_to_cross_validate,
@@ -15,6 +16,10 @@ use crate::core::identification::verdict::{CandidateVerdict, Verdict};
 
 /// Trials cross-validated per round: the best few by their fit on all the data.
 const CROSS_VALIDATED_TRIALS: usize = 3;
+
+/// Dead times for a late start the roots leave that are polished and cross-validated, the best few
+/// by their fit on all the data (as many as the trials of a round).
+const LATE_START_GUESSES: usize = CROSS_VALIDATED_TRIALS;
 
 /// What the forward selection kept: candidate indices (sorted) and the dead time, with every
 /// candidate's verdict.
@@ -88,6 +93,9 @@ impl<'d, 'a> ForwardSelection<'d, 'a> {
         }
         if !selection.dead_time.kept() {
             current = selection.trade_root_for_dead_time(current);
+        }
+        if !selection.dead_time.kept() {
+            current = selection.dead_time_for_late_start(current);
         }
         if selection.dead_time.kept() {
             selection.drop_stand_ins(current);
@@ -291,6 +299,66 @@ impl<'d, 'a> ForwardSelection<'d, 'a> {
             }
         }
         current
+    }
+
+    /// The segment models time the responses' start directly (their input delay); roots that reach
+    /// a late start by a slower rise contradict that timing while fitting the held-out segments just
+    /// as well, because a few samples of wait and a stretched pole pair look alike under the noise. When
+    /// the kept pole pairs have stretched (as polished they delay a slow input by a sample or more
+    /// beyond where the segment models put them), a dead time for the late start they still leave
+    /// ([`LATE_START_SAMPLES`] or more) is kept
+    /// unless the model without it predicts the held-out segments better by the rule that keeps a
+    /// root (when the held-out segments cannot tell the two apart, the timing the segment models
+    /// measured directly decides): the roots then return to where the
+    /// segment models put them, and the continuous-time model a controller is designed on carries
+    /// the wait instead of a pole pair slowed to imitate it.
+    fn dead_time_for_late_start(&mut self, current: Current) -> Current {
+        let Some(cur) = current.held_out.as_deref() else { return current };
+        let at = self.data.with_delay(current.delay);
+        let model_nk = apparent_nk(&at, &current.model.assembled);
+        let excess = self.data.fits.nk().saturating_sub(model_nk);
+        // The roots stretch to cover the gap when, as polished, their pole pairs delay a slow input by
+        // at least a sample more than where the segment models put them (their low-frequency group
+        // delay). A real pole is not counted: the spool's time constant follows the operating point,
+        // so its polished pole is slower or faster than the segments' average for that reason alone.
+        let as_segments_show: Vec<RootGroup> =
+            self.kept.iter().filter_map(|&i| self.groups[i].clone()).collect();
+        let dt_secs = self.data.fits.dt_secs;
+        let lag = |groups: &[RootGroup]| {
+            groups.iter().filter(|g| g.pair).map(|g| group_delay_secs(g, dt_secs)).sum::<f64>()
+        };
+        let stretched = lag(&current.model.groups) - lag(&as_segments_show) >= dt_secs;
+        if excess < LATE_START_SAMPLES || !stretched {
+            return current;
+        }
+        // The late start is the most the wait can be (the roots, returned to where the segment models
+        // put them, take up part of it), so every whole delay up to it is screened; the wait is one
+        // parameter chosen among the best few by the held-out segments, as the decision itself is.
+        // The delays are screened with the kept roots where the segment models put them (their
+        // clusters' centroids), not as polished without a wait: those have stretched to imitate it
+        // and would favour the shortest wait.
+        let delays = 1..=excess + 1;
+        let best = dead_time_guesses(self.data, &as_segments_show, delays, LATE_START_GUESSES)
+            .into_iter()
+            .filter_map(|(model, delay)| {
+                let order = model.assembled.wiener.map.order();
+                let held_out = cross_validate(&self.data.with_delay(delay), &model.groups, order)?;
+                Some((model, delay, held_out))
+            })
+            .min_by(|a, b| pooled(&a.2).total_cmp(&pooled(&b.2)));
+        let Some((model, delay, held_out)) = best else { return current };
+        // The model without the dead time must not be the better one by the rule that keeps a root.
+        if Gain::of(&held_out, cur, self.noise).passes() {
+            return current;
+        }
+        let gain = Gain::of(cur, &held_out, self.noise);
+        self.dead_time.samples = delay;
+        self.dead_time.decision = DeadTimeDecision::KeptForLateStart {
+            model_nk,
+            held_out_without: gain.without,
+            held_out_with: gain.with,
+        };
+        Current { model, delay, held_out: Some(held_out) }
     }
 
     /// The model with candidate `i` taken out and a dead time for the late start that leaves, with

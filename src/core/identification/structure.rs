@@ -16,6 +16,9 @@
 //! **Parsimony rule.** A root enters the model only when it beats the simpler model by enough,
 //! beyond noise: see `core::identification::parsimony`.
 //!
+//! **Roots go where the data put them.** When the polish of the kept roots stops on the rim of a
+//! circle, the circle follows the root (`core::identification::follow`) and the proposal says so.
+//!
 //! **No dead ends.** When no candidate cluster gives a model (no pole gathers in a majority of the
 //! segments), the reduced model is fitted directly: output-error Wiener fit of free roots, grown one
 //! real pole or pole pair at a time from a grid of time constants and natural frequencies, under the
@@ -29,6 +32,7 @@ use crate::core::identification::dead_time::DeadTimeVerdict;
 use crate::core::identification::direct_fit::{DirectFit, direct_fit};
 use crate::core::identification::error::PipelineError;
 use crate::core::identification::fits::SegmentFits;
+use crate::core::identification::follow::{CircleFollow, follow_roots};
 use crate::core::identification::reduce::IdentData;
 use crate::core::identification::selection::ForwardSelection;
 use crate::core::identification::settings::OutputSettings;
@@ -45,6 +49,10 @@ pub struct Proposal {
     pub verdicts: Vec<CandidateVerdict>,
     /// The input dead time candidate and its verdict.
     pub dead_time: DeadTimeVerdict,
+    /// The circles that followed their roots out of the segment models' circles (`clusters` holds
+    /// the grown circles).
+    #[serde(default)]
+    pub followed: Vec<CircleFollow>,
     /// Present when no cluster gave a model and the roots were fitted directly.
     pub direct: Option<DirectFit>,
 }
@@ -67,6 +75,7 @@ impl Proposal {
             })
             .collect();
         out.push(self.dead_time.sentence());
+        out.extend(self.followed.iter().map(ToString::to_string));
         out.extend(self.direct.as_ref().map(|d| d.note.clone()));
         out
     }
@@ -89,14 +98,25 @@ pub fn propose(
             clusters: Vec::new(),
             verdicts: selection.verdicts,
             dead_time: selection.dead_time,
+            followed: Vec::new(),
             direct: Some(direct),
         });
     }
+    let followed = follow_roots(&data.with_delay(selection.dead_time.in_model()), &evals, &selection.kept);
     let clusters = evals
         .iter()
         .enumerate()
         .filter(|(i, _)| selection.kept.contains(i))
-        .map(|(_, e)| e.cluster.clone())
+        .map(|(i, e)| match followed.iter().find(|f| f.candidate == i) {
+            Some(f) => Cluster { centre: f.to.centre, radius: f.to.radius, ..e.cluster.clone() },
+            None => e.cluster.clone(),
+        })
         .collect();
-    Ok(Proposal { clusters, verdicts: selection.verdicts, dead_time: selection.dead_time, direct: None })
+    Ok(Proposal {
+        clusters,
+        verdicts: selection.verdicts,
+        dead_time: selection.dead_time,
+        followed,
+        direct: None,
+    })
 }

@@ -77,6 +77,21 @@ pub struct CandidateSummary {
     pub standard_errors: Option<f64>,
 }
 
+/// The input dead time the automatic proposal tried beside its roots, and why the model carries it
+/// or not: the segment models' delay beside the model's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeadTimeSummary {
+    /// Dead time tried or kept, s (samples × sample time).
+    pub secs: f64,
+    pub samples: usize,
+    /// The segment ARX models' input delay, samples.
+    pub arx_nk: usize,
+    /// Whether the reduced model carries it.
+    pub kept: bool,
+    /// The proposal's sentence.
+    pub reason: String,
+}
+
 /// What was identified for one output.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentSummary {
@@ -90,6 +105,13 @@ pub struct IdentSummary {
     /// The model's roots as it uses them.
     #[serde(default)]
     pub roots: Vec<RootSummary>,
+    /// What the automatic proposal decided about the input dead time, when it ran.
+    #[serde(default)]
+    pub dead_time: Option<DeadTimeSummary>,
+    /// The proposal's circles that followed their roots out of the segment models' circles, one
+    /// sentence each.
+    #[serde(default)]
+    pub circles_followed: Vec<String>,
     /// Why the linear block was fitted directly instead of built from clusters, when it was.
     #[serde(default)]
     pub direct_fit: Option<String>,
@@ -166,6 +188,19 @@ impl IdentSummary {
                 })
                 .collect(),
             roots,
+            dead_time: identified.proposal.as_ref().map(|p| DeadTimeSummary {
+                secs: p.dead_time.samples as f64 * p.dead_time.dt_secs,
+                samples: p.dead_time.samples,
+                arx_nk: p.dead_time.arx_nk,
+                kept: p.dead_time.kept(),
+                reason: p.dead_time.sentence(),
+            }),
+            circles_followed: identified
+                .proposal
+                .iter()
+                .flat_map(|p| &p.followed)
+                .map(ToString::to_string)
+                .collect(),
             direct_fit: model.direct_fit.clone(),
             poles: tf.poles().unwrap_or_default(),
             zeros: tf.zeros().unwrap_or_default(),
@@ -228,11 +263,17 @@ pub(super) fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
     if !id.candidates.is_empty() {
         candidates_table(out, &id.candidates);
     }
+    if let Some(d) = &id.dead_time {
+        let _ = writeln!(out, "Dead time: {}.\n", d.reason);
+    }
     if let Some(note) = &id.direct_fit {
         let _ = writeln!(out, "**Fitted directly:** {note}\n");
     }
     if !id.clusters.is_empty() {
         clusters_table(out, &id.clusters);
+    }
+    for sentence in &id.circles_followed {
+        let _ = writeln!(out, "- root on the rim: {sentence}.");
     }
     fitted_roots_table(out, &id.roots);
     let poles: Vec<String> = id.poles.iter().map(fmt_complex).collect();

@@ -312,6 +312,51 @@ fn a_set_point_in_a_closed_loop_log_is_found_and_split_on() {
     assert_eq!(split(&runs), split(&named_runs));
 }
 
+/// Where the steps come from a set-point found in the log, the report says how far the plain model
+/// moves when they are found on the input instead: the second model is the one the input's steps
+/// give, scored on every compared run. Open-loop runs, split on the input, carry no such line.
+#[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
+fn the_report_says_how_far_the_segmentation_channel_moves_the_plain_model() {
+    use jetid::core::identification::pipeline::predict_scored;
+    use jetid::io::project::load_project;
+    use jetid::workflow::model::{OutputPlan, identify};
+    use jetid::workflow::preparation::segmentation_choice;
+    use jetid::workflow::runs::load_runs;
+    let dir = tempfile::tempdir().unwrap();
+    let project = load_project(&jetcat_without_steps_from(dir.path())).unwrap();
+    let runs = load_runs(&project).unwrap();
+    let plan = OutputPlan::of_project(&project, "rpm").with_steps_from(&runs.steps_from);
+    let identified = identify(&runs.ident, &runs.ident_junctions, &plan).unwrap();
+    let choice = segmentation_choice(&runs, &plan, &identified).unwrap();
+    assert!(choice.found && choice.steps_from == "rpm_setpoint", "{choice:?}");
+    let on_input =
+        identify(&runs.ident, &runs.ident_junctions, &OutputPlan { steps_from: None, ..plan.clone() })
+            .unwrap();
+    let compared = runs.compared();
+    assert_eq!(choice.runs.len(), compared.len(), "{choice:?}");
+    for (both, run) in choice.runs.iter().zip(compared) {
+        let rmse = |m: &jetid::core::identification::pipeline::Identified| {
+            predict_scored(&m.model.wiener, run, "rpm", plan.settings.initial_state).unwrap().metrics.rmse
+        };
+        assert_eq!(both.run, run.name);
+        assert!(
+            (both.rmse - rmse(&identified)).abs() < 1e-9
+                && (both.rmse_on_input - rmse(&on_input)).abs() < 1e-9
+        );
+    }
+    let moved = choice.moved_pct.unwrap();
+    assert!(moved.is_finite() && moved.abs() > 0.0, "{choice:?}");
+    let words = choice.sentence("rpm");
+    assert!(words.contains("rpm_setpoint") && words.contains(&format!("{moved:+.1} %")), "{words}");
+
+    let sr30 = load_project(&sample("sr30/project.toml")).unwrap();
+    let sr30_runs = load_runs(&sr30).unwrap();
+    let plan = OutputPlan::of_project(&sr30, "shaft_speed_rpm").with_steps_from(&sr30_runs.steps_from);
+    let identified = identify(&sr30_runs.ident, &sr30_runs.ident_junctions, &plan).unwrap();
+    assert_eq!(segmentation_choice(&sr30_runs, &plan, &identified), None);
+}
+
 /// The same project without its set-point named gives the same model in the batch and the app.
 #[cfg(feature = "gui")]
 #[test]

@@ -17,6 +17,8 @@ pub struct Built {
     pub diagnosis: Vec<DiagnosisEntry>,
     /// The candidates not tried and what the trials were judged on, or why there is no diagnosis.
     pub diagnosis_notes: Vec<String>,
+    /// How much the segmentation channel moves the plain model (filled in beside the baselines).
+    pub preparation: Option<crate::io::report::preparation::SegmentationChoice>,
 }
 
 /// The gray-box model of the plan's output with its effects, each refitted on the identification
@@ -54,5 +56,5 @@ pub fn effects_and_diagnosis(
         Ok((entries, skipped)) => (entries, skipped),
         Err(e) => (Vec::new(), vec![format!("diagnosis of '{output}': {e}")]),
     };
-    Ok(Built { effects, diagnosis, diagnosis_notes })
+    Ok(Built { effects, diagnosis, diagnosis_notes, preparation: None })
 }

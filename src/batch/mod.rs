@@ -20,6 +20,7 @@ use crate::io::project::Project;
 use crate::io::report::OutputReport;
 use crate::workflow::model::{self, OutputPlan};
 use crate::workflow::model_file::{new_model_file, output_entry, take_saved_clusters};
+use crate::workflow::preparation::segmentation_choice;
 use crate::workflow::runs::{self, Runs};
 
 mod compare;
@@ -154,6 +155,7 @@ impl Batch<'_> {
             models.extended = Some(extended.clone());
         }
         out.diagnosis = built.diagnosis;
+        out.preparation = built.preparation;
         self.describe_steady_states(&plan, extended, &mut out, &mut notes);
         let mut part = OutputPart {
             output: output.to_owned(),
@@ -168,8 +170,9 @@ impl Batch<'_> {
         Ok(part)
     }
 
-    /// The effects (the workflow's loop) and the diagnosis of the final model, while the baselines,
-    /// which need only the identified model, train on their own thread; the notes keep their order.
+    /// The effects (the workflow's loop) and the diagnosis of the final model, while the baselines
+    /// and the segmentation choice's second model, which need only the identified model, are fitted
+    /// on their own thread; the notes keep their order.
     fn effects_beside_baselines(
         &self,
         plan: &OutputPlan,
@@ -185,18 +188,20 @@ impl Batch<'_> {
                 let models = baseline_timings.time(&format!("baselines_{output}"), || {
                     fit_baselines(identified, &runs.ident, output, &mut notes)
                 });
-                (models, notes, baseline_timings)
+                let preparation = baseline_timings
+                    .time(&format!("preparation_{output}"), || segmentation_choice(runs, plan, identified));
+                (models, preparation, notes, baseline_timings)
             });
             let built = effects::effects_and_diagnosis(plan, runs, identified, notes, timings);
             (built, baselines.join())
         });
-        let (models, baseline_notes, baseline_timings) = baselines
+        let (models, preparation, baseline_notes, baseline_timings) = baselines
             .map_err(|_| anyhow::anyhow!("fitting the baselines of '{output}' stopped unexpectedly"))?;
         timings.0.extend(baseline_timings.0);
         let built = built?;
         notes.extend(baseline_notes);
         notes.extend(built.diagnosis_notes.iter().cloned());
-        Ok((built, models))
+        Ok((effects::Built { preparation, ..built }, models))
     }
 
     /// Whether the runs agree on the steady state under the final model (report.json

@@ -53,6 +53,7 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
         failure_reasons: BTreeMap::new(),
         operating_points: Vec::new(),
         continuous: None,
+        preparation: None,
     }
 }
 

@@ -6,6 +6,7 @@
 //!             end, their segments, the scored runs on the identification run's grid
 //!   ──model──▶ per output: segment fits → the given clusters or the automatic proposal → the
 //!              polished Wiener model → effects added by hand → the missing-physics loop
+//!   ──preparation──▶ how much the segmentation channel moves the plain model (report only)
 //!   ──model_file──▶ model.json from the models; the clusters of a saved one
 //!   ──products──▶ what the figures and the views share: the Bode grid, the chirp's response
 //! ```
@@ -17,6 +18,7 @@
 pub mod model;
 pub mod model_file;
 pub mod overrides;
+pub mod preparation;
 pub mod products;
 pub mod runs;
 

@@ -354,6 +354,9 @@ pub fn render_markdown(report: &Report) -> String {
         if let Some(sentence) = &o.steady_states {
             let _ = writeln!(out, "\n**Steady states across runs:** {sentence}.");
         }
+        if let Some(choice) = &o.preparation {
+            let _ = writeln!(out, "\n**Preparation:** {}.", choice.sentence(name));
+        }
         if !o.error_history.is_empty() {
             let _ = writeln!(
                 out,

@@ -13,6 +13,7 @@ use crate::io::atomic::write_atomic;
 
 mod ident;
 pub mod markdown;
+pub mod preparation;
 pub use ident::{CandidateSummary, ClusterSummary, IdentSummary, RootSummary, SegmentSummary};
 
 pub const REPORT_FORMAT_VERSION: u32 = 1;
@@ -93,6 +94,10 @@ pub struct OutputReport {
     /// Zero-order-hold continuous equivalent of the final model's linear block (input to v).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub continuous: Option<crate::core::control::ContinuousTf>,
+    /// How much the channel the steps were detected on moves the plain model, when the steps came
+    /// from a channel other than the input.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preparation: Option<preparation::SegmentationChoice>,
 }
 
 /// The residual analysis of one output's final model on one run, as the report keeps it (the

@@ -199,7 +199,10 @@ impl IdentSummary {
                 .proposal
                 .iter()
                 .flat_map(|p| &p.followed)
-                .map(ToString::to_string)
+                .map(|f| {
+                    let head = if f.from == f.to { "root on the rim" } else { "circle followed its root" };
+                    format!("{head}: {f}")
+                })
                 .collect(),
             direct_fit: model.direct_fit.clone(),
             poles: tf.poles().unwrap_or_default(),
@@ -273,7 +276,7 @@ pub(super) fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
         clusters_table(out, &id.clusters);
     }
     for sentence in &id.circles_followed {
-        let _ = writeln!(out, "- root on the rim: {sentence}.");
+        let _ = writeln!(out, "- {sentence}.");
     }
     fitted_roots_table(out, &id.roots);
     let poles: Vec<String> = id.poles.iter().map(fmt_complex).collect();

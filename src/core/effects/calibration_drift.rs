@@ -7,7 +7,7 @@ use super::{Evidence, ParamSpec};
 /// test days. The engine is the same, so the model's dynamics and map stay; what moves is an
 /// offset of the input, constant over a run. The block adds to each simulated run's input the
 /// offset that puts the model's steady states on the run's own measured steady stretches (holds of
-/// the output longer than `hold_s`, averaged over their second half): a calibration taken from the
+/// the output or the input, see [`CalibrationDrift::steady_stretches`]): a calibration taken from the
 /// run itself, as a test engineer would take it from the idle hold at the start of a test day.
 /// The identification data define the calibration (their offset is zero: the map is fitted on
 /// them); a run without the output, or without a hold, is simulated uncalibrated.
@@ -36,16 +36,31 @@ impl CalibrationDrift {
         Self { hold_s: (5.0 * tau_s).clamp(2.0, 10.0) }
     }
 
-    /// The steady stretches of a measured output: second halves of holds longer than `hold_s`.
-    pub fn steady_stretches(&self, y: &[f64], dt_secs: f64) -> Vec<(usize, usize)> {
-        plateaus(y, dt_secs, self.hold_s, 0.5 * self.hold_s)
+    /// The steady stretches of a run, where the test held the engine steady: the second halves of
+    /// the output's holds longer than `hold_s` (a speed held by the ECU's loop, whose input never
+    /// holds), and the input's holds after `hold_s` of settling, for their last `hold_s / 2` (an
+    /// open-loop test whose output, a noisy thrust, never holds within 1 % of its range); merged
+    /// where both find the same hold.
+    pub fn steady_stretches(&self, u: &[f64], y: &[f64], dt_secs: f64) -> Vec<(usize, usize)> {
+        let tail = 0.5 * self.hold_s;
+        let mut found = plateaus(y, dt_secs, self.hold_s, tail);
+        found.extend(plateaus(u, dt_secs, self.hold_s + tail, tail));
+        found.sort_unstable();
+        let mut merged: Vec<(usize, usize)> = Vec::with_capacity(found.len());
+        for (a, b) in found {
+            match merged.last_mut() {
+                Some(last) if a <= last.1 => last.1 = last.1.max(b),
+                _ => merged.push((a, b)),
+            }
+        }
+        merged
     }
 
     /// The input offset that best puts `steady(u + offset)` on the measured holds of `y` (least
     /// squares over the holds); zero without holds, or when no admissible offset is found.
     pub fn run_offset(&self, u: &[f64], y: &[f64], dt_secs: f64, steady: impl Fn(f64) -> f64) -> f64 {
         let holds: Vec<(f64, f64)> = self
-            .steady_stretches(y, dt_secs)
+            .steady_stretches(u, y, dt_secs)
             .into_iter()
             .filter_map(|(a, b)| Some((mean(u.get(a..b)?), mean(y.get(a..b)?))))
             .collect();

@@ -366,26 +366,51 @@ for k = 2:n
 end
 end
 
+function w = plateaus(x, dt, hold_s, tail_s)
+% Windows [a, b) (0-based a, as the other runtimes): the last tail_s of every stretch where x holds
+% within 1 % of its range for at least hold_s.
+tol = 0.01 * max(max(x) - min(x), realmin);
+need = ceil(hold_s / dt);
+tail = max(floor(tail_s / dt + 0.5), 2);
+w = zeros(0, 2);
+start = 1;
+n = numel(x);
+for k = 2:n + 1
+    if k == n + 1 || abs(x(k) - x(start)) > tol
+        if k - start >= max(need, tail)
+            w(end + 1, :) = [k - 1 - tail, k - 1]; %#ok<AGROW>
+        end
+        start = k;
+    end
+end
+end
+
 function offset = calibration_offset(o, u, y, dt)
-% calibration_drift: the input offset that puts the steady states on the run's own holds of the
-% measured output (last half of every stretch holding within 1 % of its range for hold_s).
+% calibration_drift: the input offset that puts the steady states on the run's own steady stretches:
+% the last half of every hold of the measured output longer than hold_s, and the last hold_s / 2 of
+% every hold of the input after hold_s of settling, merged where they overlap.
 hold_s = o.calibration(1);
 dc = o.calibration(2);
 steady = @(x) static_map(o, dc * x + o.offset);
-tol = 0.01 * max(max(y) - min(y), realmin);
-need = ceil(hold_s / dt);
-tail = max(floor(0.5 * hold_s / dt + 0.5), 2);
+tail_s = 0.5 * hold_s;
+found = [plateaus(y, dt, hold_s, tail_s); plateaus(u, dt, hold_s + tail_s, tail_s)];
 hu = [];
 hy = [];
-start = 1;
-n = numel(y);
-for k = 2:n + 1
-    if k == n + 1 || abs(y(k) - y(start)) > tol
-        if k - start >= max(need, tail)
-            hu(end + 1) = sum(u(k - tail:k - 1)) / tail; %#ok<AGROW>
-            hy(end + 1) = sum(y(k - tail:k - 1)) / tail; %#ok<AGROW>
+if ~isempty(found)
+    found = sortrows(found);
+    merged = found(1, :);
+    for k = 2:size(found, 1)
+        if found(k, 1) <= merged(end, 2)
+            merged(end, 2) = max(merged(end, 2), found(k, 2));
+        else
+            merged(end + 1, :) = found(k, :); %#ok<AGROW>
         end
-        start = k;
+    end
+    for k = 1:size(merged, 1)
+        a = merged(k, 1);
+        b = merged(k, 2);
+        hu(end + 1) = sum(u(a + 1:b)) / (b - a); %#ok<AGROW>
+        hy(end + 1) = sum(y(a + 1:b)) / (b - a); %#ok<AGROW>
     end
 end
 span = max(max(u) - min(u), realmin);

@@ -298,24 +298,57 @@ static double jetid_holds_cost(const jetid_params *p, const double *hu, const do
     return c;
 }
 
-/* calibration_drift: the input offset that puts the model's steady states on the run's own holds of
- * the measured output (last half of every stretch holding within 1 % of its range for hold_s), by
- * Gauss-Newton on the holds' means. u: the raw input; it goes through the input stage first. */
+/* The windows [a, b) of x's holds: the last tail_s of every stretch holding within 1 % of x's range
+ * for at least hold_s (and tail_s), appended to a/b from index count; returns the new count. */
+static size_t jetid_plateaus(const double *x, size_t n, double dt, double hold_s, double tail_s, size_t *a,
+                             size_t *b, size_t count)
+{
+    double lo = x[0], hi = x[0], tol;
+    size_t k, start = 0, need, tail;
+    for (k = 1; k < n; k++) {
+        if (x[k] < lo) lo = x[k];
+        if (x[k] > hi) hi = x[k];
+    }
+    tol = 0.01 * (hi - lo > DBL_MIN ? hi - lo : DBL_MIN);
+    need = (size_t)ceil(hold_s / dt);
+    tail = (size_t)round(tail_s / dt);
+    if (tail < 2) tail = 2;
+    for (k = 1; k <= n; k++) {
+        if (k == n || fabs(x[k] - x[start]) > tol) {
+            if (k - start >= (need > tail ? need : tail)) {
+                a[count] = k - tail;
+                b[count] = k;
+                count++;
+            }
+            start = k;
+        }
+    }
+    return count;
+}
+
+/* calibration_drift: the input offset that puts the model's steady states on the run's own steady
+ * stretches, by Gauss-Newton on their means. A steady stretch is the last half of a hold of the
+ * measured output longer than hold_s, or the last hold_s / 2 of a hold of the input after hold_s of
+ * settling, merged where the two overlap. u: the raw input; it goes through the input stage first. */
 static double jetid_calibration_offset(const jetid_params *p, const double *u, const double *temp_c,
                                        const double *pressure_kpa, const double *y, size_t n, double dt)
 {
     jetid_state s;
-    double *us, *hu, *hy, lo, hi, tol, span, h, offset = 0.0;
-    size_t k, start = 0, n_holds = 0, need, tail;
+    double *us, *hu, *hy, lo, hi, span, h, offset = 0.0, tail_s;
+    size_t k, i, n_found, n_holds = 0, *wa, *wb, ta, tb;
     int it;
     if (!p->has_calibration || n == 0) return 0.0;
     us = malloc(n * sizeof *us);
     hu = malloc(n * sizeof *hu);
     hy = malloc(n * sizeof *hy);
-    if (!us || !hu || !hy) {
+    wa = malloc(2 * n * sizeof *wa);
+    wb = malloc(2 * n * sizeof *wb);
+    if (!us || !hu || !hy || !wa || !wb) {
         free(us);
         free(hu);
         free(hy);
+        free(wa);
+        free(wb);
         return 0.0;
     }
     jetid_init(&s, p, dt, 0.0);
@@ -323,25 +356,36 @@ static double jetid_calibration_offset(const jetid_params *p, const double *u, c
         us[k] = jetid_input_stage(&s, u[k], temp_c ? temp_c[k] : 0.0, pressure_kpa ? pressure_kpa[k] : 0.0);
         s.started = 1;
     }
-    lo = hi = y[0];
-    for (k = 1; k < n; k++) {
-        if (y[k] < lo) lo = y[k];
-        if (y[k] > hi) hi = y[k];
+    tail_s = 0.5 * p->hold_s;
+    n_found = jetid_plateaus(y, n, dt, p->hold_s, tail_s, wa, wb, 0);
+    n_found = jetid_plateaus(us, n, dt, p->hold_s + tail_s, tail_s, wa, wb, n_found);
+    /* Sorted by start, then end (insertion sort: a run has a few holds). */
+    for (k = 1; k < n_found; k++) {
+        ta = wa[k];
+        tb = wb[k];
+        for (i = k; i > 0 && (wa[i - 1] > ta || (wa[i - 1] == ta && wb[i - 1] > tb)); i--) {
+            wa[i] = wa[i - 1];
+            wb[i] = wb[i - 1];
+        }
+        wa[i] = ta;
+        wb[i] = tb;
     }
-    tol = 0.01 * (hi - lo > DBL_MIN ? hi - lo : DBL_MIN);
-    need = (size_t)ceil(p->hold_s / dt);
-    tail = (size_t)round(0.5 * p->hold_s / dt);
-    if (tail < 2) tail = 2;
-    for (k = 1; k <= n; k++) {
-        if (k == n || fabs(y[k] - y[start]) > tol) {
-            if (k - start >= (need > tail ? need : tail)) {
-                hu[n_holds] = jetid_mean(us + (k - tail), tail);
-                hy[n_holds] = jetid_mean(y + (k - tail), tail);
-                n_holds++;
-            }
-            start = k;
+    /* Merged where they overlap, in place. */
+    for (k = 0; k < n_found; k++) {
+        if (n_holds > 0 && wa[k] <= wb[n_holds - 1]) {
+            if (wb[k] > wb[n_holds - 1]) wb[n_holds - 1] = wb[k];
+        } else {
+            wa[n_holds] = wa[k];
+            wb[n_holds] = wb[k];
+            n_holds++;
         }
     }
+    for (k = 0; k < n_holds; k++) {
+        hu[k] = jetid_mean(us + wa[k], wb[k] - wa[k]);
+        hy[k] = jetid_mean(y + wa[k], wb[k] - wa[k]);
+    }
+    free(wa);
+    free(wb);
     lo = hi = us[0];
     for (k = 1; k < n; k++) {
         if (us[k] < lo) lo = us[k];

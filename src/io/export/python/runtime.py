@@ -262,6 +262,20 @@ def _plateaus(y, dt, hold_s, tail_s):
     return out
 
 
+def _steady_stretches(u, y, dt, hold_s):
+    """Where the run held the engine steady: the last half of the output's holds longer than hold_s,
+    and the input's holds after hold_s of settling (their last hold_s / 2), merged where they overlap."""
+    tail = 0.5 * hold_s
+    found = sorted(_plateaus(y, dt, hold_s, tail) + _plateaus(u, dt, hold_s + tail, tail))
+    merged = []
+    for a, b in found:
+        if merged and a <= merged[-1][1]:
+            merged[-1] = (merged[-1][0], max(merged[-1][1], b))
+        else:
+            merged.append((a, b))
+    return merged
+
+
 def _mean(x):
     s = 0.0
     for v in x:
@@ -271,7 +285,8 @@ def _mean(x):
 
 def calibration_offset(output, u_stage, y, dt=DT):
     """calibration_drift's input offset for one run: the offset that puts the steady states on the
-    run's own holds of the measured output y (u_stage: the input after the input stage)."""
+    run's own steady stretches (holds of the measured output y or of u_stage, the input after the
+    input stage)."""
     p = OUTPUTS[output]
     if p["calibration"] is None:
         return 0.0
@@ -280,7 +295,7 @@ def calibration_offset(output, u_stage, y, dt=DT):
     def steady(x):
         return static_map(output, dc * x + p["offset"])
 
-    holds = [(_mean(u_stage[a:b]), _mean(y[a:b])) for a, b in _plateaus(y, dt, hold_s, 0.5 * hold_s)]
+    holds = [(_mean(u_stage[a:b]), _mean(y[a:b])) for a, b in _steady_stretches(u_stage, y, dt, hold_s)]
     lo, hi = min(u_stage), max(u_stage)
     span = max(hi - lo, _MIN_POSITIVE)
     if not holds or not math.isfinite(span):

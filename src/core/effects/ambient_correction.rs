@@ -111,17 +111,27 @@ impl AmbientCorrection {
 }
 
 /// Correlation of the percentage residual with each recorded ambient channel, pooled over runs.
+/// The correlation is of the residual in output units with the model's output times the channel's
+/// deviation from its mean over the runs, `ŷ·(x − x̄)`: inlet conditions scale the engine, so the
+/// error they leave grows with the output. Reading it as a percentage of the measurement instead
+/// would divide by the output where it is smallest, and at idle thrust the load cell's noise alone
+/// is 10–20 % of the reading: the noise would swamp the correlation.
 pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     let best = AmbientCorrection::CHANNELS
         .iter()
         .filter_map(|name| {
-            let (mut e, mut x) = (Vec::new(), Vec::new());
+            let (mut e, mut x, mut y_hat): (Vec<f64>, Vec<f64>, Vec<f64>) =
+                (Vec::new(), Vec::new(), Vec::new());
             for t in traces {
                 let channel = t.aux.iter().find(|c| c.name == *name)?;
-                e.extend(t.residual_pct());
-                x.extend(channel.values.iter().take(t.y.len()));
+                let n = t.y.len().min(channel.values.len());
+                e.extend(t.residual().into_iter().take(n));
+                x.extend(channel.values.iter().take(n));
+                y_hat.extend(t.y_hat.iter().take(n));
             }
-            Some((*name, correlation(&e, &x)))
+            let x_mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
+            let scaled: Vec<f64> = x.iter().zip(&y_hat).map(|(x, y)| y * (x - x_mean)).collect();
+            Some((*name, correlation(&e, &scaled)))
         })
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
     let Some((name, r)) = best else { return Evidence::none("no ambient channel recorded") };
@@ -132,7 +142,10 @@ pub(super) fn evidence(traces: &[ResidualTrace]) -> Evidence {
     } else {
         "little dependence on inlet conditions"
     };
-    Evidence { sentence: format!("residual tracks {name}, r = {r:.2}: {meaning}"), supports: r.abs() > 0.2 }
+    Evidence {
+        sentence: format!("residual tracks the output scaled by {name}, r = {r:.2}: {meaning}"),
+        supports: r.abs() > 0.2,
+    }
 }
 
 block_impl!(

@@ -63,6 +63,13 @@ pub struct CircleFollow {
     pub rms_after: f64,
 }
 
+impl CircleFollow {
+    /// What happened, as the report and the app head the sentence.
+    pub fn heading(&self) -> &'static str {
+        if self.from == self.to { "root on the rim" } else { "circle followed its root" }
+    }
+}
+
 /// The sentence the report and the app show.
 impl fmt::Display for CircleFollow {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -6,8 +6,13 @@ use std::fmt::Write as _;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use crate::core::identification::arx::ArxModel;
+use crate::core::identification::cluster::ClusterEval;
+use crate::core::identification::dead_time::DeadTimeVerdict;
 use crate::core::identification::pipeline::Identified;
 use crate::core::identification::reduce::RootGroup;
+use crate::core::identification::segment::Segment;
+use crate::core::identification::verdict::CandidateVerdict;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SegmentSummary {
@@ -136,73 +141,26 @@ impl IdentSummary {
         let roots: Vec<RootSummary> = model.roots.iter().map(|g| RootSummary::of(g, fits.dt_secs)).collect();
         Self {
             arx_orders: fits.models.first().map_or([0; 3], |m| [m.orders.na, m.orders.nb, m.orders.nk]),
-            segments: fits
-                .segments
-                .iter()
-                .zip(&fits.models)
-                .map(|(s, m)| SegmentSummary {
-                    label: s.label.clone(),
-                    start: s.start,
-                    step_at: s.step_at,
-                    end: s.end,
-                    rank: m.rank,
-                    cond: m.cond,
-                })
-                .collect(),
+            segments: fits.segments.iter().zip(&fits.models).map(|(s, m)| SegmentSummary::of(s, m)).collect(),
             clusters: identified
                 .evals
                 .iter()
                 .enumerate()
-                .map(|(i, e)| ClusterSummary {
-                    kind: format!("{:?}", e.cluster.kind),
-                    centre: e.cluster.centre,
-                    radius: e.cluster.radius,
-                    found: e.segments_found,
-                    needed: e.segments_needed,
-                    valid: e.valid,
-                    status: format!("{:?}", e.status),
-                    centroid: e.centroid,
-                    spread: e.spread,
-                    natural_freq_rad_s: e.natural_freq_rad_s,
-                    time_constant_secs: e.time_constant_secs,
-                    model_root: roots.iter().find(|r| r.cluster == Some(i)).cloned(),
-                })
+                .map(|(i, e)| ClusterSummary::of(i, e, &roots))
                 .collect(),
             candidates: identified
                 .proposal
                 .iter()
                 .flat_map(|p| &p.verdicts)
-                .map(|v| CandidateSummary {
-                    kind: format!("{:?}", v.cluster.kind),
-                    centre: v.cluster.centre,
-                    radius: v.cluster.radius,
-                    segments_found: v.segments_found,
-                    segments_total: v.segments_total,
-                    natural_freq_rad_s: v.natural_freq_rad_s,
-                    damping: v.damping,
-                    kept: v.kept(),
-                    reason: v.verdict.to_string(),
-                    rms_without: v.rms_without,
-                    rms_with: v.rms_with,
-                    standard_errors: v.standard_errors,
-                })
+                .map(CandidateSummary::of)
                 .collect(),
             roots,
-            dead_time: identified.proposal.as_ref().map(|p| DeadTimeSummary {
-                secs: p.dead_time.samples as f64 * p.dead_time.dt_secs,
-                samples: p.dead_time.samples,
-                arx_nk: p.dead_time.arx_nk,
-                kept: p.dead_time.kept(),
-                reason: p.dead_time.sentence(),
-            }),
+            dead_time: identified.proposal.as_ref().map(|p| DeadTimeSummary::of(&p.dead_time)),
             circles_followed: identified
                 .proposal
                 .iter()
                 .flat_map(|p| &p.followed)
-                .map(|f| {
-                    let head = if f.from == f.to { "root on the rim" } else { "circle followed its root" };
-                    format!("{head}: {f}")
-                })
+                .map(|f| format!("{}: {f}", f.heading()))
                 .collect(),
             direct_fit: model.direct_fit.clone(),
             poles: tf.poles().unwrap_or_default(),
@@ -218,6 +176,70 @@ impl IdentSummary {
                 .unwrap_or_default(),
             refined: model.refinement.is_some(),
             diagnostics: fits.diagnostics.clone(),
+        }
+    }
+}
+
+impl SegmentSummary {
+    fn of(segment: &Segment, model: &ArxModel) -> Self {
+        Self {
+            label: segment.label.clone(),
+            start: segment.start,
+            step_at: segment.step_at,
+            end: segment.end,
+            rank: model.rank,
+            cond: model.cond,
+        }
+    }
+}
+
+impl ClusterSummary {
+    /// Cluster `index` in use, with the model's root in it among `roots`.
+    fn of(index: usize, e: &ClusterEval, roots: &[RootSummary]) -> Self {
+        Self {
+            kind: format!("{:?}", e.cluster.kind),
+            centre: e.cluster.centre,
+            radius: e.cluster.radius,
+            found: e.segments_found,
+            needed: e.segments_needed,
+            valid: e.valid,
+            status: format!("{:?}", e.status),
+            centroid: e.centroid,
+            spread: e.spread,
+            natural_freq_rad_s: e.natural_freq_rad_s,
+            time_constant_secs: e.time_constant_secs,
+            model_root: roots.iter().find(|r| r.cluster == Some(index)).cloned(),
+        }
+    }
+}
+
+impl CandidateSummary {
+    fn of(v: &CandidateVerdict) -> Self {
+        Self {
+            kind: format!("{:?}", v.cluster.kind),
+            centre: v.cluster.centre,
+            radius: v.cluster.radius,
+            segments_found: v.segments_found,
+            segments_total: v.segments_total,
+            natural_freq_rad_s: v.natural_freq_rad_s,
+            damping: v.damping,
+            kept: v.kept(),
+            reason: v.verdict.to_string(),
+            rms_without: v.rms_without,
+            rms_with: v.rms_with,
+            standard_errors: v.standard_errors,
+        }
+    }
+}
+
+impl DeadTimeSummary {
+    fn of(d: &DeadTimeVerdict) -> Self {
+        Self {
+            secs: d.samples as f64 * d.dt_secs,
+            samples: d.samples,
+            arx_nk: d.arx_nk,
+            kept: d.kept(),
+            reason: d.sentence(),
         }
     }
 }

@@ -334,6 +334,54 @@ pub fn continuous_text(c: &crate::core::control::ContinuousTf) -> String {
     format!("{delay}({}) / ({})", poly(&c.num_s), poly(&c.den_s))
 }
 
+/// The error after each step of the effects, when there were any.
+fn error_history_line(out: &mut String, o: &OutputReport) {
+    if !o.error_history.is_empty() {
+        let _ = writeln!(
+            out,
+            "\nError history: {}",
+            o.error_history
+                .iter()
+                .map(|h| format!("{} {:.4} %", h.step, h.rmspe_pct))
+                .collect::<Vec<_>>()
+                .join(" → ")
+        );
+    }
+}
+
+/// The diagnosis of the final model, best first, when there is one.
+fn diagnosis_table(out: &mut String, o: &OutputReport) {
+    if !o.diagnosis.is_empty() {
+        let _ = writeln!(
+            out,
+            "\n### Diagnosis\n\nStructural refinements and physical effects are judged alike, by their error \
+             beyond the measurement noise (in units of the noise, 'beyond noise'; the ranking follows it): \
+             an effect counts only when it beats the current model, its evidence agrees and the data \
+             prefer it to the best refinement. Each trial is judged on the validation runs and, where the \
+             identification data have enough segments, on the segment responses a cross-validation held \
+             out (the 'held-out' column).\n\n\
+             | effect | kind | significant | RMSPE before % | after % | beyond noise after | held-out after % | p | evidence | witnesses |\n\
+             |---|---|---|---|---|---|---|---|---|---|"
+        );
+        for d in &o.diagnosis {
+            let held_out = d.held_out_rmspe_pct.map_or_else(|| "–".to_owned(), |h| format!("{h:.4}"));
+            let p = d.p_value.map_or_else(|| "–".to_owned(), crate::core::diagnose::p_text);
+            let beyond = d.beyond_noise_after.map_or_else(|| "–".to_owned(), |b| format!("{b:.2} σ"));
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {:.4} | {:.4} | {beyond} | {held_out} | {p} | {} | {} |",
+                d.effect,
+                d.kind,
+                d.significant,
+                d.rmspe_before_pct,
+                d.rmspe_after_pct,
+                d.evidence,
+                d.significance
+            );
+        }
+    }
+}
+
 /// The Markdown report: the same numbers as report.json, as tables a person reads.
 pub fn render_markdown(report: &Report) -> String {
     let mut out = String::new();
@@ -357,46 +405,8 @@ pub fn render_markdown(report: &Report) -> String {
         if let Some(choice) = &o.preparation {
             let _ = writeln!(out, "\n**Preparation:** {}.", choice.sentence(name));
         }
-        if !o.error_history.is_empty() {
-            let _ = writeln!(
-                out,
-                "\nError history: {}",
-                o.error_history
-                    .iter()
-                    .map(|h| format!("{} {:.4} %", h.step, h.rmspe_pct))
-                    .collect::<Vec<_>>()
-                    .join(" → ")
-            );
-        }
-        if !o.diagnosis.is_empty() {
-            let _ = writeln!(
-                out,
-                "\n### Diagnosis\n\nStructural refinements and physical effects are judged alike, by their error \
-                 beyond the measurement noise (in units of the noise, 'beyond noise'; the ranking follows it): \
-                 an effect counts only when it beats the current model, its evidence agrees and the data \
-                 prefer it to the best refinement. Each trial is judged on the validation runs and, where the \
-                 identification data have enough segments, on the segment responses a cross-validation held \
-                 out (the 'held-out' column).\n\n\
-                 | effect | kind | significant | RMSPE before % | after % | beyond noise after | held-out after % | p | evidence | witnesses |\n\
-                 |---|---|---|---|---|---|---|---|---|---|"
-            );
-            for d in &o.diagnosis {
-                let held_out = d.held_out_rmspe_pct.map_or_else(|| "–".to_owned(), |h| format!("{h:.4}"));
-                let p = d.p_value.map_or_else(|| "–".to_owned(), crate::core::diagnose::p_text);
-                let beyond = d.beyond_noise_after.map_or_else(|| "–".to_owned(), |b| format!("{b:.2} σ"));
-                let _ = writeln!(
-                    out,
-                    "| {} | {} | {} | {:.4} | {:.4} | {beyond} | {held_out} | {p} | {} | {} |",
-                    d.effect,
-                    d.kind,
-                    d.significant,
-                    d.rmspe_before_pct,
-                    d.rmspe_after_pct,
-                    d.evidence,
-                    d.significance
-                );
-            }
-        }
+        error_history_line(&mut out, o);
+        diagnosis_table(&mut out, o);
         control_section(&mut out, o, &report.input_unit);
         residuals_section(&mut out, &o.residuals, &o.unit);
     }

@@ -178,8 +178,9 @@ fn reasons_ui(ui: &mut egui::Ui, proposal: &Proposal) {
     );
     reason_ui(ui, dead_time.kept(), &what, &dead_time.decision.to_string());
     for follow in &proposal.followed {
-        let head = if follow.from == follow.to { "Root on the rim" } else { "Circle followed its root" };
-        ui.add(egui::Label::new(RichText::new(format!("{head}: {follow}")).color(theme::WARNING)).wrap());
+        let mut words = format!("{}: {follow}", follow.heading());
+        words[..1].make_ascii_uppercase();
+        ui.add(egui::Label::new(RichText::new(words).color(theme::WARNING)).wrap());
     }
     if let Some(direct) = &proposal.direct {
         ui.add(egui::Label::new(RichText::new(&direct.note).color(theme::WARNING)).wrap());

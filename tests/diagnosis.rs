@@ -692,3 +692,38 @@ fn a_loop_round_keeps_the_words_of_its_attribution() {
     let words = round.attribution.as_deref().unwrap_or_else(|| panic!("no words: {}", summary(&first)));
     assert!(words.contains(round.added.name()), "{words}");
 }
+
+/// A model with a sample-alternating pole (as an effect fit may grow one: a pole pair split into two
+/// real poles, one on the negative axis) gives way to an admissible fit when the data do not need
+/// the pole: the simulator's engine has none, so a fit without it reaches the same error, every real
+/// pole positive. A model without such a pole is left as it is.
+#[test]
+fn a_sample_alternating_pole_gives_way_to_an_admissible_fit() {
+    use jetid::core::effects::{Alternating, admissible, refit_static};
+    use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+    use num_complex::Complex64;
+    let b = bench(&[], 1);
+    let c = speed_default(&b);
+    let data = FitData::new(&b.ident, &c.fits, &c.settings).unwrap();
+    let negative = |poles: &[Complex64]| poles.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0);
+    let (poles, zeros) = c.model.roots().unwrap();
+    assert!(!negative(&poles), "the pipeline's own model: {poles:?}");
+    assert!(admissible(&c.model, &data).unwrap().is_none(), "nothing to do on {poles:?}");
+
+    let mut alternating = poles.clone();
+    alternating.push(Complex64::new(-0.6, 0.0));
+    let tf = c.model.wiener.linear.tf.clone();
+    let unit = unit_gain_tf(&alternating, &zeros, tf.dt_secs).unwrap().with_input_delay(tf.input_delay());
+    let linear = LinearBlock { tf: unit, offset: 0.0 };
+    let start = ExtendedModel::new(SPEED, WienerModel { linear, map: c.model.wiener.map.clone() });
+    let start = refit_static(&start, &data).unwrap();
+    match admissible(&start, &data).unwrap() {
+        Some(Alternating::Replaced { model, poles: replaced }) => {
+            assert_eq!(replaced.len(), 1, "{replaced:?}");
+            assert!((replaced[0] + 0.6).abs() < 1e-6, "{replaced:?}");
+            let (after, _) = model.roots().unwrap();
+            assert!(!negative(&after), "{after:?}");
+        }
+        other => panic!("the engine has no alternating mode, yet: {other:?}"),
+    }
+}

@@ -52,6 +52,17 @@ fn jetcat_project_identifies_and_scores_runs_a_and_f() {
         gray_box < 1350.0 && gray_box < hammerstein,
         "run A: gray-box {gray_box:.0} rpm (loop took {loop_took}), Hammerstein ARX {hammerstein:.0} rpm"
     );
+    // Control-ready after the loop: every operating point has the physical sign and a continuous-time
+    // local model, i.e. no pole of the model alternates sign every sample.
+    for point in report["outputs"]["rpm"]["operating_points"].as_array().unwrap() {
+        assert!(point["gain"].as_f64().unwrap() > 0.0, "local gain: {point}");
+        assert!(point["continuous_note"].is_null(), "no continuous-time local model: {point}");
+        for pole in point["poles"].as_array().unwrap() {
+            let z = pole["z"].as_array().unwrap();
+            let (re, im) = (z[0].as_f64().unwrap(), z[1].as_f64().unwrap());
+            assert!(!(im.abs() <= 1e-12 && re < 0.0), "sample-alternating pole {re}: {point}");
+        }
+    }
 }
 
 /// Runs B and D as they come, read with nothing but the column mapping (no windows, no quality

@@ -184,7 +184,9 @@ impl Effects {
     pub fn notes(&self, output: &str, plan: &EffectPlan) -> Vec<String> {
         let mut notes = Vec::new();
         let loop_ran = plan.auto_rounds > 0 && self.sequence.failed.is_none() && self.loop_failed.is_none();
-        if loop_ran && self.rounds.len() < plan.auto_rounds {
+        if let Some(refused) = &self.sequence.refused {
+            notes.push(format!("'{output}': {refused}"));
+        } else if loop_ran && self.rounds.len() < plan.auto_rounds {
             notes.push(format!(
                 "'{output}': the missing-physics loop stopped after {} of {} rounds: nothing further is significant",
                 self.rounds.len(),
@@ -202,6 +204,9 @@ impl Effects {
                 round.significance
             ));
             notes.extend(round.attribution.iter().map(|a| format!("'{output}': round {}: {a}", round.added)));
+            notes.extend(
+                round.admissibility.iter().map(|a| format!("'{output}': round {}: {a}", round.added)),
+            );
         }
         notes.extend(self.sequence.history_gaps.iter().map(|gap| format!("'{output}': {gap}")));
         notes

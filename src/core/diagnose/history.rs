@@ -2,7 +2,9 @@
 //! validation error after every step: the error history the batch reports and the app draws.
 use serde::{Deserialize, Serialize};
 
-use crate::core::effects::{EffectId, ExtendedModel};
+use crate::core::effects::{
+    ALTERNATING_POLE_SHARE, Alternating, EffectId, ExtendedModel, FitData, admissible,
+};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
@@ -32,8 +34,11 @@ pub struct EffectSequence {
     /// The effect that could not be added, and why; the effects after it were not tried.
     pub failed: Option<(EffectId, DiagnoseError)>,
     /// The diagnosis of `model` on the validation runs, when the missing-physics loop ended on it
-    /// (nothing further significant): the same report a diagnosis of the final model would give.
+    /// (nothing further significant, or a round refused): the same report a diagnosis of the final
+    /// model would give.
     pub final_diagnosis: Option<DiagnosisReport>,
+    /// The round of the missing-physics loop that was refused, and why, in words.
+    pub refused: Option<String>,
 }
 
 /// Add `ids` to `base` in order, each refitted on the identification data (`ident`, `fits`), and
@@ -52,6 +57,7 @@ pub fn apply_in_order(
         history_gaps: Vec::new(),
         failed: None,
         final_diagnosis: None,
+        refused: None,
     };
     sequence.record("base", validation, settings);
     for &id in ids {
@@ -86,6 +92,10 @@ pub struct AutoRound {
     /// numbers, why this one was taken and the experiment that would separate them.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub attribution: Option<String>,
+    /// When the trial's fit had a sample-alternating pole: whether it gave way to the admissible
+    /// fit (the round's validation error is then that fit's) or was kept, and why, in words.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub admissibility: Option<String>,
 }
 
 /// The missing-physics loop run on `sequence`'s model for up to `rounds` rounds: diagnose, add the
@@ -112,19 +122,117 @@ pub fn auto_effects(
             sequence.final_diagnosis = Some(report);
             break;
         };
+        let scored = Scored { validation, settings, rmspe_pct: top.rmspe_after_pct };
+        let (model, admissibility) = match without_alternating_poles(&top.model, ident, fits, &scored) {
+            Admissibility::Fine => (top.model.clone(), None),
+            Admissibility::Replaced(model, words) => (model, Some(words)),
+            Admissibility::Refused(words) => {
+                sequence.refused = Some(format!(
+                    "round {} would add {} ({:.3} % → {:.3} %), but {words}: the round is not taken and the loop \
+                     stops at the model before it",
+                    round + 1,
+                    top.effect,
+                    top.rmspe_before_pct,
+                    top.rmspe_after_pct
+                ));
+                sequence.final_diagnosis = Some(report);
+                break;
+            }
+        };
+        sequence.model = model;
+        sequence.record(&format!("+{} (auto)", top.effect), validation, settings);
+        let rmspe_after_pct = match (&admissibility, sequence.history.last()) {
+            (Some(_), Some(step)) => step.rmspe_pct,
+            _ => top.rmspe_after_pct,
+        };
         taken.push(AutoRound {
             added: top.effect,
             kind: top.kind,
             rmspe_before_pct: top.rmspe_before_pct,
-            rmspe_after_pct: top.rmspe_after_pct,
+            rmspe_after_pct,
             evidence: top.evidence.clone(),
             significance: top.significance_words(),
             attribution: report.attribution_note.clone(),
+            admissibility: admissibility
+                .map(|words| format!("{words} (the fit with it scored {:.3} %)", top.rmspe_after_pct)),
         });
-        sequence.model = top.model.clone();
-        sequence.record(&format!("+{} (auto)", top.effect), validation, settings);
     }
     Ok(taken)
+}
+
+/// The runs a round was chosen on, and the validation error of the trial it took there.
+struct Scored<'a> {
+    validation: &'a [&'a Run],
+    settings: &'a OutputSettings,
+    rmspe_pct: f64,
+}
+
+impl Scored<'_> {
+    /// Whether `admissible` keeps within [`ALTERNATING_POLE_SHARE`] of the trial's validation error:
+    /// the admissible fit is held to the same share on the runs the round was chosen on as on the
+    /// identification data. With no validation run there is nothing to hold it to.
+    fn holds(&self, admissible: &ExtendedModel) -> bool {
+        if self.validation.is_empty() {
+            return true;
+        }
+        validation_rmspe(admissible, self.validation, self.settings.initial_state)
+            .is_ok_and(|pct| 1.0 - self.rmspe_pct / pct.max(f64::MIN_POSITIVE) < ALTERNATING_POLE_SHARE)
+    }
+}
+
+/// What a round's model becomes when its fit has a sample-alternating pole.
+enum Admissibility {
+    /// It has none.
+    Fine,
+    /// The admissible fit replaces it; what was done, in words.
+    Replaced(ExtendedModel, String),
+    /// No admissible fit holds: why, in words.
+    Refused(String),
+}
+
+/// `model` without the sample-alternating poles an effect fit may grow (see
+/// [`crate::core::effects::admissible`]). The admissible fit must hold on the identification data
+/// and on the validation runs ([`Scored::holds`]); when it does not, the data are reached only with
+/// the alternating pole, and the round that needs it is refused: a controller designer can use the
+/// model before the round, and cannot use one with a mode that alternates sign every sample.
+fn without_alternating_poles(
+    model: &ExtendedModel,
+    ident: &Run,
+    fits: &SegmentFits,
+    scored: &Scored,
+) -> Admissibility {
+    let list = |poles: &[f64]| poles.iter().map(|p| format!("{p:.3}")).collect::<Vec<_>>().join(", ");
+    let needs = |poles: &[f64], why: &str| {
+        Admissibility::Refused(format!(
+            "its fit needs a sample-alternating pole at {} ({why}), a mode no engine sampled behind a zero-order hold \
+             has and that leaves the model no continuous-time form",
+            list(poles)
+        ))
+    };
+    match FitData::new(ident, fits, scored.settings).and_then(|data| admissible(model, &data)) {
+        Ok(None) => Admissibility::Fine,
+        Ok(Some(Alternating::Replaced { model, poles })) if scored.holds(&model) => Admissibility::Replaced(
+            model,
+            format!(
+                "the fit's sample-alternating pole at {} gave way to a zero that gives the same phase lead, real \
+                 poles kept positive (no engine sampled behind a zero-order hold alternates sign every sample)",
+                list(&poles)
+            ),
+        ),
+        Ok(Some(Alternating::Replaced { poles, .. })) => needs(
+            &poles,
+            "without it the validation error rises by more than the share a refinement may cost",
+        ),
+        Ok(Some(Alternating::Kept { poles, more_error: Some(ratio) })) => {
+            needs(&poles, &format!("without it the identification error is {ratio:.2}× as large"))
+        }
+        Ok(Some(Alternating::Kept { poles, more_error: None })) => {
+            needs(&poles, "no fit without it could be had")
+        }
+        Err(e) => Admissibility::Refused(format!(
+            "whether its fit has a sample-alternating pole cannot be checked: {e}"
+        )),
+    }
 }
 
 impl EffectSequence {

@@ -25,6 +25,7 @@ mod refine;
 mod search;
 
 pub(super) use refine::refine;
+use refine::{has_negative_real_pole, refine_admissible};
 pub use search::apply_effect;
 
 /// Starting points refined by Levenberg–Marquardt after screening.
@@ -327,6 +328,60 @@ pub fn refit(model: &ExtendedModel, data: &FitData) -> Result<ExtendedModel, Eff
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .ok_or_else(failed)?;
     Ok(best.model)
+}
+
+/// Share of the identification error a sample-alternating pole must remove, against the admissible
+/// fit, to be kept: the share the parsimony rule asks of a root
+/// (`identification::parsimony::MIN_RELATIVE_REDUCTION`), but of the whole RMS error, noise
+/// included, so it asks more: the pole costs the controller designer the continuous-time model,
+/// which an extra root does not.
+pub const ALTERNATING_POLE_SHARE: f64 = 0.10;
+
+/// What [`admissible`] did with a model's sample-alternating poles.
+#[derive(Clone, Debug)]
+pub enum Alternating {
+    /// The admissible fit replaced the model; the alternating poles it had.
+    Replaced { model: ExtendedModel, poles: Vec<f64> },
+    /// The model keeps its alternating poles: the admissible fit leaves `more_error` times its RMS
+    /// identification error (at least `1/(1 − ALTERNATING_POLE_SHARE)`), or none could be had.
+    Kept { poles: Vec<f64>, more_error: Option<f64> },
+}
+
+/// `model` with no real pole on the negative real axis, when it has one (`None` when it has none).
+///
+/// Such a pole alternates sign every sample, which no engine sampled behind a zero-order hold
+/// does: the local models a controller is designed on zig-zag and have no continuous-time form.
+/// The effect fits may grow one (a pole pair that splits into two real poles), because what it does
+/// for the fit is a phase lead of a fraction of a sample. The admissible fit gives that lead with a
+/// zero instead and keeps real poles positive (see `refine::refine_admissible`). It replaces the
+/// model unless the alternating pole removes [`ALTERNATING_POLE_SHARE`] of the RMS error the
+/// admissible fit leaves: then the data can only be reached with it, and it is kept and named.
+pub fn admissible(model: &ExtendedModel, data: &FitData) -> Result<Option<Alternating>, EffectError> {
+    let start = Structure::of(model)?;
+    if !has_negative_real_pole(&start.poles) {
+        return Ok(None);
+    }
+    check_channels(&start, data)?;
+    let poles: Vec<f64> = start
+        .poles
+        .iter()
+        .filter(|p| has_negative_real_pole(std::slice::from_ref(p)))
+        .map(|p| p.re)
+        .collect();
+    let Some(as_is) = assemble(&start, data) else {
+        return Ok(Some(Alternating::Kept { poles, more_error: None }));
+    };
+    Ok(Some(match refine_admissible(&start, data) {
+        Some(fit) => {
+            let more_error = (fit.cost / as_is.cost.max(f64::MIN_POSITIVE)).sqrt();
+            if 1.0 - 1.0 / more_error >= ALTERNATING_POLE_SHARE {
+                Alternating::Kept { poles, more_error: Some(more_error) }
+            } else {
+                Alternating::Replaced { model: fit.model, poles }
+            }
+        }
+        None => Alternating::Kept { poles, more_error: None },
+    }))
 }
 
 /// Refit gain, offset and static map (and a kink's slope) for the model's dynamics as they are:

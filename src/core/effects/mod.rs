@@ -63,7 +63,10 @@ mod wording;
 pub use ambient_correction::AmbientCorrection;
 pub use asymmetric_dynamics::AsymmetricDynamics;
 pub use calibration_drift::{CalibrationDrift, evidence as steady_state_agreement};
-pub use fit::{FOLDS, FitData, MIN_HELD_OUT_SEGMENTS, apply_effect, refit, refit_static};
+pub use fit::{
+    ALTERNATING_POLE_SHARE, Alternating, FOLDS, FitData, MIN_HELD_OUT_SEGMENTS, admissible, apply_effect,
+    refit, refit_static,
+};
 pub use id::EffectId;
 pub use model::ExtendedModel;
 pub use rate_limit::RateLimit;

@@ -13,6 +13,31 @@ use crate::core::numerics::lm::{
 /// Poles must stay inside this radius.
 const MAX_POLE_RADIUS: f64 = 0.999;
 
+/// Whether `roots` hold a real pole on the negative real axis.
+///
+/// Such a pole alternates sign every sample. A zero-order hold maps every continuous-time pole `s`
+/// to `e^(sT)`, and a real `s` to a point on the *positive* real axis, so no engine sampled behind
+/// a hold has one: a model that grows one (the refinement lets a pair split into two real poles,
+/// see [`PoleParams`]) has local models that zig-zag and no continuous-time equivalent for the
+/// controller designer.
+pub(in crate::core::effects) fn has_negative_real_pole(roots: &[Complex64]) -> bool {
+    roots.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0)
+}
+
+/// Smallest real pole of a refinement that keeps real poles positive: a pole this close to the
+/// origin decays a thousandfold in one sample, faster than anything the sample rate resolves, and
+/// still has a continuous-time equivalent (unlike a pole at the origin itself).
+const MIN_REAL_POLE: f64 = 1e-3;
+
+/// Where the refinement may put real poles.
+#[derive(Clone, Copy, PartialEq)]
+enum RealPoles {
+    /// Anywhere inside the unit circle.
+    Anywhere,
+    /// On the positive real axis only.
+    Positive,
+}
+
 /// The effect fits' Levenberg–Marquardt: few iterations to a loose tolerance (the screening has
 /// already chosen the start; a 10⁻⁵ relative gain is far below what the diagnosis can resolve).
 const EFFECT_FIT: LmSettings =
@@ -20,10 +45,34 @@ const EFFECT_FIT: LmSettings =
 
 /// Move roots and continuous effect parameters together from `start`.
 pub(in crate::core::effects) fn refine(start: &Structure, data: &FitData) -> Option<Assembled> {
-    refine_with(start, data, &EFFECT_FIT)
+    refine_with(start, data, &EFFECT_FIT, RealPoles::Anywhere)
 }
 
-fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Option<Assembled> {
+/// The best fit of `s` with no sample-alternating pole, refined from `s` with its real poles kept
+/// on the positive axis. What such a pole does for a fit is a phase lead: a unit-gain pole at `−a`
+/// advances the response by `a/(1+a)` of a sample at low frequency (its phase `≈ +ω·a/(1+a)`), as
+/// a zero at `c` does by `c/(1−c)`. So the refinement starts from `s` with each such pole made a
+/// zero at `c = a/(1+2a)` (the same lead) and the pole itself moved onto the positive axis at
+/// [`MIN_REAL_POLE`] (a lag shorter than a sample, so the structure keeps its count of poles and
+/// the spool split its shape). Where the structure has no room for a zero (as many zeros as the
+/// spool split allows), the pole is only moved onto the positive axis.
+pub(in crate::core::effects) fn refine_admissible(s: &Structure, data: &FitData) -> Option<Assembled> {
+    let mut lead = s.clone();
+    for p in lead.poles.iter_mut().filter(|p| p.im.abs() <= 1e-12 && p.re < 0.0) {
+        let a = (-p.re).min(MAX_POLE_RADIUS);
+        lead.zeros.push(Complex64::new(a / (1.0 + 2.0 * a), 0.0));
+        *p = Complex64::new(MIN_REAL_POLE, 0.0);
+    }
+    refine_with(&lead, data, &EFFECT_FIT, RealPoles::Positive)
+        .or_else(|| refine_with(s, data, &EFFECT_FIT, RealPoles::Positive))
+}
+
+fn refine_with(
+    start: &Structure,
+    data: &FitData,
+    settings: &LmSettings,
+    real: RealPoles,
+) -> Option<Assembled> {
     let (pole_params, theta_p) = PoleParams::from_roots(&start.poles);
     let (zero_params, theta_z) = RootParams::from_roots(&start.zeros);
     let mut theta0: Vec<f64> = theta_p.iter().chain(&theta_z).copied().collect();
@@ -31,9 +80,12 @@ fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Opti
     theta0.extend(start.effects.iter().flat_map(EffectBlock::free_params));
     let (np, nz) = (theta_p.len(), theta_z.len());
     let unpack = |theta: &[f64]| -> Option<Structure> {
-        let poles = pole_params.roots(theta.get(..np)?);
+        let mut poles = pole_params.roots(theta.get(..np)?);
         if poles.iter().any(|p| p.norm() >= MAX_POLE_RADIUS) {
             return None;
+        }
+        if real == RealPoles::Positive {
+            lift_onto_positive_axis(&mut poles);
         }
         let zeros = zero_params.roots(theta.get(np..np + nz)?);
         let mut at = np + nz;
@@ -49,6 +101,16 @@ fn refine_with(start: &Structure, data: &FitData, settings: &LmSettings) -> Opti
         LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
     let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;
     assemble(&unpack(&fitted.theta)?, data)
+}
+
+/// Real poles left of [`MIN_REAL_POLE`] moved onto it. Projecting rather than refusing such a step
+/// lets the refinement slide along the boundary of the admissible set: refused steps leave
+/// Levenberg–Marquardt's finite-difference Jacobian blind in that direction, and it stops short of
+/// the best admissible fit.
+fn lift_onto_positive_axis(poles: &mut [Complex64]) {
+    for p in poles.iter_mut().filter(|p| p.im.abs() <= 1e-12 && p.re < MIN_REAL_POLE) {
+        *p = Complex64::new(MIN_REAL_POLE, 0.0);
+    }
 }
 
 /// Poles as refinement parameters: a real pole is one parameter, a complex pair the two

@@ -94,12 +94,15 @@ fn loop_ui(ui: &mut egui::Ui, output: &str, cache: &OutputCache, live: &LiveMode
             .color(theme::OK),
         );
         hint(ui, &format!("{}; {}", round.evidence, round.significance));
-        if let Some(attribution) = &round.attribution {
-            hint(ui, &format!("{attribution}."));
+        for words in round.attribution.iter().chain(&round.admissibility) {
+            hint(ui, &format!("{words}."));
         }
     }
     for note in live.effects.notes.iter().filter(|n| n.contains("stopped after")) {
         hint(ui, note);
+    }
+    if let Some(refused) = &live.effects.refused {
+        hint(ui, &format!("{refused}."));
     }
     commands
 }

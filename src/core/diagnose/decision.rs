@@ -37,15 +37,7 @@ impl Trials {
             structure_note: None,
             attribution_note,
         };
-        let top_is_physics = report.top_is_physics();
-        report.structure_note =
-            report.entries.iter().find(|d| d.kind == DiagnosisKind::Structure && d.significant).map(|d| {
-                if top_is_physics {
-                    format!("below the physics ranked first, the structure may also improve: {}", d.evidence)
-                } else {
-                    format!("structure is the missing piece: {}", d.evidence)
-                }
-            });
+        report.note_structure();
         report
     }
 

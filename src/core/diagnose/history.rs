@@ -10,7 +10,7 @@ use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
 use super::{
-    DiagnoseError, DiagnosisKind, DiagnosisReport, Edit, TrialId, diagnose_with_progress, edit,
+    DiagnoseError, Diagnosis, DiagnosisKind, DiagnosisReport, Edit, TrialId, diagnose_with_progress, edit,
     validation_rmspe,
 };
 
@@ -37,8 +37,9 @@ pub struct EffectSequence {
     /// (nothing further significant, or a round refused): the same report a diagnosis of the final
     /// model would give.
     pub final_diagnosis: Option<DiagnosisReport>,
-    /// The round of the missing-physics loop that was refused, and why, in words.
-    pub refused: Option<String>,
+    /// The trials the missing-physics loop refused (their fits need a sample-alternating pole),
+    /// each with its round and why, in words.
+    pub refusals: Vec<String>,
 }
 
 /// Add `ids` to `base` in order, each refitted on the identification data (`ident`, `fits`), and
@@ -57,7 +58,7 @@ pub fn apply_in_order(
         history_gaps: Vec::new(),
         failed: None,
         final_diagnosis: None,
-        refused: None,
+        refusals: Vec::new(),
     };
     sequence.record("base", validation, settings);
     for &id in ids {
@@ -116,29 +117,16 @@ pub fn auto_effects(
     let mut taken = Vec::new();
     for round in 0..rounds {
         let mut round_progress = |f: f64| progress((round as f64 + f) / rounds as f64);
-        let report =
+        let mut report =
             diagnose_with_progress(&sequence.model, ident, fits, validation, settings, &mut round_progress)?;
-        let Some(top) = report.entries.iter().find(|d| d.significant) else {
+        let context = RoundContext { round, ident, fits, scored_on: validation, settings };
+        let Some((pick, model, admissibility)) =
+            admissible_pick(&mut report, &context, &mut sequence.refusals)
+        else {
             sequence.final_diagnosis = Some(report);
             break;
         };
-        let scored = Scored { validation, settings, rmspe_pct: top.rmspe_after_pct };
-        let (model, admissibility) = match without_alternating_poles(&top.model, ident, fits, &scored) {
-            Admissibility::Fine => (top.model.clone(), None),
-            Admissibility::Replaced(model, words) => (model, Some(words)),
-            Admissibility::Refused(words) => {
-                sequence.refused = Some(format!(
-                    "round {} would add {} ({:.3} % → {:.3} %), but {words}: the round is not taken and the loop \
-                     stops at the model before it",
-                    round + 1,
-                    top.effect,
-                    top.rmspe_before_pct,
-                    top.rmspe_after_pct
-                ));
-                sequence.final_diagnosis = Some(report);
-                break;
-            }
-        };
+        let top = &report.entries[pick];
         sequence.model = model;
         sequence.record(&format!("+{} (auto)", top.effect), validation, settings);
         let rmspe_after_pct = match (&admissibility, sequence.history.last()) {
@@ -160,23 +148,60 @@ pub fn auto_effects(
     Ok(taken)
 }
 
-/// The runs a round was chosen on, and the validation error of the trial it took there.
-struct Scored<'a> {
-    validation: &'a [&'a Run],
+/// What a round of the loop works on: the identification data its trials were fitted on and the
+/// validation runs they were chosen on.
+struct RoundContext<'a> {
+    round: usize,
+    ident: &'a Run,
+    fits: &'a SegmentFits,
+    scored_on: &'a [&'a Run],
     settings: &'a OutputSettings,
-    rmspe_pct: f64,
 }
 
-impl Scored<'_> {
-    /// Whether `admissible` keeps within [`ALTERNATING_POLE_SHARE`] of the trial's validation error:
-    /// the admissible fit is held to the same share on the runs the round was chosen on as on the
-    /// identification data. With no validation run there is nothing to hold it to.
-    fn holds(&self, admissible: &ExtendedModel) -> bool {
-        if self.validation.is_empty() {
+impl RoundContext<'_> {
+    /// Whether `admissible` keeps within [`ALTERNATING_POLE_SHARE`] of the trial's validation error
+    /// `trial_pct`: the admissible fit is held to the same share on the runs the round is chosen on as
+    /// on the identification data. With no validation run there is nothing to hold it to.
+    fn holds(&self, admissible: &ExtendedModel, trial_pct: f64) -> bool {
+        if self.scored_on.is_empty() {
             return true;
         }
-        validation_rmspe(admissible, self.validation, self.settings.initial_state)
-            .is_ok_and(|pct| 1.0 - self.rmspe_pct / pct.max(f64::MIN_POSITIVE) < ALTERNATING_POLE_SHARE)
+        validation_rmspe(admissible, self.scored_on, self.settings.initial_state)
+            .is_ok_and(|pct| 1.0 - trial_pct / pct.max(f64::MIN_POSITIVE) < ALTERNATING_POLE_SHARE)
+    }
+}
+
+/// Index of the first significant entry of `report` (`entries.len()` when there is none).
+fn first_significant(report: &DiagnosisReport) -> usize {
+    report.entries.iter().position(|d| d.significant).unwrap_or(report.entries.len())
+}
+
+/// The significant trial of `report` the round takes, best first, with its model made admissible
+/// (see [`without_alternating_poles`]) and what that did, in words. A trial whose fit needs a
+/// sample-alternating pole is refused: it no longer counts in `report`, and why is added to
+/// `refusals`; the next significant trial is tried. `None` when none is left.
+fn admissible_pick(
+    report: &mut DiagnosisReport,
+    context: &RoundContext,
+    refusals: &mut Vec<String>,
+) -> Option<(usize, ExtendedModel, Option<String>)> {
+    loop {
+        let pick = first_significant(report);
+        let trial = report.entries.get(pick)?;
+        match without_alternating_poles(trial, context) {
+            Admissibility::Fine => return Some((pick, trial.model.clone(), None)),
+            Admissibility::Replaced(model, words) => return Some((pick, model, Some(words))),
+            Admissibility::Refused(words) => {
+                refusals.push(format!(
+                    "round {}: {} (validation error from {:.3} % to {:.3} %) is not taken: {words}",
+                    context.round + 1,
+                    trial.effect,
+                    trial.rmspe_before_pct,
+                    trial.rmspe_after_pct
+                ));
+                report.refuse(pick, format!("not taken: {words}"));
+            }
+        }
     }
 }
 
@@ -195,12 +220,7 @@ enum Admissibility {
 /// and on the validation runs ([`Scored::holds`]); when it does not, the data are reached only with
 /// the alternating pole, and the round that needs it is refused: a controller designer can use the
 /// model before the round, and cannot use one with a mode that alternates sign every sample.
-fn without_alternating_poles(
-    model: &ExtendedModel,
-    ident: &Run,
-    fits: &SegmentFits,
-    scored: &Scored,
-) -> Admissibility {
+fn without_alternating_poles(trial: &Diagnosis, context: &RoundContext) -> Admissibility {
     let list = |poles: &[f64]| poles.iter().map(|p| format!("{p:.3}")).collect::<Vec<_>>().join(", ");
     let needs = |poles: &[f64], why: &str| {
         Admissibility::Refused(format!(
@@ -209,16 +229,19 @@ fn without_alternating_poles(
             list(poles)
         ))
     };
-    match FitData::new(ident, fits, scored.settings).and_then(|data| admissible(model, &data)) {
+    let data = FitData::new(context.ident, context.fits, context.settings);
+    match data.and_then(|data| admissible(&trial.model, &data)) {
         Ok(None) => Admissibility::Fine,
-        Ok(Some(Alternating::Replaced { model, poles })) if scored.holds(&model) => Admissibility::Replaced(
-            model,
-            format!(
-                "the fit's sample-alternating pole at {} gave way to a zero that gives the same phase lead, real \
+        Ok(Some(Alternating::Replaced { model, poles })) if context.holds(&model, trial.rmspe_after_pct) => {
+            Admissibility::Replaced(
+                model,
+                format!(
+                    "the fit's sample-alternating pole at {} gave way to a zero that gives the same phase lead, real \
                  poles kept positive (no engine sampled behind a zero-order hold alternates sign every sample)",
-                list(&poles)
-            ),
-        ),
+                    list(&poles)
+                ),
+            )
+        }
         Ok(Some(Alternating::Replaced { poles, .. })) => needs(
             &poles,
             "without it the validation error rises by more than the share a refinement may cost",

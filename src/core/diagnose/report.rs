@@ -194,6 +194,38 @@ pub struct DiagnosisReport {
 }
 
 impl DiagnosisReport {
+    /// `structure_note` from the entries as they stand: the words follow the ranking, structure is
+    /// "the missing piece" only when no physics ranks above it (the table and the loop take the top
+    /// significant entry).
+    pub(super) fn note_structure(&mut self) {
+        let top_is_physics = self.top_is_physics();
+        self.structure_note =
+            self.entries.iter().find(|d| d.kind == DiagnosisKind::Structure && d.significant).map(|d| {
+                if top_is_physics {
+                    format!("below the physics ranked first, the structure may also improve: {}", d.evidence)
+                } else {
+                    format!("structure is the missing piece: {}", d.evidence)
+                }
+            });
+    }
+
+    /// Entry `index` no longer counts, for the reason `why` (the loop refused it: its fit needs a
+    /// sample-alternating pole). When it was the first significant entry, the note that explained
+    /// its place goes with it.
+    pub(super) fn refuse(&mut self, index: usize, why: String) {
+        let was_first = self.entries.iter().position(|d| d.significant) == Some(index);
+        if let Some(entry) = self.entries.get_mut(index) {
+            entry.significant = false;
+            entry.why_not = Some(why);
+        }
+        if was_first {
+            self.attribution_note = None;
+        }
+        self.note_structure();
+    }
+}
+
+impl DiagnosisReport {
     /// Whether the top significant entry (the one the loop would take) is a physical effect.
     pub fn top_is_physics(&self) -> bool {
         self.entries.iter().find(|d| d.significant).is_some_and(|d| d.kind == DiagnosisKind::Physics)

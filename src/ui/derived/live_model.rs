@@ -70,8 +70,8 @@ pub struct EffectsOutcome {
     pub history: Vec<HistoryStep>,
     /// What each round of the loop added.
     pub rounds: Vec<AutoRound>,
-    /// The round of the loop that was refused, and why (its fit needs a sample-alternating pole).
-    pub refused: Option<String>,
+    /// The trials the loop refused, and why (their fits need a sample-alternating pole).
+    pub refusals: Vec<String>,
     /// What the loop did, in words (the batch's notes).
     pub notes: Vec<String>,
     /// What went wrong (an effect that could not be added, a run the model cannot simulate).

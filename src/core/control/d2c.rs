@@ -17,7 +17,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use crate::core::numerics::poly::{self, complex_poly_from_roots, poly_from_roots, polyval_complex};
-use crate::core::numerics::tf::{DiscreteTf, TfError};
+use crate::core::numerics::tf::{DiscreteTf, TfError, alternates_sign};
 
 /// `Gc(s) = e^(−s·delay)·(b0·sᵐ + … + bm)/(sⁿ + a1·sⁿ⁻¹ + … + an)`, coefficients in descending
 /// powers of s (as python-control and MATLAB write them), the denominator monic.
@@ -65,7 +65,7 @@ pub fn d2c_zoh(tf: &DiscreteTf) -> Result<ContinuousTf, D2cError> {
         if p.norm() < f64::EPSILON {
             return Err(D2cError::PoleAtOrigin { re: p.re, im: p.im });
         }
-        if p.im.abs() <= 1e-12 && p.re < 0.0 {
+        if alternates_sign(*p) {
             return Err(D2cError::NegativeRealPole { re: p.re, im: p.im });
         }
         if poles[..i].iter().any(|q| (p - q).norm() < REPEATED_POLE_DISTANCE) {

@@ -22,7 +22,7 @@ use super::d2c::{ContinuousTf, d2c_zoh};
 use crate::core::effects::{AsymmetricDynamics, EffectBlock, ExtendedModel};
 use crate::core::numerics::cutoff::{LowFrequencyLevel, cutoff_rad_s};
 use crate::core::numerics::poly::{self, convolve};
-use crate::core::numerics::tf::{DiscreteTf, log_space};
+use crate::core::numerics::tf::{DiscreteTf, alternates_sign, log_space};
 
 /// Where an operating point comes from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -279,8 +279,7 @@ fn local_poles(tf: &DiscreteTf) -> Result<Vec<LocalPole>, poly::PolyError> {
     Ok(roots
         .into_iter()
         .map(|z| {
-            let s =
-                (!(z.im.abs() <= 1e-12 && z.re < 0.0)).then(|| Complex64::new(z.norm().ln(), z.arg()) / dt);
+            let s = (!alternates_sign(z)).then(|| Complex64::new(z.norm().ln(), z.arg()) / dt);
             let wn = s.map(|s| s.norm());
             LocalPole {
                 z,

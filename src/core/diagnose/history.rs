@@ -171,11 +171,6 @@ impl RoundContext<'_> {
     }
 }
 
-/// Index of the first significant entry of `report` (`entries.len()` when there is none).
-fn first_significant(report: &DiagnosisReport) -> usize {
-    report.entries.iter().position(|d| d.significant).unwrap_or(report.entries.len())
-}
-
 /// The significant trial of `report` the round takes, best first, with its model made admissible
 /// (see [`without_alternating_poles`]) and what that did, in words. A trial whose fit needs a
 /// sample-alternating pole is refused: it no longer counts in `report`, and why is added to
@@ -186,8 +181,8 @@ fn admissible_pick(
     refusals: &mut Vec<String>,
 ) -> Option<(usize, ExtendedModel, Option<String>)> {
     loop {
-        let pick = first_significant(report);
-        let trial = report.entries.get(pick)?;
+        let pick = report.entries.iter().position(|d| d.significant)?;
+        let trial = &report.entries[pick];
         match without_alternating_poles(trial, context) {
             Admissibility::Fine => return Some((pick, trial.model.clone(), None)),
             Admissibility::Replaced(model, words) => return Some((pick, model, Some(words))),
@@ -217,7 +212,7 @@ enum Admissibility {
 
 /// `model` without the sample-alternating poles an effect fit may grow (see
 /// [`crate::core::effects::admissible`]). The admissible fit must hold on the identification data
-/// and on the validation runs ([`Scored::holds`]); when it does not, the data are reached only with
+/// and on the validation runs ([`RoundContext::holds`]); when it does not, the data are reached only with
 /// the alternating pole, and the round that needs it is refused: a controller designer can use the
 /// model before the round, and cannot use one with a mode that alternates sign every sample.
 fn without_alternating_poles(trial: &Diagnosis, context: &RoundContext) -> Admissibility {

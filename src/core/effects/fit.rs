@@ -18,7 +18,7 @@ use super::{AsymmetricDynamics, EffectBlock, EffectError};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
-use crate::core::numerics::tf::DiscreteTf;
+use crate::core::numerics::tf::{DiscreteTf, alternates_sign};
 use crate::core::run::{Channel, Run};
 
 mod refine;
@@ -362,12 +362,7 @@ pub fn admissible(model: &ExtendedModel, data: &FitData) -> Result<Option<Altern
         return Ok(None);
     }
     check_channels(&start, data)?;
-    let poles: Vec<f64> = start
-        .poles
-        .iter()
-        .filter(|p| has_negative_real_pole(std::slice::from_ref(p)))
-        .map(|p| p.re)
-        .collect();
+    let poles: Vec<f64> = start.poles.iter().filter(|p| alternates_sign(**p)).map(|p| p.re).collect();
     let Some(as_is) = assemble(&start, data) else {
         return Ok(Some(Alternating::Kept { poles, more_error: None }));
     };

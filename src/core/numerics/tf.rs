@@ -176,6 +176,14 @@ pub struct BodePoint {
 }
 
 /// `n` log-spaced frequencies from `lo` to `hi` (rad/s).
+/// Whether the z-plane pole `z` lies on the negative real axis: its mode alternates sign every
+/// sample. A zero-order hold maps every continuous-time pole `s` to `e^(sT)`, and a real `s` to a
+/// point on the *positive* real axis, so no continuous system sampled behind a hold has such a pole,
+/// and it has no continuous-time equivalent.
+pub fn alternates_sign(z: Complex64) -> bool {
+    z.im.abs() <= 1e-12 && z.re < 0.0
+}
+
 pub fn log_space(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     if n < 2 || lo <= 0.0 || hi <= lo {
         return vec![lo; n.min(1)];

@@ -9,19 +9,16 @@ use crate::core::identification::refine::RootParams;
 use crate::core::numerics::lm::{
     Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
 };
+use crate::core::numerics::tf::alternates_sign;
 
 /// Poles must stay inside this radius.
 const MAX_POLE_RADIUS: f64 = 0.999;
 
-/// Whether `roots` hold a real pole on the negative real axis.
-///
-/// Such a pole alternates sign every sample. A zero-order hold maps every continuous-time pole `s`
-/// to `e^(sT)`, and a real `s` to a point on the *positive* real axis, so no engine sampled behind
-/// a hold has one: a model that grows one (the refinement lets a pair split into two real poles,
-/// see [`PoleParams`]) has local models that zig-zag and no continuous-time equivalent for the
-/// controller designer.
+/// Whether `roots` hold a pole that alternates sign every sample ([`alternates_sign`]): a model
+/// that grows one (the refinement lets a pair split into two real poles, see [`PoleParams`]) has
+/// local models that zig-zag and no continuous-time equivalent for the controller designer.
 pub(in crate::core::effects) fn has_negative_real_pole(roots: &[Complex64]) -> bool {
-    roots.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0)
+    roots.iter().any(|p| alternates_sign(*p))
 }
 
 /// Smallest real pole of a refinement that keeps real poles positive: a pole this close to the
@@ -58,7 +55,7 @@ pub(in crate::core::effects) fn refine(start: &Structure, data: &FitData) -> Opt
 /// spool split allows), the pole is only moved onto the positive axis.
 pub(in crate::core::effects) fn refine_admissible(s: &Structure, data: &FitData) -> Option<Assembled> {
     let mut lead = s.clone();
-    for p in lead.poles.iter_mut().filter(|p| p.im.abs() <= 1e-12 && p.re < 0.0) {
+    for p in lead.poles.iter_mut().filter(|p| alternates_sign(**p)) {
         let a = (-p.re).min(MAX_POLE_RADIUS);
         lead.zeros.push(Complex64::new(a / (1.0 + 2.0 * a), 0.0));
         *p = Complex64::new(MIN_REAL_POLE, 0.0);

@@ -7,7 +7,7 @@ use jetid::core::effects::{
     EffectBlock, ExtendedModel, ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak,
     TransportDelay,
 };
-use jetid::core::identification::static_map::StaticMap;
+use jetid::core::identification::static_map::{Beyond, StaticMap};
 use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
 use jetid::core::run::{Channel, Run};
 use num_complex::Complex64;
@@ -26,7 +26,13 @@ fn model(effects: &[EffectBlock]) -> ExtendedModel {
         DT,
     )
     .unwrap();
-    let map = StaticMap { v_center: 25.0, v_scale: 15.0, coeffs_scaled: vec![60.0, 30.0, -4.0] };
+    // Inputs below 2.25 read the map beyond its range (v < 10), where it continues its end.
+    let map = StaticMap {
+        v_center: 25.0,
+        v_scale: 15.0,
+        coeffs_scaled: vec![60.0, 30.0, -4.0],
+        beyond: Beyond::EndTrend,
+    };
     let mut m = ExtendedModel::new("speed_rpm", WienerModel { linear: LinearBlock { tf, offset: 1.0 }, map });
     for e in effects {
         m = m.with_effect(e.clone()).unwrap();

@@ -693,6 +693,43 @@ fn a_loop_round_keeps_the_words_of_its_attribution() {
     assert!(words.contains(round.added.name()), "{words}");
 }
 
+/// An effect added by hand to a model that carries a sample-alternating pole does not keep the
+/// pole when the data do without it (the simulator's engine has none): the sequence ends on an
+/// admissible model, with the effect, and says what was done in words.
+#[test]
+fn an_effect_added_by_hand_leaves_no_sample_alternating_pole_the_data_do_without() {
+    use jetid::core::diagnose::apply_in_order;
+    use jetid::core::effects::refit_static;
+    use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+    use num_complex::Complex64;
+    let b = bench(&[], 1);
+    let c = speed_default(&b);
+    let data = FitData::new(&b.ident, &c.fits, &c.settings).unwrap();
+    let negative = |poles: &[Complex64]| poles.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0);
+    let (mut poles, zeros) = c.model.roots().unwrap();
+    poles.push(Complex64::new(-0.6, 0.0));
+    let tf = c.model.wiener.linear.tf.clone();
+    let unit = unit_gain_tf(&poles, &zeros, tf.dt_secs).unwrap().with_input_delay(tf.input_delay());
+    let linear = LinearBlock { tf: unit, offset: 0.0 };
+    let base = refit_static(
+        &ExtendedModel::new(SPEED, WienerModel { linear, map: c.model.wiener.map.clone() }),
+        &data,
+    )
+    .unwrap();
+    let runs = [&b.validation];
+    let sequence = apply_in_order(&base, &[EffectId::ThermalSoak], &b.ident, &c.fits, &c.settings, &runs);
+    assert!(sequence.failed.is_none(), "{:?}", sequence.failed);
+    assert!(sequence.model.effects.iter().any(|e| e.id() == EffectId::ThermalSoak));
+    let (after, _) = sequence.model.roots().unwrap();
+    assert!(!negative(&after), "{after:?}");
+    assert_eq!(sequence.admissibility.len(), 1, "{:?}", sequence.admissibility);
+    assert!(
+        sequence.admissibility[0].starts_with("+thermal_soak: the fit's sample-alternating pole"),
+        "{:?}",
+        sequence.admissibility
+    );
+}
+
 /// A model with a sample-alternating pole (as an effect fit may grow one: a pole pair split into two
 /// real poles, one on the negative axis) gives way to an admissible fit when the data do not need
 /// the pole: the simulator's engine has none, so a fit without it reaches the same error, every real

@@ -14,8 +14,9 @@ pub const MODEL_FORMAT_VERSION: u32 = 1;
 
 pub const CONVENTION: &str = "Wiener model u -> G(z) -> v -> f(v) -> y. linear.tf.num_zinv[k] and \
 den_zinv[k] multiply z^-k, den_zinv[0] = 1; v = G(z) u + linear.offset, simulated from the steady \
-state of the first input sample. f(v) = sum_i static_map.coeffs_scaled[i] * ((v - v_center)/v_scale)^i \
-= sum_i static_map_beta[i] * v^i.";
+state of the first input sample. f(v) = sum_i static_map.coeffs_scaled[i] * x^i with x = (v - v_center)/v_scale \
+= sum_i static_map_beta[i] * v^i on the identified range |x| <= 1; with static_map.beyond = \"end_slope\" the map \
+continues beyond it along its tangent at x = +-1 (a missing beyond reads as \"polynomial\": the polynomial everywhere).";
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SignalInfo {

@@ -184,7 +184,7 @@ impl Effects {
     pub fn notes(&self, output: &str, plan: &EffectPlan) -> Vec<String> {
         let mut notes = Vec::new();
         let loop_ran = plan.auto_rounds > 0 && self.sequence.failed.is_none() && self.loop_failed.is_none();
-        notes.extend(self.sequence.refusals.iter().map(|r| format!("'{output}': {r}")));
+        notes.extend(self.sequence.admissibility.iter().map(|r| format!("'{output}': {r}")));
         if loop_ran && self.rounds.len() < plan.auto_rounds {
             notes.push(format!(
                 "'{output}': the missing-physics loop stopped after {} of {} rounds: nothing further is significant",

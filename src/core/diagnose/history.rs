@@ -10,8 +10,8 @@ use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 
 use super::{
-    DiagnoseError, Diagnosis, DiagnosisKind, DiagnosisReport, Edit, TrialId, diagnose_with_progress, edit,
-    validation_rmspe,
+    DiagnoseError, Diagnosis, DiagnosisKind, DiagnosisReport, Edit, MIN_RELATIVE_REDUCTION, TrialId,
+    diagnose_with_progress, edit, validation_rmspe,
 };
 
 /// The mean validation RMSPE of the model after one step ("base", "+thermal_soak", …).
@@ -37,13 +37,20 @@ pub struct EffectSequence {
     /// (nothing further significant, or a round refused): the same report a diagnosis of the final
     /// model would give.
     pub final_diagnosis: Option<DiagnosisReport>,
-    /// The trials the missing-physics loop refused (their fits need a sample-alternating pole),
-    /// each with its round and why, in words.
-    pub refusals: Vec<String>,
+    /// What was done about sample-alternating poles, in words: the trials the missing-physics loop
+    /// refused (their fits need such a pole), each with its round and why, and the effects added by
+    /// hand whose fit gave the pole up for the admissible form or keeps it (see [`apply_in_order`]).
+    pub admissibility: Vec<String>,
 }
 
 /// Add `ids` to `base` in order, each refitted on the identification data (`ident`, `fits`), and
 /// score the model on `validation` after every step.
+///
+/// An effect asked for by hand is added whatever it does to the error, but not with a
+/// sample-alternating pole when the data can do without one: a fit that grows one takes the
+/// admissible fit when that keeps within [`ALTERNATING_POLE_SHARE`] of its error on the
+/// identification data (see [`admissible`]); otherwise it keeps the pole, and says so in
+/// [`EffectSequence::admissibility`], as for every other outcome.
 pub fn apply_in_order(
     base: &ExtendedModel,
     ids: &[EffectId],
@@ -58,12 +65,16 @@ pub fn apply_in_order(
         history_gaps: Vec::new(),
         failed: None,
         final_diagnosis: None,
-        refusals: Vec::new(),
+        admissibility: Vec::new(),
     };
     sequence.record("base", validation, settings);
     for &id in ids {
         match edit(&sequence.model, Edit::Add(id), ident, fits, settings) {
-            Ok(next) => sequence.model = next,
+            Ok(next) => {
+                let (model, words) = admissible_by_hand(next, ident, fits, settings);
+                sequence.model = model;
+                sequence.admissibility.extend(words.map(|w| format!("+{id}: {w}")));
+            }
             Err(err) => {
                 sequence.failed = Some((id, err));
                 break;
@@ -72,6 +83,45 @@ pub fn apply_in_order(
         sequence.record(&format!("+{id}"), validation, settings);
     }
     sequence
+}
+
+/// `model` in its admissible form when its fit grew a sample-alternating pole and the data can do
+/// without it; what was done, in words (`None` when there was no such pole).
+fn admissible_by_hand(
+    model: ExtendedModel,
+    ident: &Run,
+    fits: &SegmentFits,
+    settings: &OutputSettings,
+) -> (ExtendedModel, Option<String>) {
+    let list = |poles: &[f64]| poles.iter().map(|p| format!("{p:.3}")).collect::<Vec<_>>().join(", ");
+    let keeps = |poles: &[f64], why: String| {
+        format!(
+            "its fit keeps a sample-alternating pole at {} ({why}): a mode no engine sampled behind a \
+             zero-order hold has, which leaves the model no continuous-time form",
+            list(poles)
+        )
+    };
+    match FitData::new(ident, fits, settings).and_then(|data| admissible(&model, &data)) {
+        Ok(None) => (model, None),
+        Ok(Some(Alternating::Replaced { model: fit, poles })) => (
+            fit,
+            Some(format!(
+                "the fit's sample-alternating pole at {} gave way to a zero that gives the same phase lead, real \
+                 poles kept positive",
+                list(&poles)
+            )),
+        ),
+        Ok(Some(Alternating::Kept { poles, more_error: Some(ratio) })) => {
+            let why = format!("without it the identification error is {ratio:.2}× as large");
+            (model, Some(keeps(&poles, why)))
+        }
+        Ok(Some(Alternating::Kept { poles, more_error: None })) => {
+            (model, Some(keeps(&poles, "no fit without it could be had".to_owned())))
+        }
+        Err(e) => {
+            (model, Some(format!("whether its fit has a sample-alternating pole cannot be checked: {e}")))
+        }
+    }
 }
 
 /// One round of the missing-physics loop: what the diagnosis ranked first among the significant
@@ -121,7 +171,7 @@ pub fn auto_effects(
             diagnose_with_progress(&sequence.model, ident, fits, validation, settings, &mut round_progress)?;
         let context = RoundContext { round, ident, fits, scored_on: validation, settings };
         let Some((pick, model, admissibility)) =
-            admissible_pick(&mut report, &context, &mut sequence.refusals)
+            admissible_pick(&mut report, &context, &mut sequence.admissibility)
         else {
             sequence.final_diagnosis = Some(report);
             break;
@@ -159,15 +209,26 @@ struct RoundContext<'a> {
 }
 
 impl RoundContext<'_> {
-    /// Whether `admissible` keeps within [`ALTERNATING_POLE_SHARE`] of the trial's validation error
-    /// `trial_pct`: the admissible fit is held to the same share on the runs the round is chosen on as
-    /// on the identification data. With no validation run there is nothing to hold it to.
-    fn holds(&self, admissible: &ExtendedModel, trial_pct: f64) -> bool {
+    /// Whether the admissible fit still makes the round worth taking. The trial
+    /// was judged significant on its free fit; the admissible fit is a less flexible model, and is
+    /// taken when either
+    /// - it keeps within [`ALTERNATING_POLE_SHARE`] of the free fit's validation error (what the
+    ///   alternating pole buys is then what a refinement may cost, as on the identification data),
+    /// - or it still removes [`MIN_RELATIVE_REDUCTION`] of the current model's validation error,
+    ///   the share a significant trial must remove (the round is then worth taking on its own,
+    ///   however much better the inadmissible fit would have been).
+    ///
+    /// With no validation run there is nothing to hold it to.
+    fn holds(&self, admissible: &ExtendedModel, trial: &Diagnosis) -> bool {
         if self.scored_on.is_empty() {
             return true;
         }
-        validation_rmspe(admissible, self.scored_on, self.settings.initial_state)
-            .is_ok_and(|pct| 1.0 - trial_pct / pct.max(f64::MIN_POSITIVE) < ALTERNATING_POLE_SHARE)
+        validation_rmspe(admissible, self.scored_on, self.settings.initial_state).is_ok_and(|pct| {
+            let keeps_the_trial =
+                1.0 - trial.rmspe_after_pct / pct.max(f64::MIN_POSITIVE) < ALTERNATING_POLE_SHARE;
+            let significant_alone = pct <= (1.0 - MIN_RELATIVE_REDUCTION) * trial.rmspe_before_pct;
+            keeps_the_trial || significant_alone
+        })
     }
 }
 
@@ -227,7 +288,7 @@ fn without_alternating_poles(trial: &Diagnosis, context: &RoundContext) -> Admis
     let data = FitData::new(context.ident, context.fits, context.settings);
     match data.and_then(|data| admissible(&trial.model, &data)) {
         Ok(None) => Admissibility::Fine,
-        Ok(Some(Alternating::Replaced { model, poles })) if context.holds(&model, trial.rmspe_after_pct) => {
+        Ok(Some(Alternating::Replaced { model, poles })) if context.holds(&model, trial) => {
             Admissibility::Replaced(
                 model,
                 format!(
@@ -239,7 +300,14 @@ fn without_alternating_poles(trial: &Diagnosis, context: &RoundContext) -> Admis
         }
         Ok(Some(Alternating::Replaced { poles, .. })) => needs(
             &poles,
-            "without it the validation error rises by more than the share a refinement may cost",
+            &format!(
+                "without it the validation error neither stays within {:.0} % of {:.3} % nor falls from {:.3} % by \
+                 the {:.0} % a significant change needs",
+                100.0 * ALTERNATING_POLE_SHARE,
+                trial.rmspe_after_pct,
+                trial.rmspe_before_pct,
+                100.0 * MIN_RELATIVE_REDUCTION
+            ),
         ),
         Ok(Some(Alternating::Kept { poles, more_error: Some(ratio) })) => {
             needs(&poles, &format!("without it the identification error is {ratio:.2}× as large"))

@@ -297,7 +297,7 @@ mod tests {
 
     fn model() -> ExtendedModel {
         let tf = unit_gain_tf(&[Complex64::new(0.9, 0.0)], &[], 0.1).unwrap();
-        let map = StaticMap { v_center: 0.0, v_scale: 1.0, coeffs_scaled: vec![1.0, 2.0] };
+        let map = StaticMap { coeffs_scaled: vec![1.0, 2.0], ..StaticMap::identity() };
         ExtendedModel::new("thrust_n", WienerModel { linear: LinearBlock { tf, offset: 0.5 }, map })
     }
 

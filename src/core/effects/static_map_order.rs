@@ -2,8 +2,8 @@
 use super::Evidence;
 use super::ParamSpec;
 use super::stats::{ResidualTrace, mean, plateaus};
-use crate::core::identification::static_map::StaticMap;
-use crate::core::numerics::lstsq::solve_lstsq;
+use crate::core::identification::static_map::{Beyond, StaticMap, monotone_rows, trend_sign};
+use crate::core::numerics::constrained::solve_lstsq_nonneg;
 
 /// A kink in the static map: a bleed valve that opens or a limiter that acts above an operating
 /// point adds `slope_change · max(0, v − knot_v)` to the polynomial `f(v)`. The knot is fitted on
@@ -48,7 +48,8 @@ impl StaticMapOrder {
     }
 }
 
-/// Least-squares polynomial of `order` through the points, plus a kink at `knot_v` when given.
+/// Least-squares polynomial of `order` through the points, plus a kink at `knot_v` when given,
+/// held monotone over the points' range like every fitted map (see `identification::static_map`).
 /// Returns the polynomial part and the kink's slope change.
 pub fn fit_map_with_knot(
     v: &[f64],
@@ -70,11 +71,13 @@ pub fn fit_map_with_knot(
             _ => ((vr - v_center) / v_scale).powi(c as i32),
         }
     });
-    let sol = solve_lstsq(&a, y).ok()?;
+    let x: Vec<f64> = v.iter().map(|vr| (vr - v_center) / v_scale).collect();
+    let knot_x = knot_v.map(|knot| (knot - v_center) / v_scale);
+    let sol = solve_lstsq_nonneg(&a, y, &monotone_rows(order, trend_sign(&x, y), knot_x)).ok()?;
     let slope_change =
         if knot_v.is_some() { sol.x.get(order + 1).copied().unwrap_or(0.0) / v_scale } else { 0.0 };
     let coeffs_scaled = sol.x.iter().take(order + 1).copied().collect();
-    Some((StaticMap { v_center, v_scale, coeffs_scaled }, slope_change))
+    Some((StaticMap { v_center, v_scale, coeffs_scaled, beyond: Beyond::EndTrend }, slope_change))
 }
 
 /// Steady-state residuals at the plateaus of every run against the operating point: their spread

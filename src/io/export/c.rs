@@ -4,6 +4,7 @@
 use super::parts::{self, Block, Step};
 use super::plan::{Filter, Linear, OutputPlan, Plan, Spool};
 use super::{header, list, num};
+use crate::core::identification::static_map::Beyond;
 
 pub(super) fn render(plan: &Plan) -> String {
     let mut text = String::from("/*\n");
@@ -101,6 +102,7 @@ fn base_fields(o: &OutputPlan, p: &str) -> Vec<String> {
         format!(".offset = {}", num(o.offset)),
         format!(".v_center = {}", num(o.map.v_center)),
         format!(".v_scale = {}", num(o.map.v_scale)),
+        format!(".end_trend = {}", i32::from(o.map.beyond == Beyond::EndTrend)),
         format!(".n_coeffs = {}", o.map.coeffs_scaled.len()),
         format!(".coeffs = {p}_coeffs"),
     ]

@@ -5,6 +5,7 @@ use super::ExportError;
 use super::parts::{self, Block, Step};
 use super::plan::{Filter, Linear, OutputPlan, Plan};
 use super::{header, list, num};
+use crate::core::identification::static_map::Beyond;
 
 /// Longest MATLAB identifier (`namelengthmax`).
 const MAX_NAME_LEN: usize = 63;
@@ -57,11 +58,12 @@ fn output(o: &OutputPlan) -> String {
     let (n, d) = o.tf.positive_powers();
     t.push_str(&format!("o.tf_num_z = {};\no.tf_den_z = {};\n", row(&n), row(&d)));
     t.push_str(&format!(
-        "o.offset = {};\no.v_center = {};\no.v_scale = {};\no.coeffs = {};\n",
+        "o.offset = {};\no.v_center = {};\no.v_scale = {};\no.coeffs = {};\no.end_trend = {};\n",
         num(o.offset),
         num(o.map.v_center),
         num(o.map.v_scale),
-        row(&o.map.coeffs_scaled)
+        row(&o.map.coeffs_scaled),
+        o.map.beyond == Beyond::EndTrend
     ));
     for block in parts::map_blocks(o) {
         t.push_str(&assign_block("o", &block));
@@ -292,25 +294,60 @@ end
 end
 
 function y = static_map(o, v)
-x = (v - o.v_center) / o.v_scale;
-y = zeros(size(v));
-for i = numel(o.coeffs):-1:1
-    y = y .* x + o.coeffs(i);
-end
+y = map_polynomial(o, (v - o.v_center) / o.v_scale);
 if ~isempty(o.kink)
     y = y + o.kink(2) * max(v - o.kink(1), 0);
 end
 end
 
 function d = static_map_slope(o, v)
-x = (v - o.v_center) / o.v_scale;
-d = 0;
-for i = numel(o.coeffs):-1:2
-    d = d * x + (i - 1) * o.coeffs(i);
-end
+[~, d] = map_polynomial(o, (v - o.v_center) / o.v_scale);
 d = d / o.v_scale;
 if ~isempty(o.kink) && v > o.kink(1)
     d = d + o.kink(2);
+end
+end
+
+function [y, d] = map_polynomial(o, x)
+% static_map.rs StaticMap eval and slope: the polynomial part of f and its slope d/dx at x. Inside
+% |x| <= 1 (everywhere without end_trend) the polynomial; beyond it the end's value, slope and
+% curvature continue: an exponential approach where the curvature slows the map outwards, else
+% their parabola.
+[y, d] = poly_at(o.coeffs, x);
+if ~o.end_trend
+    return;
+end
+for e = [-1, 1]
+    out = e * x > 1;
+    if ~any(out(:))
+        continue;
+    end
+    [p0, p1, p2] = poly_at(o.coeffs, e);
+    t = e * (x(out) - e);
+    if e * p1 * p2 < 0
+        len = abs(p1 / p2);
+        y(out) = p0 + e * p1 * (len * (1 - exp(-t / len)));
+        d(out) = p1 * exp(-t / len);
+    else
+        y(out) = p0 + (e * p1 * t + 0.5 * p2 * t .* t);
+        d(out) = p1 + e * p2 * t;
+    end
+end
+end
+
+function [p0, p1, p2] = poly_at(c, x)
+% The polynomial's value, slope and curvature at x.
+p0 = zeros(size(x));
+p1 = zeros(size(x));
+p2 = zeros(size(x));
+for i = numel(c):-1:1
+    p0 = p0 .* x + c(i);
+end
+for i = numel(c):-1:2
+    p1 = p1 .* x + (i - 1) * c(i);
+end
+for i = numel(c):-1:3
+    p2 = p2 .* x + (i - 1) * (i - 2) * c(i);
 end
 end
 

@@ -3,6 +3,7 @@
 use super::parts::{self, Block, Step};
 use super::plan::{Filter, Linear, OutputPlan, Plan};
 use super::{header, list, num};
+use crate::core::identification::static_map::Beyond;
 
 pub(super) fn render(plan: &Plan) -> String {
     let mut text = String::from("#!/usr/bin/env python3\n");
@@ -98,9 +99,15 @@ fn tuple(items: &[&str]) -> String {
     }
 }
 
-/// The static map as `(v_center, v_scale, [coefficients])`.
+/// The static map as `(v_center, v_scale, [coefficients], end_trend)`.
 fn static_map(o: &OutputPlan) -> String {
-    format!("({}, {}, {})", num(o.map.v_center), num(o.map.v_scale), list(&o.map.coeffs_scaled, "[", "]"))
+    format!(
+        "({}, {}, {}, {})",
+        num(o.map.v_center),
+        num(o.map.v_scale),
+        list(&o.map.coeffs_scaled, "[", "]"),
+        if o.map.beyond == Beyond::EndTrend { "True" } else { "False" }
+    )
 }
 
 /// An optional block as a dict entry: its numbers as a tuple, or `None`.

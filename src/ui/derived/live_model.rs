@@ -70,8 +70,9 @@ pub struct EffectsOutcome {
     pub history: Vec<HistoryStep>,
     /// What each round of the loop added.
     pub rounds: Vec<AutoRound>,
-    /// The trials the loop refused, and why (their fits need a sample-alternating pole).
-    pub refusals: Vec<String>,
+    /// What was done about sample-alternating poles, in words: the trials the loop refused, the
+    /// effects added by hand whose fit gave such a pole up or keeps it.
+    pub admissibility: Vec<String>,
     /// What the loop did, in words (the batch's notes).
     pub notes: Vec<String>,
     /// What went wrong (an effect that could not be added, a run the model cannot simulate).

@@ -106,7 +106,7 @@ impl ModelInputs {
         let effects = model::add_effects(&live.model, plan, &self.run, fits, settings, &validation, progress);
         outcome.history = effects.sequence.history.clone();
         outcome.rounds = effects.rounds.clone();
-        outcome.refusals = effects.sequence.refusals.clone();
+        outcome.admissibility = effects.sequence.admissibility.clone();
         outcome.notes = effects.notes(&output, plan);
         if let Err(err) = effects.check(&output) {
             outcome.problems.push(err.to_string());

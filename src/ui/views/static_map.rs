@@ -1,9 +1,11 @@
 //! The Static map view: the fitted f(v) over the steady-state points (v, y) of the identification
-//! segments, the static-map coefficients and the leave-one-out table the order was chosen from.
+//! segments, dashed where it continues past them, the static-map coefficients and the leave-one-out
+//! table the order was chosen from.
 use egui::RichText;
 use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
 
 use crate::core::identification::settings::OutputSettings;
+use crate::core::identification::static_map::Beyond;
 use crate::ui::derived::Derived;
 use crate::ui::state::command::Command;
 use crate::ui::theme;
@@ -27,13 +29,19 @@ pub fn static_map_ui(ui: &mut egui::Ui, output: &str, cache: &Derived) -> Vec<Co
         .steady_points
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (v, _)| (lo.min(*v), hi.max(*v)));
-    let pad = 0.1 * (v_hi - v_lo).max(1e-9);
-    let curve: Vec<[f64; 2]> = (0..=CURVE_POINTS)
-        .map(|k| {
-            let v = v_lo - pad + (v_hi - v_lo + 2.0 * pad) * k as f64 / CURVE_POINTS as f64;
-            [v, map.eval(v)]
-        })
-        .collect();
+    // A third of the range either side shows how the map continues past the holds.
+    let pad = 0.35 * (v_hi - v_lo).max(1e-9);
+    let curve = |a: f64, b: f64| -> Vec<[f64; 2]> {
+        (0..=CURVE_POINTS)
+            .map(|k| a + (b - a) * k as f64 / CURVE_POINTS as f64)
+            .map(|v| [v, map.eval(v)])
+            .collect()
+    };
+    let (fitted, below, above) = (curve(v_lo, v_hi), curve(v_lo - pad, v_lo), curve(v_hi, v_hi + pad));
+    let beyond_name = match map.beyond {
+        Beyond::EndTrend => "beyond the holds: the end's trend",
+        Beyond::Polynomial => "beyond the holds: the polynomial",
+    };
     let steady: Vec<[f64; 2]> = model.steady_points.iter().map(|(v, y)| [*v, *y]).collect();
     let plot_width = (ui.available_width() - TABLE_WIDTH - ui.spacing().item_spacing.x).max(200.0);
     let height = ui.available_height();
@@ -49,10 +57,18 @@ pub fn static_map_ui(ui: &mut egui::Ui, output: &str, cache: &Derived) -> Vec<Co
                 .legend(Legend::default().position(egui_plot::Corner::LeftTop).follow_insertion_order(true))
                 .show(ui, |plot_ui| {
                     plot_ui.line(
-                        Line::new(format!("f(v), order {}", map.order()), curve)
+                        Line::new(format!("f(v), order {}", map.order()), fitted)
                             .color(theme::MODEL)
                             .width(2.0),
                     );
+                    for part in [below, above] {
+                        plot_ui.line(
+                            Line::new(beyond_name, part)
+                                .color(theme::MODEL)
+                                .width(1.5)
+                                .style(egui_plot::LineStyle::dashed_loose()),
+                        );
+                    }
                     plot_ui.points(
                         Points::new("steady states (segment tails)", steady)
                             .shape(MarkerShape::Circle)

@@ -34,6 +34,7 @@ typedef struct {
     jetid_filter tf;
     double offset;
     double v_center, v_scale;
+    int end_trend; /* 1: beyond |x| > 1 the map continues its end (see jetid_map_polynomial) */
     int n_coeffs;
     const double *coeffs;
     int has_kink;
@@ -198,14 +199,40 @@ static double jetid_sensor_step(jetid_sensor_state *s, const jetid_output_step *
     return s->pos;
 }
 
-/* f(v): the polynomial in (v - v_center)/v_scale, plus the kink of static_map_order. */
+/* The polynomial's value (k = 0), slope d/dx (k = 1) or curvature (k = 2) at x. */
+static double jetid_poly(const jetid_params *p, double x, int k)
+{
+    double y = 0.0;
+    int i;
+    for (i = p->n_coeffs - 1; i >= k; i--) y = y * x + (k == 0 ? 1.0 : k == 1 ? i : i * (i - 1.0)) * p->coeffs[i];
+    return y;
+}
+
+/* static_map.rs StaticMap::eval: the polynomial part of f at x. Inside |x| <= 1 (everywhere
+ * without end_trend) the polynomial; beyond it the end's value, slope and curvature continue: an
+ * exponential approach where the curvature slows the map outwards, else their parabola. */
+static double jetid_map_polynomial(const jetid_params *p, double x)
+{
+    double end, value, slope, curvature, t, length;
+    if (!p->end_trend || (x <= 1.0 && x >= -1.0)) return jetid_poly(p, x, 0);
+    end = x > 0.0 ? 1.0 : -1.0;
+    value = jetid_poly(p, end, 0);
+    slope = jetid_poly(p, end, 1);
+    curvature = jetid_poly(p, end, 2);
+    t = end * (x - end);
+    if (end * slope * curvature < 0.0) {
+        length = fabs(slope / curvature);
+        return value + end * slope * (length * (1.0 - exp(-t / length)));
+    }
+    return value + (end * slope * t + 0.5 * curvature * t * t);
+}
+
+/* f(v): the map in x = (v - v_center)/v_scale, plus the kink of static_map_order. */
 static double jetid_static_map(const jetid_params *p, double v)
 {
-    double x = (v - p->v_center) / p->v_scale, y = 0.0, kink = 0.0;
-    int i;
-    for (i = p->n_coeffs - 1; i >= 0; i--) y = y * x + p->coeffs[i];
+    double kink = 0.0;
     if (p->has_kink) kink = p->slope_change * (v - p->knot_v > 0.0 ? v - p->knot_v : 0.0);
-    return y + kink;
+    return jetid_map_polynomial(p, (v - p->v_center) / p->v_scale) + kink;
 }
 
 static void jetid_init(jetid_state *s, const jetid_params *p, double dt, double calibration_offset)

@@ -168,14 +168,49 @@ class _Sensor:
         return pos
 
 
-def static_map(output, v):
-    """f(v): the polynomial in (v - v_center)/v_scale, plus the kink of static_map_order."""
-    p = OUTPUTS[output]
-    center, scale, coeffs = p["map"]
-    x = (v - center) / scale
+def _poly(coeffs, x):
     y = 0.0
     for c in reversed(coeffs):
         y = y * x + c
+    return y
+
+
+def _poly_slope(coeffs, x):
+    d = 0.0
+    for i in range(len(coeffs) - 1, 0, -1):
+        d = d * x + i * coeffs[i]
+    return d
+
+
+def _poly_curvature(coeffs, x):
+    d = 0.0
+    for i in range(len(coeffs) - 1, 1, -1):
+        d = d * x + (i * (i - 1)) * coeffs[i]
+    return d
+
+
+def _map_polynomial(coeffs, end_trend, x):
+    """static_map.rs StaticMap eval and slope: the polynomial part of f and its slope d/dx at x. Inside
+    |x| <= 1 (everywhere without end_trend) the polynomial; beyond it the end's value, slope and
+    curvature continue: an exponential approach where the curvature slows the map outwards, else
+    their parabola."""
+    if not end_trend or abs(x) <= 1.0:
+        return _poly(coeffs, x), _poly_slope(coeffs, x)
+    end = 1.0 if x > 0.0 else -1.0
+    value, slope, curvature = _poly(coeffs, end), _poly_slope(coeffs, end), _poly_curvature(coeffs, end)
+    t = end * (x - end)
+    if end * slope * curvature < 0.0:
+        length = abs(slope / curvature)
+        return value + end * slope * (length * (1.0 - math.exp(-t / length))), slope * math.exp(-t / length)
+    return value + (end * slope * t + 0.5 * curvature * t * t), slope + end * curvature * t
+
+
+def static_map(output, v):
+    """f(v): the map in x = (v - v_center)/v_scale (see _map_polynomial), plus the kink of
+    static_map_order."""
+    p = OUTPUTS[output]
+    center, scale, coeffs, end_trend = p["map"]
+    y, _ = _map_polynomial(coeffs, end_trend, (v - center) / scale)
     kink = 0.0
     if p["kink"] is not None:
         knot, slope_change = p["kink"]
@@ -186,12 +221,8 @@ def static_map(output, v):
 def static_map_slope(output, v):
     """df/dv, the kink included."""
     p = OUTPUTS[output]
-    center, scale, coeffs = p["map"]
-    x = (v - center) / scale
-    d = 0.0
-    for i in range(len(coeffs) - 1, 0, -1):
-        d = d * x + i * coeffs[i]
-    slope = d / scale
+    center, scale, coeffs, end_trend = p["map"]
+    slope = _map_polynomial(coeffs, end_trend, (v - center) / scale)[1] / scale
     if p["kink"] is not None and v > p["kink"][0]:
         slope += p["kink"][1]
     return slope

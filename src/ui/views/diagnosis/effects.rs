@@ -101,8 +101,8 @@ fn loop_ui(ui: &mut egui::Ui, output: &str, cache: &OutputCache, live: &LiveMode
     for note in live.effects.notes.iter().filter(|n| n.contains("stopped after")) {
         hint(ui, note);
     }
-    for refusal in &live.effects.refusals {
-        hint(ui, &format!("{refusal}."));
+    for words in &live.effects.admissibility {
+        hint(ui, &format!("{words}."));
     }
     commands
 }

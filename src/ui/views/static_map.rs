@@ -151,5 +151,13 @@ fn side_ui(
         "Points: the mean of v and y over the settled tail of each segment (and before the first step). \
          The linear block's gain is fitted by least squares on the identification run, so v is in output units.",
     );
+    if map.beyond == Beyond::EndTrend {
+        model_ui::hint(
+            ui,
+            "The map is held monotone over the points, so every local gain has the engine's sign. Past them \
+             (dashed) it continues its end's value, slope and curvature without turning back: an exponential \
+             approach where the curvature slows it, a parabola where it speeds it up.",
+        );
+    }
     command
 }

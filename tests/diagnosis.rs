@@ -693,35 +693,40 @@ fn a_loop_round_keeps_the_words_of_its_attribution() {
     assert!(words.contains(round.added.name()), "{words}");
 }
 
+/// `c`'s model with a real pole at −0.6 added to its linear block (a mode that alternates sign
+/// every sample), gain, offset and map refitted.
+fn with_alternating_pole(c: &Current, data: &FitData) -> ExtendedModel {
+    use jetid::core::effects::refit_static;
+    use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+    use num_complex::Complex64;
+    let (mut poles, zeros) = c.model.roots().unwrap();
+    poles.push(Complex64::new(-0.6, 0.0));
+    let tf = c.model.wiener.linear.tf.clone();
+    let unit = unit_gain_tf(&poles, &zeros, tf.dt_secs).unwrap().with_input_delay(tf.input_delay());
+    let linear = LinearBlock { tf: unit, offset: 0.0 };
+    refit_static(&ExtendedModel::new(SPEED, WienerModel { linear, map: c.model.wiener.map.clone() }), data)
+        .unwrap()
+}
+
+fn has_negative_real_pole(poles: &[num_complex::Complex64]) -> bool {
+    poles.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0)
+}
+
 /// An effect added by hand to a model that carries a sample-alternating pole does not keep the
 /// pole when the data do without it (the simulator's engine has none): the sequence ends on an
 /// admissible model, with the effect, and says what was done in words.
 #[test]
 fn an_effect_added_by_hand_leaves_no_sample_alternating_pole_the_data_do_without() {
     use jetid::core::diagnose::apply_in_order;
-    use jetid::core::effects::refit_static;
-    use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
-    use num_complex::Complex64;
     let b = bench(&[], 1);
     let c = speed_default(&b);
-    let data = FitData::new(&b.ident, &c.fits, &c.settings).unwrap();
-    let negative = |poles: &[Complex64]| poles.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0);
-    let (mut poles, zeros) = c.model.roots().unwrap();
-    poles.push(Complex64::new(-0.6, 0.0));
-    let tf = c.model.wiener.linear.tf.clone();
-    let unit = unit_gain_tf(&poles, &zeros, tf.dt_secs).unwrap().with_input_delay(tf.input_delay());
-    let linear = LinearBlock { tf: unit, offset: 0.0 };
-    let base = refit_static(
-        &ExtendedModel::new(SPEED, WienerModel { linear, map: c.model.wiener.map.clone() }),
-        &data,
-    )
-    .unwrap();
+    let base = with_alternating_pole(&c, &FitData::new(&b.ident, &c.fits, &c.settings).unwrap());
     let runs = [&b.validation];
     let sequence = apply_in_order(&base, &[EffectId::ThermalSoak], &b.ident, &c.fits, &c.settings, &runs);
     assert!(sequence.failed.is_none(), "{:?}", sequence.failed);
     assert!(sequence.model.effects.iter().any(|e| e.id() == EffectId::ThermalSoak));
     let (after, _) = sequence.model.roots().unwrap();
-    assert!(!negative(&after), "{after:?}");
+    assert!(!has_negative_real_pole(&after), "{after:?}");
     assert_eq!(sequence.admissibility.len(), 1, "{:?}", sequence.admissibility);
     assert!(
         sequence.admissibility[0].starts_with("+thermal_soak: the fit's sample-alternating pole"),
@@ -736,30 +741,20 @@ fn an_effect_added_by_hand_leaves_no_sample_alternating_pole_the_data_do_without
 /// pole positive. A model without such a pole is left as it is.
 #[test]
 fn a_sample_alternating_pole_gives_way_to_an_admissible_fit() {
-    use jetid::core::effects::{Alternating, admissible, refit_static};
-    use jetid::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
-    use num_complex::Complex64;
+    use jetid::core::effects::{Alternating, admissible};
     let b = bench(&[], 1);
     let c = speed_default(&b);
     let data = FitData::new(&b.ident, &c.fits, &c.settings).unwrap();
-    let negative = |poles: &[Complex64]| poles.iter().any(|p| p.im.abs() <= 1e-12 && p.re < 0.0);
-    let (poles, zeros) = c.model.roots().unwrap();
-    assert!(!negative(&poles), "the pipeline's own model: {poles:?}");
+    let (poles, _) = c.model.roots().unwrap();
+    assert!(!has_negative_real_pole(&poles), "the pipeline's own model: {poles:?}");
     assert!(admissible(&c.model, &data).unwrap().is_none(), "nothing to do on {poles:?}");
-
-    let mut alternating = poles.clone();
-    alternating.push(Complex64::new(-0.6, 0.0));
-    let tf = c.model.wiener.linear.tf.clone();
-    let unit = unit_gain_tf(&alternating, &zeros, tf.dt_secs).unwrap().with_input_delay(tf.input_delay());
-    let linear = LinearBlock { tf: unit, offset: 0.0 };
-    let start = ExtendedModel::new(SPEED, WienerModel { linear, map: c.model.wiener.map.clone() });
-    let start = refit_static(&start, &data).unwrap();
+    let start = with_alternating_pole(&c, &data);
     match admissible(&start, &data).unwrap() {
         Some(Alternating::Replaced { model, poles: replaced }) => {
             assert_eq!(replaced.len(), 1, "{replaced:?}");
             assert!((replaced[0] + 0.6).abs() < 1e-6, "{replaced:?}");
             let (after, _) = model.roots().unwrap();
-            assert!(!negative(&after), "{after:?}");
+            assert!(!has_negative_real_pole(&after), "{after:?}");
         }
         other => panic!("the engine has no alternating mode, yet: {other:?}"),
     }

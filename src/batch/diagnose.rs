@@ -22,7 +22,14 @@ pub fn diagnose_output(
     let validation = runs.validation_of(output);
     let report = match done {
         Some(report) => report,
-        None => diagnose::diagnose(current, &runs.ident, &identified.fits, &validation, &plan.settings)?,
+        None => diagnose::diagnose_admissible(
+            current,
+            &runs.ident,
+            &identified.fits,
+            &validation,
+            &plan.settings,
+            &mut |_| true,
+        )?,
     };
     let skipped = report
         .skipped

@@ -85,6 +85,31 @@ pub fn apply_in_order(
     sequence
 }
 
+/// A diagnosis of `model` whose significant trials are each checked as the missing-physics loop
+/// checks the one it takes (see [`admissible_pick`]): a trial whose fit needs a sample-alternating
+/// pole that no admissible fit can stand in for stops counting, with why. The batch and the app
+/// diagnose the model they show through this, so a trial the loop refused is refused everywhere.
+pub fn diagnose_admissible(
+    model: &ExtendedModel,
+    ident: &Run,
+    fits: &SegmentFits,
+    validation: &[&Run],
+    settings: &OutputSettings,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<DiagnosisReport, DiagnoseError> {
+    let mut report = diagnose_with_progress(model, ident, fits, validation, settings, progress)?;
+    let context = RoundContext { round: 0, ident, fits, scored_on: validation, settings };
+    for index in 0..report.entries.len() {
+        if !report.entries[index].significant {
+            continue;
+        }
+        if let Admissibility::Refused(why) = without_alternating_poles(&report.entries[index], &context) {
+            report.refuse(index, format!("not taken: {why}"));
+        }
+    }
+    Ok(report)
+}
+
 /// `model` in its admissible form when its fit grew a sample-alternating pole and the data can do
 /// without it; what was done, in words (`None` when there was no such pole).
 fn admissible_by_hand(

@@ -79,7 +79,9 @@ mod witness;
 use decision::{Trials, decide};
 pub use edit::{Edit, edit};
 use held_out::{HeldOut, Recipe};
-pub use history::{AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects};
+pub use history::{
+    AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects, diagnose_admissible,
+};
 pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, TrialId};
 pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
 use witness::{Judge, Scores, Verdict};

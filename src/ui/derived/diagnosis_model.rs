@@ -24,13 +24,13 @@ pub struct DiagnosisInput {
 }
 
 impl DiagnosisInput {
-    /// Rank the catalog's effects on this model (see [`diagnose::diagnose`]).
+    /// Rank the catalog's effects on this model, as the batch does (see [`diagnose::diagnose_admissible`]).
     pub fn run(
         &self,
         progress: &mut dyn FnMut(f64) -> bool,
     ) -> Result<diagnose::DiagnosisReport, diagnose::DiagnoseError> {
         let validation: Vec<&Run> = self.validation.iter().map(AsRef::as_ref).collect();
-        diagnose::diagnose_with_progress(
+        diagnose::diagnose_admissible(
             &self.current,
             &self.ident,
             &self.fits,

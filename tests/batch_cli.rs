@@ -66,6 +66,25 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
     for title in ["reference: linear ARX(2,2)", "reference: Hammerstein ARX", "reference: static cubic map"] {
         assert!(md.contains(title), "report.md lacks {title}");
     }
+    // Every root of the bundled models carries the 95 % intervals of its figures, around its value.
+    for output in ["shaft_speed_rpm", "thrust_n"] {
+        for root in report["outputs"][output]["identified"]["roots"].as_array().unwrap() {
+            for field in ["natural_freq_rad_s", "time_constant_secs", "damping"] {
+                let Some(value) = root[field].as_f64() else { continue };
+                let ci = &root[format!("{field}_ci95")];
+                if field == "damping" && root["pair"] == false {
+                    assert!(ci.is_null(), "a real root's damping is 1 by definition: {root}");
+                    continue;
+                }
+                let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+                assert!(lo < value && value < hi, "{output} {field}: {root}");
+            }
+        }
+    }
+    assert!(
+        md.contains("ωn (rad/s) | ζ | τ (s)") && md.contains(" ± "),
+        "report.md shows the intervals as ±"
+    );
     for channel in ["fuel_flow_gph", "shaft_speed_rpm", "thrust_n"] {
         let best = report["noise_fit"][channel]["best_by_log_likelihood"].as_str().unwrap();
         assert!(

@@ -4,7 +4,8 @@
 //!   `initial_state`, `wiener`, `refine`;
 //! - the chain's vocabulary: `settings` (how an output is identified), `error`, `fits` (the
 //!   segments and their ARX models);
-//! - the reduced model: `reduce` (root groups, the one assembly, the polish inside the clusters);
+//! - the reduced model: `reduce` (root groups, the one assembly, the polish inside the clusters),
+//!   `uncertainty` (how well the data fix its roots);
 //! - the automatic proposal: `words` (how its numbers read), `parsimony` (when a candidate beats
 //!   the simpler model), `cross_validation` (held-out errors across segments), `dead_time` (the
 //!   input delay as a candidate), `direct_fit` (free roots when no cluster gives a model),
@@ -26,6 +27,7 @@ pub mod fits;
 pub mod settings;
 
 pub mod reduce;
+pub mod uncertainty;
 
 pub mod cross_validation;
 pub mod dead_time;

@@ -10,6 +10,7 @@ use crate::core::identification::refine::Refinement;
 use crate::core::identification::segment::Segment;
 use crate::core::identification::static_map::{OrderSuggestion, StaticMap};
 use crate::core::identification::structure::{self, Proposal};
+use crate::core::identification::uncertainty::{self, RootInterval};
 use crate::core::identification::wiener::{LinearBlock, WienerError, WienerModel};
 use crate::core::numerics::metrics::{Metrics, metrics};
 use crate::core::numerics::tf::BodePoint;
@@ -37,6 +38,10 @@ pub struct GrayBoxModel {
     /// Why the model was fitted directly rather than built from clusters, when it was.
     #[serde(default)]
     pub direct_fit: Option<String>,
+    /// 95 % intervals of each root's s-plane figures, in the order of `roots` (see
+    /// `core::identification::uncertainty`); empty when the data do not fix the roots.
+    #[serde(default)]
+    pub root_intervals: Vec<RootInterval>,
 }
 
 /// Clusters → reduced linear block (each root polished inside its cluster) → static map.
@@ -78,7 +83,9 @@ fn model_of_groups(
         }
         _ => (first.clone(), groups.to_vec(), None),
     };
+    let root_intervals = uncertainty::of_roots(data, &roots, order).map(|u| u.intervals).unwrap_or_default();
     Ok(GrayBoxModel {
+        root_intervals,
         output: data.fits.output.clone(),
         clusters: clusters.to_vec(),
         wiener: assembled.wiener,

@@ -40,7 +40,12 @@ impl TestSystem {
     /// Gaussian noise of standard deviation `noise_sd` (seeded by `seed`).
     pub(super) fn new(poles: &[f64], delay: usize, noise_sd: f64, seed: u64) -> Self {
         let poles: Vec<Complex64> = poles.iter().map(|p| Complex64::new(*p, 0.0)).collect();
-        let tf = unit_gain_tf(&poles, &[], DT_SECS).unwrap().with_input_delay(delay);
+        Self::with_poles(&poles, delay, noise_sd, seed)
+    }
+
+    /// [`TestSystem::new`] with any poles (a pair given as both conjugates).
+    pub(super) fn with_poles(poles: &[Complex64], delay: usize, noise_sd: f64, seed: u64) -> Self {
+        let tf = unit_gain_tf(poles, &[], DT_SECS).unwrap().with_input_delay(delay);
         let u: Vec<f64> = LEVELS.iter().flat_map(|level| [*level; HOLD]).collect();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let noise = Normal::new(0.0, noise_sd).unwrap();

@@ -12,6 +12,7 @@ use crate::core::identification::dead_time::DeadTimeVerdict;
 use crate::core::identification::pipeline::Identified;
 use crate::core::identification::reduce::RootGroup;
 use crate::core::identification::segment::Segment;
+use crate::core::identification::uncertainty::RootInterval;
 use crate::core::identification::verdict::CandidateVerdict;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -57,6 +58,14 @@ pub struct RootSummary {
     pub natural_freq_rad_s: f64,
     pub damping: f64,
     pub time_constant_secs: Option<f64>,
+    /// 95 % intervals of the three figures from the fit's covariance (see
+    /// `core::identification::uncertainty`); absent when the data do not fix the root.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub natural_freq_rad_s_ci95: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping_ci95: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_constant_secs_ci95: Option<[f64; 2]>,
     /// The polish left it on the rim of its cluster: the data pull it further out.
     pub at_rim: bool,
 }
@@ -138,7 +147,12 @@ impl IdentSummary {
         let model = &identified.model;
         let tf = &model.wiener.linear.tf;
         let fits = &identified.fits;
-        let roots: Vec<RootSummary> = model.roots.iter().map(|g| RootSummary::of(g, fits.dt_secs)).collect();
+        let roots: Vec<RootSummary> = model
+            .roots
+            .iter()
+            .enumerate()
+            .map(|(i, g)| RootSummary::of(g, fits.dt_secs, model.root_intervals.get(i)))
+            .collect();
         Self {
             arx_orders: fits.models.first().map_or([0; 3], |m| [m.orders.na, m.orders.nb, m.orders.nk]),
             segments: fits.segments.iter().zip(&fits.models).map(|(s, m)| SegmentSummary::of(s, m)).collect(),
@@ -245,10 +259,13 @@ impl DeadTimeSummary {
 }
 
 impl RootSummary {
-    /// A root of the model with its s-plane figures.
-    pub fn of(g: &RootGroup, dt_secs: f64) -> Self {
+    /// A root of the model with its s-plane figures and, when known, their 95 % intervals.
+    pub fn of(g: &RootGroup, dt_secs: f64, interval: Option<&RootInterval>) -> Self {
         let (natural_freq_rad_s, damping, time_constant_secs) = g.s_plane(dt_secs);
         Self {
+            natural_freq_rad_s_ci95: interval.and_then(|i| i.natural_freq_rad_s),
+            damping_ci95: interval.and_then(|i| i.damping),
+            time_constant_secs_ci95: interval.and_then(|i| i.time_constant_secs),
             kind: format!("{:?}", g.kind),
             root: g.root,
             pair: g.pair,
@@ -274,8 +291,12 @@ fn fmt_root(r: &RootSummary) -> String {
     if r.pair { format!("{:.4} ± {:.4}j", r.root.re, r.root.im.abs()) } else { format!("{:.4}", r.root.re) }
 }
 
-fn fmt_tau(t: Option<f64>) -> String {
-    t.map_or("–".to_owned(), |t| format!("{t:.3}"))
+/// A figure with the half-width of its 95 % interval (`value ± half`; the interval is symmetric).
+fn fmt_with_ci(value: f64, ci95: Option<[f64; 2]>) -> String {
+    match ci95 {
+        Some([lo, hi]) => format!("{value:.3} ± {:.3}", 0.5 * (hi - lo)),
+        None => format!("{value:.3}"),
+    }
 }
 
 pub(super) fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
@@ -329,7 +350,8 @@ pub(super) fn ident_section(out: &mut String, id: &IdentSummary, unit: &str) {
 fn clusters_table(out: &mut String, clusters: &[ClusterSummary]) {
     let _ = writeln!(
         out,
-        "Clusters in use, with the root the model has in each (polished inside the circle):\n\n\
+        "Clusters in use, with the root the model has in each (polished inside the circle); ± is the half-width \
+         of the 95 % interval the identification data give the figure (report.json: `*_ci95`):\n\n\
          | cluster | centre | radius | members | valid | centroid | model root | ωn (rad/s) | ζ | τ (s) |\n\
          |---|---|---|---|---|---|---|---|---|---|"
     );
@@ -337,9 +359,9 @@ fn clusters_table(out: &mut String, clusters: &[ClusterSummary]) {
         let (root, omega, zeta, tau) = match &c.model_root {
             Some(r) => (
                 format!("{}{}", fmt_root(r), if r.at_rim { " (on the rim)" } else { "" }),
-                format!("{:.3}", r.natural_freq_rad_s),
-                format!("{:.3}", r.damping),
-                fmt_tau(r.time_constant_secs),
+                fmt_with_ci(r.natural_freq_rad_s, r.natural_freq_rad_s_ci95),
+                fmt_with_ci(r.damping, r.damping_ci95),
+                r.time_constant_secs.map_or("–".to_owned(), |t| fmt_with_ci(t, r.time_constant_secs_ci95)),
             ),
             None => ("not in the model".to_owned(), "–".to_owned(), "–".to_owned(), "–".to_owned()),
         };
@@ -360,13 +382,16 @@ fn clusters_table(out: &mut String, clusters: &[ClusterSummary]) {
 fn fitted_roots_table(out: &mut String, roots: &[RootSummary]) {
     let free: Vec<&RootSummary> = roots.iter().filter(|r| r.cluster.is_none()).collect();
     if !free.is_empty() {
-        let _ = writeln!(out, "\n| fitted root | ωn (rad/s) | ζ | τ (s) |\n|---|---|---|---|");
+        let _ = writeln!(
+            out,
+            "\nRoots fitted directly; ± is the half-width of the 95 % interval:\n\n| fitted root | ωn (rad/s) | ζ | τ (s) |\n|---|---|---|---|"
+        );
         for r in free {
             let cells = [
                 format!("{} {}", r.kind, fmt_root(r)),
-                format!("{:.3}", r.natural_freq_rad_s),
-                format!("{:.3}", r.damping),
-                fmt_tau(r.time_constant_secs),
+                fmt_with_ci(r.natural_freq_rad_s, r.natural_freq_rad_s_ci95),
+                fmt_with_ci(r.damping, r.damping_ci95),
+                r.time_constant_secs.map_or("–".to_owned(), |t| fmt_with_ci(t, r.time_constant_secs_ci95)),
             ];
             table_row(out, cells);
         }

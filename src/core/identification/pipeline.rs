@@ -39,7 +39,9 @@ pub struct GrayBoxModel {
     #[serde(default)]
     pub direct_fit: Option<String>,
     /// 95 % intervals of each root's s-plane figures, in the order of `roots` (see
-    /// `core::identification::uncertainty`); empty when the data do not fix the roots.
+    /// `core::identification::uncertainty`): filled by [`identify_output`], the path that reports
+    /// them, not on the live path the app rebuilds on every drag; empty when the data do not fix
+    /// the roots.
     #[serde(default)]
     pub root_intervals: Vec<RootInterval>,
 }
@@ -83,9 +85,8 @@ fn model_of_groups(
         }
         _ => (first.clone(), groups.to_vec(), None),
     };
-    let root_intervals = uncertainty::of_roots(data, &roots, order).map(|u| u.intervals).unwrap_or_default();
     Ok(GrayBoxModel {
-        root_intervals,
+        root_intervals: Vec::new(),
         output: data.fits.output.clone(),
         clusters: clusters.to_vec(),
         wiener: assembled.wiener,
@@ -292,7 +293,11 @@ pub fn identify_output(
         Some(c) => ModelSource::Clusters(c.to_vec()),
         None => ModelSource::Proposal(std::sync::Arc::new(propose(&fits, ident, settings)?)),
     };
-    let (model, evals) = source.build(&fits, ident, settings)?;
+    let (mut model, evals) = source.build(&fits, ident, settings)?;
+    let data = IdentData::new(&fits, ident, settings)?.with_delay(model.wiener.linear.tf.input_delay());
+    model.root_intervals = uncertainty::of_roots(&data, &model.roots, model.wiener.map.order())
+        .map(|u| u.intervals)
+        .unwrap_or_default();
     let proposal = match source {
         ModelSource::Proposal(p) => Some(std::sync::Arc::unwrap_or_clone(p)),
         ModelSource::Clusters(_) => None,

@@ -403,7 +403,89 @@ fn errors_name_what_is_wrong() {
         &["export", "--model", s(&no_spool), "--format", "python", "--out", s(&out)],
         &["thrust_n", "asymmetric_dynamics", "real pole"],
     );
+    // A covariance that does not describe the model: one parameter short, or not symmetric.
+    let short = edited("short_cov.json", &|m| {
+        let c = m.outputs[0].covariance.as_mut().unwrap();
+        c.names.pop();
+        c.values.pop();
+    });
+    fails_with(
+        &["export", "--model", s(&short), "--format", "python", "--out", s(&out)],
+        &["thrust_n", "parameter covariance", "parameters"],
+    );
+    let skew = edited("skew_cov.json", &|m| {
+        let c = m.outputs[0].covariance.as_mut().unwrap();
+        c.matrix[0][1] = c.matrix[1][0] + (c.matrix[0][0] * c.matrix[1][1]).sqrt();
+    });
+    fails_with(
+        &["export", "--model", s(&skew), "--format", "c", "--out", s(&out)],
+        &["thrust_n", "not a covariance"],
+    );
     assert!(!out.exists(), "nothing is written on an error");
+}
+
+/// The exported `sample_models` draws from the model file's covariance: the sample covariance of
+/// 2,000 drawn parameter vectors is within 10 % of the stated one (each entry against the product of
+/// the two standard deviations: with 2,000 draws an entry's own sampling spread is about 2-3 % of
+/// that), the model at the stated values is the file's linear block, and `operating_point_ci95`
+/// agrees with the report's `gain_ci95` at the grid's middle point.
+#[test]
+fn the_python_sample_models_follow_the_covariance() {
+    if !have_python() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (model, _) = fit(dir.path(), None, Some("shaft_speed_rpm"));
+    let stated =
+        read_model(&model).unwrap().outputs[0].covariance.clone().expect("the batch stores a covariance");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit/report.json")).unwrap()).unwrap();
+    let mid = &report["outputs"]["shaft_speed_rpm"]["operating_points"][4];
+    let (u, ci): (f64, Vec<f64>) =
+        (mid["u"].as_f64().unwrap(), serde_json::from_value(mid["gain_ci95"].clone()).unwrap());
+    let program = dir.path().join("jetid_model.py");
+    ok(
+        &jetid(&["export", "--model", s(&model), "--format", "python", "--out", s(&program)]),
+        "export python",
+    );
+    let script = format!(
+        "import sys, numpy as np; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
+         o = 'shaft_speed_rpm'\n\
+         draws = m.sample_models(o, 2000, 7)\n\
+         theta = np.array([d['theta'] for d in draws])\n\
+         S = np.cov(theta.T)\n\
+         print(' '.join(repr(float(x)) for x in S.ravel()))\n\
+         g = m.model_at(o, m.COVARIANCE[o]['values'])['tf']\n\
+         t = m.TF[o]\n\
+         print(max(abs(complex(g(np.exp(1j * w * m.DT)) - t(np.exp(1j * w * m.DT)))) / abs(complex(t(1.0))) for w in (0.01, 0.3, 2.0)))\n\
+         print(' '.join(repr(x) for x in m.operating_point_ci95(o, {u:?})['gain']))",
+        dir = s(dir.path()),
+    );
+    let printed = ok(&Command::new("python3").args(["-c", &script]).output().unwrap(), "sample_models");
+    let lines: Vec<Vec<f64>> =
+        printed.lines().map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect()).collect();
+    let n = stated.values.len();
+    assert_eq!(lines[0].len(), n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let scale = (stated.matrix[i][i] * stated.matrix[j][j]).sqrt();
+            let got = lines[0][i * n + j];
+            assert!(
+                (got - stated.matrix[i][j]).abs() <= 0.1 * scale,
+                "{} × {}: sample covariance {got} against the stated {}",
+                stated.names[i],
+                stated.names[j],
+                stated.matrix[i][j]
+            );
+        }
+    }
+    assert!(lines[1][0] < 1e-9, "the model at the stated values is the file's G(z): {}", lines[1][0]);
+    let (lo, hi) = (lines[2][0], lines[2][1]);
+    let width = ci[1] - ci[0];
+    assert!(
+        (lo - ci[0]).abs() <= 0.25 * width && (hi - ci[1]).abs() <= 0.25 * width,
+        "Python's gain interval [{lo}, {hi}] against the report's {ci:?}"
+    );
 }
 
 /// The exported `operating_point` is the local model of the report's operating points (the same

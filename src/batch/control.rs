@@ -1,6 +1,8 @@
 //! The control-oriented part of an output's report: operating points across the identified range
 //! and the steady run's plateau, and the continuous-time equivalent of the linear block.
-use crate::core::control::{ContinuousTf, OperatingPoint, d2c_zoh, identified_range, operating_points};
+use crate::core::control::{
+    ContinuousTf, OperatingPoint, ParameterCovariance, bands, d2c_zoh, identified_range, operating_points,
+};
 use crate::core::effects::ExtendedModel;
 use crate::core::numerics::stats::mean;
 
@@ -10,6 +12,7 @@ use crate::workflow::runs::Runs;
 /// computed goes to `notes`.
 pub(super) fn control_report(
     model: &ExtendedModel,
+    covariance: Option<&ParameterCovariance>,
     runs: &Runs,
     notes: &mut Vec<String>,
 ) -> (Vec<OperatingPoint>, Option<ContinuousTf>) {
@@ -18,10 +21,21 @@ pub(super) fn control_report(
     let range = identified_range(u);
     let plateaus: Vec<(String, f64)> =
         runs.steady.iter().map(|s| (s.name.clone(), mean(&s.input.values))).collect();
-    let points = operating_points(model, range, &plateaus).unwrap_or_else(|e| {
+    let mut points = operating_points(model, range, &plateaus).unwrap_or_else(|e| {
         notes.push(format!("operating points of '{output}': {e}"));
         Vec::new()
     });
+    if let Some(covariance) = covariance.filter(|_| !points.is_empty()) {
+        match bands::with_intervals(&mut points, model, covariance, range, &plateaus) {
+            Ok(drawn) if drawn < bands::DRAWS => notes.push(format!(
+                "operating-point intervals of '{output}': {drawn} of {} models drawn from the covariance \
+                 gave operating points (the others gave no model: an effect parameter out of its range, or a local model that could not be computed)",
+                bands::DRAWS
+            )),
+            Ok(_) => {}
+            Err(e) => notes.push(format!("operating-point intervals of '{output}': {e}")),
+        }
+    }
     let continuous = d2c_zoh(&model.wiener.linear.tf)
         .map_err(|e| notes.push(format!("continuous-time equivalent of '{output}': {e}")))
         .ok();

@@ -5,6 +5,8 @@ use std::path::Path;
 use std::collections::BTreeMap;
 
 use crate::core::compare::{Curve, FrequencyComparison, ModelKind, OutputModels};
+use crate::core::control::{ParameterCovariance, bands};
+use crate::core::effects::ExtendedModel;
 use crate::core::identification::pipeline::{GrayBoxModel, Identified};
 use crate::core::monte_carlo::MonteCarloResult;
 use crate::core::numerics::metrics::BoxStats;
@@ -26,6 +28,8 @@ pub struct OutputCurves<'a> {
     traces: Vec<RunTraces<'a>>,
     /// Each model's response to the chirp and the measured one, when there is a chirp run.
     chirp: Option<ChirpCurves>,
+    /// What could not be drawn, one sentence each.
+    notes: Vec<String>,
 }
 
 /// A compared run with every model's simulation of it.
@@ -33,6 +37,9 @@ struct RunTraces<'a> {
     run: &'a Run,
     measured: &'a Channel,
     models: Vec<(String, Vec<f64>)>,
+    /// Half-width of the 95 % band of the gray-box's noiseless output from its parameter
+    /// uncertainty, when the covariance could be carried to this run.
+    band: Option<Vec<f64>>,
 }
 
 /// The chirp's measured response and every model's, by the same Welch estimate.
@@ -47,10 +54,12 @@ impl<'a> OutputCurves<'a> {
     pub fn of(
         identified: &'a Identified,
         models: &OutputModels,
+        uncertain: Option<(&ExtendedModel, &ParameterCovariance)>,
         compared: &[&'a Run],
         freq: Option<&FrequencyComparison>,
     ) -> Self {
         let output = &identified.model.output;
+        let notes = std::cell::RefCell::new(Vec::new());
         let traces = compared
             .iter()
             .filter_map(|run| {
@@ -60,7 +69,14 @@ impl<'a> OutputCurves<'a> {
                     .into_iter()
                     .map(|(kind, y)| (kind.label().to_owned(), y))
                     .collect();
-                Some(RunTraces { run, measured, models })
+                let band = uncertain.and_then(|(model, cov)| {
+                    bands::output_half_widths(model, cov, run)
+                        .map_err(|e| {
+                            notes.borrow_mut().push(format!("uncertainty band on '{}': {e}", run.name))
+                        })
+                        .ok()
+                });
+                Some(RunTraces { run, measured, models, band })
             })
             .collect();
         Self {
@@ -69,6 +85,7 @@ impl<'a> OutputCurves<'a> {
             static_map: static_map_curve(&identified.model),
             traces,
             chirp: freq.and_then(chirp_curves),
+            notes: notes.into_inner(),
         }
     }
 }
@@ -151,7 +168,7 @@ pub fn output_figures(
     curves: &OutputCurves<'_>,
     boxes: &BTreeMap<ModelKind, BTreeMap<String, BoxStats>>,
 ) -> (Vec<String>, Vec<String>) {
-    let (mut written, mut notes) = (Vec::new(), Vec::new());
+    let (mut written, mut notes) = (Vec::new(), curves.notes.clone());
     let mut keep = |name: String, result: Result<(), figures::FigureError>| match result {
         Ok(()) => written.push(name),
         Err(e) => notes.push(format!("figure {name}: {e}")),
@@ -183,12 +200,13 @@ pub fn output_figures(
         let name = format!("{output}_traces_{}.png", run.name);
         let title = format!("{output} on '{}': every model from the input alone", run.name);
         let y_label = figures::with_unit(output, &traces.measured.unit);
-        let drawn = figures::traces_png(
+        let drawn = figures::traces_with_band_png(
             &dir.join(&name),
             &title,
             &run.t_secs,
             &traces.measured.values,
             &traces.models,
+            traces.band.as_deref(),
             &y_label,
         );
         keep(name, drawn);

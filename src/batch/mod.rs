@@ -22,6 +22,7 @@ use crate::workflow::model::{self, OutputPlan};
 use crate::workflow::model_file::{new_model_file, output_entry, take_saved_clusters};
 use crate::workflow::preparation::segmentation_choice;
 use crate::workflow::runs::{self, Runs};
+use crate::workflow::uncertainty::parameter_covariance;
 
 mod compare;
 mod control;
@@ -157,9 +158,17 @@ impl Batch<'_> {
         out.diagnosis = built.diagnosis;
         out.preparation = built.preparation;
         self.describe_steady_states(&plan, extended, &mut out, &mut notes);
+        let covariance = timings
+            .time(&format!("uncertainty_{output}"), || {
+                parameter_covariance(&identified.fits, extended, &runs.ident, &plan.settings)
+            })
+            .map_err(|e| notes.push(format!("parameter uncertainty of '{output}': {e}")))
+            .ok();
+        let mut entry = output_entry(&identified.model, extended, &unit);
+        entry.covariance = covariance;
         let mut part = OutputPart {
             output: output.to_owned(),
-            entry: output_entry(&identified.model, extended, &unit),
+            entry,
             report: out,
             figures: Vec::new(),
             notes,
@@ -235,7 +244,7 @@ impl Batch<'_> {
         timings: &mut Timings,
     ) {
         let (runs, output) = (self.runs, part.output.clone());
-        let (out, notes) = (&mut part.report, &mut part.notes);
+        let (out, notes, entry) = (&mut part.report, &mut part.notes, &part.entry);
         let studies = compare::compare(models, runs, &output, self.input_noise.as_ref(), out, notes, timings);
         let sigma = runs.steady.as_ref().and_then(|s| steady_noise_sigma(s, &output));
         let (residuals, figs) = timings.time("residuals", || {
@@ -243,7 +252,9 @@ impl Batch<'_> {
         });
         out.residuals = residuals;
         out.failing = crate::io::report::markdown::failing_models(out);
-        (out.operating_points, out.continuous) = control::control_report(extended, runs, notes);
+        (out.operating_points, out.continuous) = timings.time(&format!("control_{output}"), || {
+            control::control_report(extended, entry.covariance.as_ref(), runs, notes)
+        });
         part.figures.extend(figs);
         if runs.steady.is_some() && self.input_noise.is_some() {
             part.monte_carlo = Some(compare::monte_carlo_summaries(&studies.monte_carlo));
@@ -253,9 +264,15 @@ impl Batch<'_> {
             part.figures.extend(figs);
             part.notes.extend(figure_notes);
         }
+        let uncertain = part.entry.covariance.as_ref().map(|cov| (extended, cov));
         let (figs, figure_notes) = timings.time("figures", || {
-            let curves =
-                figures::OutputCurves::of(identified, models, &runs.compared(), studies.frequency.as_ref());
+            let curves = figures::OutputCurves::of(
+                identified,
+                models,
+                uncertain,
+                &runs.compared(),
+                studies.frequency.as_ref(),
+            );
             let report = &part.report;
             figures::output_figures(self.out_dir, &output, &report.unit, &curves, &report.error_boxes)
         });

@@ -30,7 +30,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 pub use bode::{BodeCurve, EmpiricalBode, bode_png};
 pub use residuals::residuals_png;
 pub use stats::{boxplot_png, histogram_png};
-pub use xy::{static_map_png, traces_png};
+pub use xy::{static_map_png, traces_png, traces_with_band_png};
 pub use zplane::{ZPLANE_SIZE, zplane_png};
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/fonts/DejaVuSans-LICENSE.txt`).

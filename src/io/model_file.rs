@@ -42,6 +42,11 @@ pub struct OutputModel {
     pub refinement: Option<Refinement>,
     #[serde(default)]
     pub effects: Vec<EffectRecord>,
+    /// The covariance of the model's parameters (roots, static map, effects) from its fit to the
+    /// identification run (`core::control::covariance`); absent in older files and where the run
+    /// does not fix the parameters.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub covariance: Option<crate::core::control::ParameterCovariance>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

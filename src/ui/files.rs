@@ -13,6 +13,7 @@ use crate::ui::project_io;
 use crate::ui::state::command::FileAction;
 use crate::ui::state::session::file_label;
 use crate::workflow::model_file::{new_model_file, output_entry};
+use crate::workflow::uncertainty::parameter_covariance;
 
 impl App {
     /// Show an error until dismissed (and name it in the status bar).
@@ -35,28 +36,33 @@ impl App {
 
     fn export_model(&mut self, path: &Path) -> Result<()> {
         self.refresh();
-        let (written, skipped) = self
+        let (written, skipped, uncertain) = self
             .model_file()
-            .and_then(|(file, skipped)| {
+            .and_then(|(file, skipped, uncertain)| {
                 write_model(path, &file)?;
-                Ok((file.outputs.len(), skipped))
+                Ok((file.outputs.len(), skipped, uncertain))
             })
             .with_context(|| format!("exporting the model to {}", path.display()))?;
         let mut status = format!("Exported {written} output model(s) to {}", file_label(path));
         if !skipped.is_empty() {
             status += &format!("; not exported (no valid model): {}", skipped.join(", "));
         }
+        if !uncertain.is_empty() {
+            status += &format!("; without a parameter covariance: {}", uncertain.join("; "));
+        }
         self.view.status = Some(status);
         Ok(())
     }
 
-    /// The committed model of every output that has one, and the names of those that have none.
-    fn model_file(&self) -> Result<(ModelFile, Vec<String>)> {
+    /// The committed model of every output that has one (with its parameter covariance from the
+    /// identification run, as the batch stores it), the names of those that have none, and why an
+    /// output's covariance could not be estimated.
+    fn model_file(&self) -> Result<(ModelFile, Vec<String>, Vec<String>)> {
         let Some(ident) = &self.cache.ident else {
             bail!("there is no identification run, so there is no model");
         };
         let mut file = new_model_file(&ident.run);
-        let mut skipped = Vec::new();
+        let (mut skipped, mut uncertain) = (Vec::new(), Vec::new());
         for output in &ident.outputs {
             let Ok(live) = &output.live else {
                 skipped.push(output.name.clone());
@@ -67,12 +73,20 @@ impl App {
                 skipped.push(format!("{} (its effects could not be added)", output.name));
                 continue;
             }
-            file.outputs.push(output_entry(&live.model, &live.current_model(), &output.unit));
+            let current = live.current_model();
+            let mut entry = output_entry(&live.model, &current, &output.unit);
+            if let Ok(fits) = &output.fits {
+                match parameter_covariance(fits, &current, &ident.run, &output.setup.settings) {
+                    Ok(covariance) => entry.covariance = Some(covariance),
+                    Err(e) => uncertain.push(format!("{}: {e}", output.name)),
+                }
+            }
+            file.outputs.push(entry);
         }
         if file.outputs.is_empty() {
             bail!("no output has a valid model ({})", skipped.join(", "));
         }
-        Ok((file, skipped))
+        Ok((file, skipped, uncertain))
     }
 
     /// Take the clusters of every output the file and the identification run share, as one

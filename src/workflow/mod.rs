@@ -21,6 +21,7 @@ pub mod overrides;
 pub mod preparation;
 pub mod products;
 pub mod runs;
+pub mod uncertainty;
 
 pub use model::{EffectPlan, Effects, EffectsError, ModelSource, OutputPlan};
 pub use overrides::Overrides;

@@ -46,6 +46,7 @@ pub fn output_entry(model: &GrayBoxModel, current: &ExtendedModel, unit: &str) -
         clusters: model.clusters.clone(),
         refinement: model.refinement.clone(),
         effects: current.records(),
+        covariance: None,
     }
 }
 

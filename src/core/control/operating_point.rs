@@ -47,6 +47,14 @@ pub struct LocalPole {
     pub wn_rad_s: Option<f64>,
     /// Damping ratio −Re(s)/|s|.
     pub zeta: Option<f64>,
+    /// 95 % intervals of the three from the model's parameter covariance (see
+    /// `core::control::bands`); `None` until they are computed or where they do not apply.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tau_s_ci95: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wn_rad_s_ci95: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zeta_ci95: Option<[f64; 2]>,
 }
 
 impl LocalPole {
@@ -80,6 +88,11 @@ pub struct StepFigures {
     pub settling_s: Option<f64>,
     /// Peak above the final value, % of the final value.
     pub overshoot_pct: f64,
+    /// 95 % intervals of the rise and settling times (see `core::control::bands`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rise_s_ci95: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settling_s_ci95: Option<[f64; 2]>,
 }
 
 /// A model's steady state at one input and its local linear model there.
@@ -95,6 +108,12 @@ pub struct OperatingPoint {
     pub y: f64,
     /// Local gain dy/du at u*.
     pub gain: f64,
+    /// 95 % intervals of the local gain and the bandwidth from the model's parameter covariance
+    /// (see `core::control::bands`); `None` until they are computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain_ci95: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bandwidth_rad_s_ci95: Option<[f64; 2]>,
     /// Local linear model K·G(z)/G(1), the effects linearised (see the module documentation).
     pub local: DiscreteTf,
     /// Its poles (one per conjugate pair, upper half-plane), slowest first.
@@ -188,6 +207,8 @@ fn operating_point(
         v,
         y,
         gain,
+        gain_ci95: None,
+        bandwidth_rad_s_ci95: None,
         bandwidth_rad_s: bandwidth(&unit),
         step: step_figures(&unit, &poles),
         local,
@@ -287,6 +308,9 @@ fn local_poles(tf: &DiscreteTf) -> Result<Vec<LocalPole>, poly::PolyError> {
                 tau_s: s.filter(|s| s.im.abs() <= 1e-12 && s.re < 0.0).map(|s| -1.0 / s.re),
                 wn_rad_s: wn,
                 zeta: s.filter(|s| s.norm() > 0.0).map(|s| -s.re / s.norm()),
+                tau_s_ci95: None,
+                wn_rad_s_ci95: None,
+                zeta_ci95: None,
             }
         })
         .collect())
@@ -333,7 +357,12 @@ fn step_figures(unit: &DiscreteTf, poles: &[LocalPole]) -> StepFigures {
     };
     let settling_s = y.iter().rposition(|v| (v - 1.0).abs() > 0.02).map(|k| (k + 1) as f64 * dt);
     let peak = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    StepFigures { rise_s, settling_s, overshoot_pct: (100.0 * (peak - 1.0)).max(0.0) }
+    StepFigures {
+        rise_s,
+        settling_s,
+        overshoot_pct: (100.0 * (peak - 1.0)).max(0.0),
+        ..StepFigures::default()
+    }
 }
 
 #[cfg(test)]

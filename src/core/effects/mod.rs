@@ -383,7 +383,7 @@ impl EffectBlock {
     }
 
     /// Parameters the fit moves continuously, in an unconstrained form.
-    fn free_params(&self) -> Vec<f64> {
+    pub(crate) fn free_params(&self) -> Vec<f64> {
         match self {
             Self::TransportDelay(b) => b.free_params(),
             Self::ThermalSoak(b) => b.free_params(),
@@ -397,7 +397,7 @@ impl EffectBlock {
     }
 
     /// The block with new free parameters, or `None` where they leave the admissible range.
-    fn with_free_params(&self, theta: &[f64], dt_secs: f64) -> Option<Self> {
+    pub(crate) fn with_free_params(&self, theta: &[f64], dt_secs: f64) -> Option<Self> {
         Some(match self {
             Self::TransportDelay(b) => Self::TransportDelay(b.with_free_params(theta)?),
             Self::ThermalSoak(b) => Self::ThermalSoak(b.with_free_params(theta)?),

@@ -42,4 +42,4 @@ pub mod words;
 pub mod pipeline;
 
 #[cfg(test)]
-mod test_system;
+pub(crate) mod test_system;

@@ -15,36 +15,36 @@ use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::wiener::unit_gain_tf;
 use crate::core::run::{Channel, Run};
 
-pub(super) const DT_SECS: f64 = 0.1;
+pub(crate) const DT_SECS: f64 = 0.1;
 /// Input levels, each held for [`HOLD`] samples.
-const LEVELS: [f64; 5] = [1.0, 2.0, 1.4, 2.6, 1.7];
+pub(crate) const LEVELS: [f64; 5] = [1.0, 2.0, 1.4, 2.6, 1.7];
 const HOLD: usize = 100;
 /// Samples of each segment before its step.
 const BEFORE_STEP: usize = 30;
-pub(super) const OUTPUT: &str = "y";
+pub(crate) const OUTPUT: &str = "y";
 
 /// The static map of the system.
-fn static_map(v: f64) -> f64 {
+pub(crate) fn static_map(v: f64) -> f64 {
     2.0 + 3.0 * v + 0.5 * v * v
 }
 
 /// A known Wiener system and its segment ARX fits.
-pub(super) struct TestSystem {
-    pub(super) run: Run,
-    pub(super) settings: OutputSettings,
-    pub(super) fits: SegmentFits,
+pub(crate) struct TestSystem {
+    pub(crate) run: Run,
+    pub(crate) settings: OutputSettings,
+    pub(crate) fits: SegmentFits,
 }
 
 impl TestSystem {
     /// The system with real `poles` behind `delay` samples of input dead time, measured with
     /// Gaussian noise of standard deviation `noise_sd` (seeded by `seed`).
-    pub(super) fn new(poles: &[f64], delay: usize, noise_sd: f64, seed: u64) -> Self {
+    pub(crate) fn new(poles: &[f64], delay: usize, noise_sd: f64, seed: u64) -> Self {
         let poles: Vec<Complex64> = poles.iter().map(|p| Complex64::new(*p, 0.0)).collect();
         Self::with_poles(&poles, delay, noise_sd, seed)
     }
 
     /// [`TestSystem::new`] with any poles (a pair given as both conjugates).
-    pub(super) fn with_poles(poles: &[Complex64], delay: usize, noise_sd: f64, seed: u64) -> Self {
+    pub(crate) fn with_poles(poles: &[Complex64], delay: usize, noise_sd: f64, seed: u64) -> Self {
         let tf = unit_gain_tf(poles, &[], DT_SECS).unwrap().with_input_delay(delay);
         let u: Vec<f64> = LEVELS.iter().flat_map(|level| [*level; HOLD]).collect();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -70,7 +70,7 @@ impl TestSystem {
     }
 
     /// The candidate of a circle around `centre` as the segment models' roots make it.
-    pub(super) fn candidate(&self, kind: RootKind, centre: Complex64, radius: f64) -> ClusterEval {
+    pub(crate) fn candidate(&self, kind: RootKind, centre: Complex64, radius: f64) -> ClusterEval {
         let circle = Cluster::new(kind, centre, radius);
         cluster::evaluate_cluster(&circle, &self.fits.roots, &self.settings.cluster, DT_SECS).unwrap()
     }

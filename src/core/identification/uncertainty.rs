@@ -139,7 +139,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// that decays like an AR(1) with time constant T, Bartlett weights out to 3T keep the long-run
 /// variance within a fifth of its value while the estimate's own noise (∝ L/N) stays small on runs
 /// of thousands of samples. Capped at a quarter of the run.
-fn bandwidth(e: &[f64]) -> usize {
+pub(crate) fn bandwidth(e: &[f64]) -> usize {
     let n = e.len();
     let m = e.iter().sum::<f64>() / n as f64;
     let c0: f64 = e.iter().map(|v| (v - m) * (v - m)).sum();
@@ -158,7 +158,7 @@ fn bandwidth(e: &[f64]) -> usize {
 }
 
 /// `S = Σ_{|l| ≤ L} (1 − |l|/(L+1)) Γ_l` of the scores `sₖ = Jₖ eₖ`.
-fn long_run_variance(jac: &[Vec<f64>], e: &[f64], bandwidth: usize) -> nalgebra::DMatrix<f64> {
+pub(crate) fn long_run_variance(jac: &[Vec<f64>], e: &[f64], bandwidth: usize) -> nalgebra::DMatrix<f64> {
     let n = jac.len();
     let scores: Vec<Vec<f64>> =
         jac.iter().map(|col| col.iter().zip(e).map(|(j, r)| j * r).collect()).collect();

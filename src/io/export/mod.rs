@@ -56,6 +56,9 @@ pub enum ExportError {
          '_', starting with a letter, at most 63 characters): name the --out file e.g. jetid_model.m"
     )]
     BadMatlabName { name: String },
+    /// A stored covariance that does not describe the output's parameters (a hand-edited file).
+    #[error("output '{output}': the stored parameter covariance cannot be exported: {reason}")]
+    BadCovariance { output: String, reason: String },
 }
 
 /// The program text of `model` in `format`. `source` names the model file in the generated

@@ -4,6 +4,7 @@
 use num_complex::Complex64;
 
 use super::ExportError;
+use crate::core::control::covariance::{Layout, ParameterCovariance, parameter_layout, parameters};
 use crate::core::effects::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ExtendedModel, RateLimit,
     ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak,
@@ -141,6 +142,49 @@ pub struct OutputPlan {
     pub effect_dynamics: Filter,
     /// Names of the applied effects, in signal-path order (for the generated file's header).
     pub effects: Vec<&'static str>,
+    /// The parameter covariance the model file holds, checked against the model.
+    pub uncertainty: Option<Uncertainty>,
+}
+
+/// A model's parameter covariance and where its parameters sit (see `core::control::covariance`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Uncertainty {
+    pub covariance: ParameterCovariance,
+    pub layout: Layout,
+}
+
+/// The model file's covariance of `out`, when it holds one that describes `model`'s parameters:
+/// as many names and values as the model has parameters, a square symmetric matrix of finite
+/// numbers with no negative variance.
+fn uncertainty(out: &OutputModel, model: &ExtendedModel) -> Result<Option<Uncertainty>, ExportError> {
+    let Some(cov) = &out.covariance else { return Ok(None) };
+    let bad = |reason: String| ExportError::BadCovariance { output: out.name.clone(), reason };
+    let layout = parameter_layout(model).map_err(|e| bad(e.to_string()))?;
+    let (names, _) = parameters(model).map_err(|e| bad(e.to_string()))?;
+    let n = names.len();
+    if cov.names.len() != n || cov.values.len() != n {
+        return Err(bad(format!(
+            "it lists {} parameters with {} values, the model has {n} ({})",
+            cov.names.len(),
+            cov.values.len(),
+            names.join(", ")
+        )));
+    }
+    if cov.matrix.len() != n || cov.matrix.iter().any(|row| row.len() != n) {
+        return Err(bad(format!("its matrix is not {n} × {n}")));
+    }
+    let finite = cov.values.iter().chain(cov.matrix.iter().flatten()).all(|v| v.is_finite());
+    let symmetric = (0..n).all(|i| {
+        (0..n).all(|j| {
+            (cov.matrix[i][j] - cov.matrix[j][i]).abs() <= 1e-9 * (cov.matrix[i][i] * cov.matrix[j][j]).sqrt()
+        })
+    });
+    if !finite || !symmetric || (0..n).any(|i| cov.matrix[i][i] < 0.0) {
+        return Err(bad(
+            "its matrix is not a covariance (finite, symmetric, no negative variance)".to_owned()
+        ));
+    }
+    Ok(Some(Uncertainty { covariance: cov.clone(), layout }))
 }
 
 impl OutputPlan {
@@ -272,6 +316,7 @@ fn output_plan(out: &OutputModel) -> Result<OutputPlan, ExportError> {
     if split.needed() {
         plan.linear = Linear::Split(spool(out, tf, &poles, &zeros, split)?);
     }
+    plan.uncertainty = uncertainty(out, &model)?;
     Ok(plan)
 }
 
@@ -323,6 +368,7 @@ fn direct_plan(out: &OutputModel, model: &ExtendedModel) -> OutputPlan {
             Filter { num_zinv, den_zinv, steady_gain: 1.0 }
         },
         effects: model.effects.iter().map(|e| e.id().name()).collect(),
+        uncertainty: None,
     }
 }
 

@@ -3,6 +3,7 @@
 use super::parts::{self, Block, Step};
 use super::plan::{Filter, Linear, OutputPlan, Plan};
 use super::{header, list, num};
+use crate::core::control::covariance::Slot;
 use crate::core::identification::static_map::Beyond;
 
 pub(super) fn render(plan: &Plan) -> String {
@@ -14,6 +15,7 @@ pub(super) fn render(plan: &Plan) -> String {
     text.push_str(&constants(plan));
     text.push_str(&outputs_dict(plan));
     text.push_str(&tf_coeffs_dict(plan));
+    text.push_str(&covariance_dict(plan));
     text.push_str(RUNTIME);
     text.push_str(READ_RUN);
     text.push_str(MAIN);
@@ -49,6 +51,44 @@ fn tf_coeffs_dict(plan: &Plan) -> String {
         .collect();
     format!("{TF_COEFFS_COMMENT}TF_COEFFS = {{\n{entries}}}\n")
 }
+
+/// `COVARIANCE`: per output, the model file's parameter covariance and where the parameters sit
+/// (`None` when the file holds none).
+fn covariance_dict(plan: &Plan) -> String {
+    let slots = |slots: &[Slot]| {
+        let names: Vec<&str> =
+            slots.iter().map(|s| if *s == Slot::Pair { "\"pair\"" } else { "\"real\"" }).collect();
+        format!("[{}]", names.join(", "))
+    };
+    let entries: String = plan
+        .outputs
+        .iter()
+        .map(|out| {
+            let body = out.uncertainty.as_ref().map(|u| {
+                let c = &u.covariance;
+                let names: Vec<String> = c.names.iter().map(|n| string(n)).collect();
+                let rows: Vec<String> = c.matrix.iter().map(|r| list(r, "[", "]")).collect();
+                dict(&[
+                    ("names", format!("[{}]", names.join(", "))),
+                    ("values", list(&c.values, "[", "]")),
+                    ("matrix", format!("[{}]", rows.join(", "))),
+                    ("poles", slots(&u.layout.poles)),
+                    ("zeros", slots(&u.layout.zeros)),
+                    ("map", u.layout.map.to_string()),
+                    ("steady_gain", num(u.layout.steady_gain)),
+                    ("delay", u.layout.delay.to_string()),
+                ])
+            });
+            format!("    {:?}: {},\n", out.name, option(body))
+        })
+        .collect();
+    format!("{COVARIANCE_COMMENT}COVARIANCE = {{\n{entries}}}\n")
+}
+
+const COVARIANCE_COMMENT: &str = "\n# Per output: the covariance of the model's parameters from its fit to the identification run \
+    (None when\n# the model file holds none): names, values, matrix, and where the parameters sit (poles as \
+    atanh of a real\n# pole / of a pair's modulus with its angle, then zeros, the static map's coefficients, each effect's \
+    free\n# parameters). See sample_models().\n";
 
 const OUTPUTS_COMMENT: &str =
     "# Per output: the numbers of every step of its signal path (see simulate()).\n";
@@ -160,9 +200,12 @@ const USAGE: &str = r#"#
 #   --calibrate            read the measured outputs for calibration_drift's per-run offset, as
 #                          `jetid predict ... --map output=NAME` does
 # Import: simulate(u, aux, measured) -> {output: array}; operating_point(output, u_star) -> the
-#   local linear model as a control.TransferFunction; load_run(path, LoadOptions()) reads a run
+#   local linear model as a control.TransferFunction; sample_models(output, n, seed) -> models drawn
+#   from the parameter covariance; operating_point_ci95(output, u_star) -> the 95 % interval of the
+#   local gain; load_run(path, LoadOptions()) reads a run
 #   file as jetid does. Needs numpy; TF and operating_point also python-control, imported only
 #   when they are used (it takes a second or two to load), so the command line starts at once.
+import cmath
 import math
 import os
 import re

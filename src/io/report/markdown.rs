@@ -274,32 +274,60 @@ fn control_section(out: &mut String, o: &OutputReport, input_unit: &str) {
     let _ = writeln!(
         out,
         "Local model at each point: K·G(z)/G(1), K the local gain dy/du, with the effects linearised there. \
-         Poles as τ (real) or ωn, ζ (pairs), from their zero-order-hold equivalents.\n\n\
+         Poles as τ (real) or ωn, ζ (pairs), from their zero-order-hold equivalents. \
+         `x −a/+b`: the 95 % interval from x − a to x + b, the 2.5 and 97.5 percentiles over models drawn \
+         from the parameter covariance (report.json: `*_ci95`).\n\n\
          | point | u*{u_unit} | y*{unit} | dy/du [{gain_unit}] | poles | −3 dB bandwidth (rad/s) | rise 10–90 % (s) | settling 2 % (s) | overshoot % |\n\
          |---|---|---|---|---|---|---|---|---|",
         u_unit = crate::core::run::bracketed_unit(input_unit),
         unit = crate::core::run::bracketed_unit(&o.unit),
         gain_unit = gain_unit(&o.unit, input_unit),
     );
-    let opt = |x: Option<f64>, digits: usize| x.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
+    let opt = |x: Option<f64>, ci: Option<[f64; 2]>, digits: usize| {
+        x.map_or("–".to_owned(), |v| with_interval(v, ci, digits))
+    };
     for p in &o.operating_points {
         let source = match &p.source {
             crate::core::control::PointSource::Grid => "grid".to_owned(),
             crate::core::control::PointSource::SteadyRun(run) => format!("steady run `{run}`"),
         };
-        let poles: Vec<String> = p.poles.iter().map(|r| r.describe(3)).collect();
+        let poles: Vec<String> = p.poles.iter().map(pole_with_interval).collect();
         let _ = writeln!(
             out,
-            "| {source} | {:.4} | {:.4} | {:.5} | {} | {} | {} | {} | {:.1} |",
+            "| {source} | {:.4} | {:.4} | {} | {} | {} | {} | {} | {:.1} |",
             p.u,
             p.y,
-            p.gain,
+            with_interval(p.gain, p.gain_ci95, 5),
             poles.join("; "),
-            opt(p.bandwidth_rad_s, 3),
-            opt(p.step.rise_s, 3),
-            opt(p.step.settling_s, 3),
+            opt(p.bandwidth_rad_s, p.bandwidth_rad_s_ci95, 3),
+            opt(p.step.rise_s, p.step.rise_s_ci95, 3),
+            opt(p.step.settling_s, p.step.settling_s_ci95, 3),
             p.step.overshoot_pct
         );
+    }
+}
+
+/// `value −a/+b`: the value and how far its 95 % interval reaches below and above it (the
+/// operating points' intervals are percentiles of drawn models, not symmetric); the value alone
+/// without an interval.
+fn with_interval(value: f64, ci95: Option<[f64; 2]>, digits: usize) -> String {
+    match ci95 {
+        Some([lo, hi]) => {
+            let sig = digits.min(3);
+            format!("{value:.digits$} −{:.sig$}/+{:.sig$}", (value - lo).max(0.0), (hi - value).max(0.0))
+        }
+        None => format!("{value:.digits$}"),
+    }
+}
+
+/// A local pole as `τ 1.820 −0.1/+0.2 s` or `ωn …, ζ …`, with its intervals where it has them.
+fn pole_with_interval(p: &crate::core::control::LocalPole) -> String {
+    match (p.tau_s, p.wn_rad_s, p.zeta) {
+        (Some(tau), _, _) => format!("τ {} s", with_interval(tau, p.tau_s_ci95, 3)),
+        (None, Some(wn), Some(zeta)) => {
+            format!("ωn {}, ζ {}", with_interval(wn, p.wn_rad_s_ci95, 3), with_interval(zeta, p.zeta_ci95, 3))
+        }
+        _ => p.describe(3),
     }
 }
 

@@ -308,22 +308,13 @@ pub fn assemble(
         data.held_out.clone(),
     )?;
     let v = linear.simulate(data.u);
-    let tail = ((data.settings.settle_secs / fits.dt_secs).round() as usize).max(3);
-    let mut steady_points = Vec::with_capacity(fits.segments.len() + 1);
-    let window = |a: usize, b: usize| -> Option<(f64, f64)> {
-        let (a, b) = (a.checked_sub(data.start)?, b.checked_sub(data.start)?);
-        if data.held_out.as_ref().is_some_and(|out| out.start < b && a < out.end) {
-            return None;
-        }
-        Some((mean(v.get(a..b)?), mean(data.y.get(a..b)?)))
-    };
-    if let Some(point) = fits.segments.first().and_then(|first| window(data.start, first.step_at)) {
-        steady_points.push(point);
-    }
-    for seg in &fits.segments {
-        let (a, b) = seg.settled_tail(tail);
-        steady_points.extend(window(a, b));
-    }
+    let steady_points: Vec<(f64, f64)> = steady_windows(data)
+        .into_iter()
+        .filter_map(|w| {
+            let local = w.start - data.start..w.end - data.start;
+            Some((mean(v.get(local.clone())?), mean(data.y.get(local)?)))
+        })
+        .collect();
     let (vs, ys): (Vec<f64>, Vec<f64>) = steady_points.iter().copied().unzip();
     let (order, suggestion) = match static_order {
         Some(order) => (order, None),
@@ -335,6 +326,30 @@ pub fn assemble(
     let map = fit_static_map(&vs, &ys, order)?;
     let residual = v.iter().zip(data.y).map(|(vk, yk)| map.eval(*vk) - yk).collect();
     Ok(Assembled { wiener: WienerModel { linear, map }, steady_points, suggestion, residual })
+}
+
+/// The windows of the identification run whose means are the static map's steady points, in run
+/// indices: the hold before the first step, then each segment's settled tail (the last
+/// `settle_secs`, at most half the segment after its step); windows that touch the held-out samples
+/// or leave the data are left out.
+pub fn steady_windows(data: &IdentData) -> Vec<std::ops::Range<usize>> {
+    let fits = data.fits;
+    let tail = ((data.settings.settle_secs / fits.dt_secs).round() as usize).max(3);
+    let end = data.start + data.u.len().min(data.y.len());
+    let usable = |a: usize, b: usize| -> Option<std::ops::Range<usize>> {
+        let (la, lb) = (a.checked_sub(data.start)?, b.checked_sub(data.start)?);
+        if data.held_out.as_ref().is_some_and(|out| out.start < lb && la < out.end) || b > end || a >= b {
+            return None;
+        }
+        Some(a..b)
+    };
+    let mut windows = Vec::with_capacity(fits.segments.len() + 1);
+    windows.extend(fits.segments.first().and_then(|first| usable(data.start, first.step_at)));
+    for seg in &fits.segments {
+        let (a, b) = seg.settled_tail(tail);
+        windows.extend(usable(a, b));
+    }
+    windows
 }
 
 /// Assemble the model of a list of root groups.

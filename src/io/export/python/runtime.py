@@ -439,3 +439,80 @@ def operating_point(output, u_star):
     k = static_map_slope(output, v_star) * g1
     num, den = local_dynamics(output, u_star)
     return _tf_zinv(k * num, den)
+
+
+def _roots(kinds, x, bounded):
+    """Roots from their coordinates (see COVARIANCE): atanh of a real pole / of a pair's modulus with
+    its angle when bounded (poles), the positions themselves otherwise (zeros). Returns the roots and
+    how many coordinates they took."""
+    roots, at = [], 0
+    for kind in kinds:
+        if kind == "real":
+            roots.append(complex(math.tanh(x[at]) if bounded else x[at], 0.0))
+            at += 1
+        else:
+            z = cmath.rect(math.tanh(x[at]), x[at + 1]) if bounded else complex(x[at], x[at + 1])
+            roots += [z, z.conjugate()]
+            at += 2
+    return roots, at
+
+
+def _covariance(output):
+    c = COVARIANCE[output]
+    if c is None:
+        raise ValueError(f"the model file holds no parameter covariance for {output!r}: re-run `jetid --batch`")
+    return c
+
+
+def sample_parameters(output, n, seed=0):
+    """n parameter vectors (rows, in the order of COVARIANCE[output]["names"]) drawn from the normal
+    distribution of the covariance, reproducibly from seed."""
+    c = _covariance(output)
+    rng = np.random.default_rng(seed)
+    return rng.multivariate_normal(np.array(c["values"]), np.array(c["matrix"]), size=n, method="eigh")
+
+
+def model_at(output, theta):
+    """The model of parameter vector theta: {"theta", "tf": the linear block G(z) as a
+    control.TransferFunction (its roots from theta, its steady gain and dead time held), "map": the
+    static map as OUTPUTS[output]["map"] with theta's coefficients, "effects": each effect's free
+    parameters}. The effects' parameters are given as drawn, in the form the fit moves them."""
+    c = _covariance(output)
+    poles, at = _roots(c["poles"], theta, True)
+    zeros, used = _roots(c["zeros"], theta[at:], False)
+    at += used
+    den = np.real(np.poly(poles))
+    num = np.real(np.poly(zeros)) if zeros else np.array([1.0])
+    num = num * c["steady_gain"] / (np.sum(num) / np.sum(den))
+    num_zinv = [0.0] * (len(poles) - len(zeros) + c["delay"]) + list(num)
+    center, scale, _, end_trend = OUTPUTS[output]["map"]
+    m = c["map"]
+    return {
+        "theta": np.asarray(theta),
+        "tf": _tf_zinv(num_zinv, den),
+        "map": (center, scale, [float(b) for b in theta[at:at + m]], end_trend),
+        "effects": np.asarray(theta[at + m:]),
+    }
+
+
+def sample_models(output, n, seed=0):
+    """n models drawn from the parameter covariance (see model_at): the spread a robust controller
+    design has to allow for."""
+    return [model_at(output, theta) for theta in sample_parameters(output, n, seed)]
+
+
+def operating_point_ci95(output, u_star, n=2000, seed=0):
+    """The 95 % interval of the local gain dy/du at the steady input u_star: the 2.5 and 97.5
+    percentiles over n static maps drawn from the covariance (G(1) and the kink's knot held)."""
+    c = _covariance(output)
+    p = OUTPUTS[output]
+    g1 = c["steady_gain"]
+    v_star = g1 * u_star + p["offset"]
+    gains = []
+    for theta in sample_parameters(output, n, seed):
+        center, scale, coeffs, end_trend = model_at(output, theta)["map"]
+        slope = _map_polynomial(coeffs, end_trend, (v_star - center) / scale)[1] / scale
+        if p["kink"] is not None and v_star > p["kink"][0]:
+            slope += p["kink"][1]
+        gains.append(slope * g1)
+    return {"gain": [float(np.percentile(gains, 2.5)), float(np.percentile(gains, 97.5))]}

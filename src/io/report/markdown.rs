@@ -310,7 +310,7 @@ fn control_section(out: &mut String, o: &OutputReport, input_unit: &str) {
 /// `value −a/+b`: the value and how far its 95 % interval reaches below and above it (the
 /// operating points' intervals are percentiles of drawn models, not symmetric); the value alone
 /// without an interval.
-fn with_interval(value: f64, ci95: Option<[f64; 2]>, digits: usize) -> String {
+pub fn with_interval(value: f64, ci95: Option<[f64; 2]>, digits: usize) -> String {
     match ci95 {
         Some([lo, hi]) => {
             let sig = digits.min(3);
@@ -321,7 +321,7 @@ fn with_interval(value: f64, ci95: Option<[f64; 2]>, digits: usize) -> String {
 }
 
 /// A local pole as `τ 1.820 −0.1/+0.2 s` or `ωn …, ζ …`, with its intervals where it has them.
-fn pole_with_interval(p: &crate::core::control::LocalPole) -> String {
+pub fn pole_with_interval(p: &crate::core::control::LocalPole) -> String {
     match (p.tau_s, p.wn_rad_s, p.zeta) {
         (Some(tau), _, _) => format!("τ {} s", with_interval(tau, p.tau_s_ci95, 3)),
         (None, Some(wn), Some(zeta)) => {

@@ -134,6 +134,9 @@ pub struct LiveModel {
     /// The committed model's first look: not polished and without its effects, shown while the
     /// finished model is computed on a worker thread.
     pub finishing: bool,
+    /// The bands of the finished model's parameter uncertainty (`Err`: why there are none; a drag
+    /// preview and a model being finished have none yet).
+    pub uncertainty: Result<std::sync::Arc<crate::ui::derived::uncertainty::ModelUncertainty>, String>,
 }
 
 /// A model by value: its Wiener part and its effects with their fitted parameters. A model built

@@ -12,6 +12,7 @@ pub mod live_model;
 mod model_build;
 pub mod model_cache;
 pub mod residuals;
+pub mod uncertainty;
 use std::sync::Arc;
 
 use egui_plot::PlotPoint;

@@ -20,6 +20,7 @@ use crate::core::identification::settings::OutputSettings;
 use crate::core::run::{Run, RunRole};
 use crate::ui::derived::ident_runs::ScoredSource;
 use crate::ui::derived::live_model::{EffectsOutcome, LiveModel, ScoredRun, Unavailable, next_model_id};
+use crate::ui::derived::uncertainty;
 use crate::workflow::model::{self, EffectPlan, ModelSource};
 
 /// Cluster evaluations and the model, as a cache keeps them.
@@ -74,6 +75,9 @@ impl ModelInputs {
         let (evals, mut live) = self.build(source, settings);
         if let (Ok(live), Ok(fits)) = (&mut live, &self.fits) {
             self.add_effects(live, fits, settings, progress);
+            let runs: Vec<&Run> = self.scored.iter().map(|s| s.run.as_ref()).collect();
+            live.uncertainty =
+                uncertainty::of(&live.current_model(), fits, &self.run, settings, &runs, &self.omegas_rad_s);
         }
         (evals, live)
     }
@@ -164,6 +168,7 @@ impl ModelInputs {
             runs: scored,
             polish_requested: settings.refine,
             finishing: false,
+            uncertainty: Err("the parameter uncertainty is computed once the model is finished".to_owned()),
         }
     }
 }

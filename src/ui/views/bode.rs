@@ -15,6 +15,9 @@ const Y_AXIS_WIDTH: f32 = 64.0;
 const EMPIRICAL_NAME: &str = "chirp (measured)";
 /// The legend entry of the reduced model.
 const REDUCED_NAME: &str = "reduced model G(z)";
+/// The legend entry of its band: 2.5 to 97.5 percentiles over models drawn from the parameter
+/// covariance.
+const BAND_NAME: &str = "G(z): 95 % band (parameters)";
 
 #[derive(Default)]
 pub struct BodeViewState {
@@ -96,8 +99,11 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &BodeViewState) {
                 );
             }
         }
-        if view.live.is_ok() {
+        if let Ok(live) = view.live {
             plot_util::line_key_ui(ui, theme::REDUCED, 3.0, false, REDUCED_NAME);
+            if live.uncertainty.is_ok() {
+                plot_util::line_key_ui(ui, theme::REDUCED.gamma_multiply(0.3), 8.0, false, BAND_NAME);
+            }
         }
         if !view.output.empirical_bode.points.is_empty() {
             plot_util::diamond_key_ui(ui, theme::EMPIRICAL, EMPIRICAL_NAME);
@@ -115,6 +121,19 @@ fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: 
         }
     }
     if let Ok(live) = view.live {
+        if let Ok(u) = &live.uncertainty {
+            let x: Vec<f64> = u.bode.omega_rad_s.iter().map(|w| w.log10()).collect();
+            let pick = |k: usize| -> Vec<f64> {
+                let side = |b: &[f64; 2]| b[k];
+                match part {
+                    Part::Magnitude => u.bode.mag_db.iter().map(side).collect(),
+                    Part::Phase => u.bode.phase_deg.iter().map(side).collect(),
+                }
+            };
+            if let Some(band) = plot_util::band(BAND_NAME, &x, &pick(0), &pick(1), theme::REDUCED) {
+                plot_ui.add(band);
+            }
+        }
         plot_ui.line(Line::new(REDUCED_NAME, curve(&live.bode, part)).color(theme::REDUCED).width(3.0));
     }
 }

@@ -6,10 +6,12 @@ use crate::core::run::RunRole;
 use egui::RichText;
 use egui_plot::{Legend, Line, MarkerShape, Plot, Points};
 
-use crate::core::control::{OperatingPoint, PointSource, identified_range, operating_points};
+use crate::core::control::{OperatingPoint, PointSource, bands, identified_range, operating_points};
+use crate::core::effects::ExtendedModel;
 use crate::core::numerics::stats::mean;
 use crate::core::numerics::tf::log_space;
 use crate::ui::derived::Derived;
+use crate::ui::derived::uncertainty::ModelUncertainty;
 use crate::ui::state::session::Session;
 use crate::ui::theme;
 use crate::ui::widgets::model as model_ui;
@@ -25,12 +27,55 @@ const Y_AXIS_WIDTH: f32 = 64.0;
 /// Bode points of the local model.
 const BODE_POINTS: usize = 300;
 
-#[derive(Default)]
 pub struct ControlViewState {
     /// Index of the point whose Bode is shown.
     pub selected: usize,
     /// The points of the model last drawn: (output, model id, points or why there are none).
     cache: Option<(String, u64, Result<Vec<OperatingPoint>, String>)>,
+    /// Their uncertainty: the 95 % band of each point's normalised step response (over the step
+    /// plot's horizon), or why there are no intervals.
+    bands: Result<StepBands, String>,
+}
+
+/// The 95 % bands of the points' normalised step responses, from models drawn from the parameter
+/// covariance.
+#[derive(Default)]
+struct StepBands {
+    /// Per point: (low, high) at each sample of the horizon.
+    per_point: Vec<Option<(Vec<f64>, Vec<f64>)>>,
+}
+
+impl Default for ControlViewState {
+    fn default() -> Self {
+        Self { selected: 0, cache: None, bands: Err(String::new()) }
+    }
+}
+
+/// The step plot's horizon: one and a half times the slowest settling time, at least 1.5 s.
+fn step_horizon(points: &[OperatingPoint]) -> f64 {
+    points.iter().filter_map(|p| p.step.settling_s).fold(0.0, f64::max).max(1.0) * 1.5
+}
+
+/// Fill the points' intervals from the model's parameter uncertainty and compute their step bands.
+fn with_uncertainty(
+    points: &mut [OperatingPoint],
+    model: &ExtendedModel,
+    uncertainty: &ModelUncertainty,
+    range: (f64, f64),
+    plateaus: &[(String, f64)],
+) -> Result<StepBands, String> {
+    bands::with_intervals(points, model, &uncertainty.covariance, range, plateaus)
+        .map_err(|e| e.to_string())?;
+    let horizon_s = step_horizon(points);
+    // The same horizon and sample count as the step plot draws the responses over.
+    let per_point = points
+        .iter()
+        .map(|p| {
+            let n = ((horizon_s / p.local.dt_secs).ceil() as usize).clamp(2, 100_000);
+            bands::step_band(&uncertainty.draws, p.u, n)
+        })
+        .collect();
+    Ok(StepBands { per_point })
 }
 
 impl ControlViewState {
@@ -64,7 +109,12 @@ pub fn control_ui(
             .filter(|r| r.role == RunRole::Steady)
             .map(|r| (r.run.name.clone(), mean(&r.run.input.values)))
             .collect();
-        let points = operating_points(&model, range, &plateaus).map_err(|e| e.to_string());
+        let mut points = operating_points(&model, range, &plateaus).map_err(|e| e.to_string());
+        state.bands = match (&mut points, &live.uncertainty) {
+            (Ok(points), Ok(u)) => with_uncertainty(points, &model, u, range, &plateaus),
+            (_, Err(why)) => Err(why.clone()),
+            (Err(_), _) => Err(String::new()),
+        };
         state.cache = Some((output.to_owned(), live.id, points));
     }
     let Some((_, _, points)) = &state.cache else { return };
@@ -80,7 +130,8 @@ pub fn control_ui(
     model_ui::hint(
         ui,
         "Local model at each point: K·G(z)/G(1), K = dy/du there, effects linearised where they act. \
-         Nine points across the identified input range, plus each steady run's plateau. Click a row for its Bode.",
+         Nine points across the identified input range, plus each steady run's plateau. Click a row for its Bode. \
+         x −a/+b: the 95 % interval from x − a to x + b, over models drawn from the parameter covariance.",
     );
     let unit = &view.output.unit;
     let input = &ident.run.input;
@@ -99,7 +150,10 @@ pub fn control_ui(
                 &crate::io::report::markdown::gain_unit(unit, &input.unit),
             )
         });
-        ui.allocate_ui(egui::vec2(half, plot_height), |ui| step_plot(ui, output, points, state.selected));
+        let bands = state.bands.as_ref().ok();
+        ui.allocate_ui(egui::vec2(half, plot_height), |ui| {
+            step_plot(ui, output, points, state.selected, bands)
+        });
     });
     bode_plots(ui, output, &points[state.selected], plot_height, unit, &input.unit);
     table_ui(ui, points, &mut state.selected, table_height, unit, &input.unit);
@@ -146,6 +200,18 @@ fn schedule_plot(
         .legend(Legend::default().position(egui_plot::Corner::LeftBottom).follow_insertion_order(true))
         .show(ui, |plot_ui| {
             let gain_name = gain_legend(max_gain, gain_unit);
+            let with_ci: Vec<(f64, [f64; 2])> =
+                grid.iter().filter_map(|p| Some((p.u, p.gain_ci95?))).collect();
+            if with_ci.len() == grid.len() {
+                let x: Vec<f64> = with_ci.iter().map(|(u, _)| *u).collect();
+                let lo: Vec<f64> = with_ci.iter().map(|(_, ci)| ci[0] / max_gain).collect();
+                let hi: Vec<f64> = with_ci.iter().map(|(_, ci)| ci[1] / max_gain).collect();
+                if let Some(band) =
+                    plot_util::band("local gain: 95 % band (parameters)", &x, &lo, &hi, theme::MODEL)
+                {
+                    plot_ui.add(band);
+                }
+            }
             plot_ui.line(Line::new(gain_name.clone(), gain_of(&grid)).color(theme::MODEL).width(2.0));
             plot_ui.points(
                 Points::new(gain_name, gain_of(&grid))
@@ -181,9 +247,16 @@ fn schedule_plot(
         });
 }
 
-/// Step responses of every local model, normalised by their final values; the selected one thick.
-fn step_plot(ui: &mut egui::Ui, output: &str, points: &[OperatingPoint], selected: usize) {
-    let horizon = points.iter().filter_map(|p| p.step.settling_s).fold(0.0, f64::max).max(1.0) * 1.5;
+/// Step responses of every local model, normalised by their final values; the selected one thick,
+/// with its 95 % band from the parameter uncertainty when there is one.
+fn step_plot(
+    ui: &mut egui::Ui,
+    output: &str,
+    points: &[OperatingPoint],
+    selected: usize,
+    bands: Option<&StepBands>,
+) {
+    let horizon = step_horizon(points);
     Plot::new(("control_steps", output))
         .height(ui.available_height())
         .x_axis_label("time after the step [s]")
@@ -193,6 +266,18 @@ fn step_plot(ui: &mut egui::Ui, output: &str, points: &[OperatingPoint], selecte
         .y_grid_spacer(plot_util::grid_125_y)
         .legend(Legend::default().position(egui_plot::Corner::RightBottom).follow_insertion_order(true))
         .show(ui, |plot_ui| {
+            let selected_band = bands.and_then(|b| b.per_point.get(selected)?.as_ref());
+            if let (Some((lo, hi)), Some(p)) = (selected_band, points.get(selected)) {
+                let t: Vec<f64> = (0..lo.len()).map(|j| j as f64 * p.local.dt_secs).collect();
+                let colour = theme::ramp(if points.len() > 1 {
+                    selected as f32 / (points.len() - 1) as f32
+                } else {
+                    0.0
+                });
+                if let Some(band) = plot_util::band("selected: 95 % band (parameters)", &t, lo, hi, colour) {
+                    plot_ui.add(band);
+                }
+            }
             for (i, p) in points.iter().enumerate() {
                 let dt = p.local.dt_secs;
                 let n = ((horizon / dt).ceil() as usize).clamp(2, 100_000);
@@ -284,7 +369,14 @@ fn table_ui(
     unit: &str,
     input_unit: &str,
 ) {
-    let opt = |x: Option<f64>| x.map_or("–".to_owned(), |v| format!("{v:.3}"));
+    use crate::io::report::markdown::{pole_with_interval, with_interval};
+    let opt = |x: Option<f64>, ci: Option<[f64; 2]>| x.map_or("–".to_owned(), |v| with_interval(v, ci, 3));
+    let gain = |p: &OperatingPoint| match p.gain_ci95 {
+        Some([lo, hi]) => {
+            format!("{:.4e} −{:.2e}/+{:.2e}", p.gain, (p.gain - lo).max(0.0), (hi - p.gain).max(0.0))
+        }
+        None => format!("{:.4e}", p.gain),
+    };
     egui::ScrollArea::vertical().max_height(height).show(ui, |ui| {
         let grid = egui::Grid::new("control_table").striped(true).num_columns(9).spacing([14.0, ROW_SPACING]);
         grid.show(ui, |ui| {
@@ -312,12 +404,12 @@ fn table_ui(
                 }
                 ui.label(RichText::new(format!("{:.4}", p.u)).monospace());
                 ui.label(RichText::new(format!("{:.1}", p.y)).monospace());
-                ui.label(RichText::new(format!("{:.4e}", p.gain)).monospace());
-                let poles: Vec<String> = p.poles.iter().map(|r| r.describe(2)).collect();
+                ui.label(RichText::new(gain(p)).monospace());
+                let poles: Vec<String> = p.poles.iter().map(pole_with_interval).collect();
                 ui.label(poles.join("; "));
-                ui.label(RichText::new(opt(p.bandwidth_rad_s)).monospace());
-                ui.label(RichText::new(opt(p.step.rise_s)).monospace());
-                ui.label(RichText::new(opt(p.step.settling_s)).monospace());
+                ui.label(RichText::new(opt(p.bandwidth_rad_s, p.bandwidth_rad_s_ci95)).monospace());
+                ui.label(RichText::new(opt(p.step.rise_s, p.step.rise_s_ci95)).monospace());
+                ui.label(RichText::new(opt(p.step.settling_s, p.step.settling_s_ci95)).monospace());
                 ui.label(RichText::new(format!("{:.1}", p.step.overshoot_pct)).monospace());
                 ui.end_row();
             }

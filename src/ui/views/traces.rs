@@ -107,6 +107,11 @@ pub fn traces_ui(
         model_name: if scored.without_effects.is_some() { "gray-box + effects" } else { "gray-box model" },
         focus: state.focus_window.filter(|_| state.focus_pending),
         reset: std::mem::take(&mut state.reset_pending),
+        band: live
+            .runs
+            .iter()
+            .position(|r| r.index == scored.index)
+            .and_then(|i| live.uncertainty.as_ref().ok()?.run_bands.get(i)?.as_deref().ok()),
     };
     state.focus_pending = false;
     let spacing = ui.spacing().item_spacing.y;
@@ -156,6 +161,8 @@ struct Shown<'a> {
     focus: Option<(f64, f64)>,
     /// Show the whole run again on this frame.
     reset: bool,
+    /// Half-width of the 95 % band of the model's noiseless output from its parameter uncertainty.
+    band: Option<&'a [f64]>,
 }
 
 impl Shown<'_> {
@@ -163,6 +170,10 @@ impl Shown<'_> {
         self.measured.iter().zip(y_hat).map(|(y, yh)| y - yh).collect()
     }
 }
+
+/// The legend entry of the model's uncertainty band: around its trace above, around zero below (a
+/// residual beyond it is a miss the parameters' uncertainty does not explain).
+const BAND_NAME: &str = "95 % band of the model (parameters)";
 
 /// The measured output with the model (and the extra curves) over time.
 fn output_plot_ui(
@@ -208,6 +219,12 @@ fn output_plot_ui(
                     line.color(theme::WITHOUT_EFFECTS).width(1.2).style(LineStyle::Dashed { length: 6.0 }),
                 );
             }
+            if let Some(band) = shown
+                .band
+                .and_then(|h| plot_util::band_around(BAND_NAME, t, &scored.gray_box.y_hat, h, theme::MODEL))
+            {
+                plot_ui.add(band);
+            }
             let gray = Line::new(shown.model_name, series(t, scored.gray_box.y_hat.iter().copied()));
             plot_ui.line(gray.color(theme::MODEL).width(1.5));
         });
@@ -239,6 +256,12 @@ fn residual_plot_ui(
                 if let Some((lo, hi)) = range_in_window(t, model_residual.iter().copied(), window) {
                     plot_ui.set_plot_bounds_y(lo..=hi);
                 }
+            }
+            if let Some(band) = shown
+                .band
+                .and_then(|h| plot_util::band_around(BAND_NAME, t, &vec![0.0; h.len()], h, theme::MODEL))
+            {
+                plot_ui.add(band);
             }
             let residual = |y_hat: &[f64]| series(t, shown.residual_of(y_hat).into_iter());
             if let Some(without) = shown.without {

@@ -180,6 +180,52 @@ fn key_ui(ui: &mut egui::Ui, colour: egui::Color32, name: &str, mark_width: f32)
     rect
 }
 
+/// How opaque an uncertainty band is drawn: light enough that the lines over it stay readable.
+const BAND_ALPHA: u8 = 60;
+
+/// A 95 % uncertainty band between `lo` and `hi` over `x`, in `colour` washed out, without a
+/// border; `None` when the three do not have one value each per x (a band that does not belong to
+/// the curve it is drawn with) or nothing is finite. Non-finite points are left out.
+pub fn band(
+    name: &str,
+    x: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    colour: egui::Color32,
+) -> Option<egui_plot::FilledArea> {
+    if x.len() != lo.len() || x.len() != hi.len() {
+        return None;
+    }
+    let kept: Vec<usize> =
+        (0..x.len()).filter(|&k| x[k].is_finite() && lo[k].is_finite() && hi[k].is_finite()).collect();
+    if kept.is_empty() {
+        return None;
+    }
+    let pick = |v: &[f64]| -> Vec<f64> { kept.iter().map(|&k| v[k]).collect() };
+    let fill = egui::Color32::from_rgba_unmultiplied(colour.r(), colour.g(), colour.b(), BAND_ALPHA);
+    Some(
+        egui_plot::FilledArea::new(name, &pick(x), &pick(lo), &pick(hi))
+            .fill_color(fill)
+            .stroke(egui::Stroke::NONE),
+    )
+}
+
+/// [`band`] of `centre ± half`.
+pub fn band_around(
+    name: &str,
+    x: &[f64],
+    centre: &[f64],
+    half: &[f64],
+    colour: egui::Color32,
+) -> Option<egui_plot::FilledArea> {
+    if centre.len() != half.len() {
+        return None;
+    }
+    let lo: Vec<f64> = centre.iter().zip(half).map(|(c, h)| c - h).collect();
+    let hi: Vec<f64> = centre.iter().zip(half).map(|(c, h)| c + h).collect();
+    band(name, x, &lo, &hi, colour)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

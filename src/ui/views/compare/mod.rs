@@ -257,6 +257,20 @@ pub fn compare_ui(
         let plot_height = (rest - 2.0 * ui.spacing().item_spacing.y - SEPARATOR_HEIGHT)
             .clamp(compare_plots::MIN_PLOT_HEIGHT, compare_plots::PLOT_HEIGHT);
         let label = view.output.label();
+        let bands: Vec<(&str, &[f64])> = match view.live.as_ref() {
+            Ok(live) => live
+                .uncertainty
+                .as_ref()
+                .map(|u| {
+                    live.runs
+                        .iter()
+                        .zip(&u.run_bands)
+                        .filter_map(|(run, band)| Some((run.name.as_str(), band.as_deref().ok()?)))
+                        .collect()
+                })
+                .unwrap_or_default(),
+            Err(_) => Vec::new(),
+        };
         let selected = compare_plots::traces_and_frequency_ui(
             ui,
             &compare_plots::Row {
@@ -264,6 +278,7 @@ pub fn compare_ui(
                 shown_run: shown_run.as_deref(),
                 output_label: &label,
                 height: plot_height,
+                bands: &bands,
             },
         );
         ui.separator();

@@ -26,6 +26,9 @@ pub struct Row<'a> {
     pub shown_run: Option<&'a str>,
     pub output_label: &'a str,
     pub height: f32,
+    /// Per run name: the half-width of the 95 % band of the gray-box model's noiseless output
+    /// from its parameter uncertainty.
+    pub bands: &'a [(&'a str, &'a [f64])],
 }
 
 /// The traces (left) and the chirp's frequency response (right); returns the run the user picked.
@@ -49,7 +52,7 @@ pub fn traces_and_frequency_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<Strin
 }
 
 fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
-    let Row { comparison, shown_run, output_label, height } = *row;
+    let Row { comparison, shown_run, output_label, height, bands } = *row;
     let runs = &comparison.runs;
     let shown = shown_run.and_then(|name| runs.iter().find(|r| r.run.name == name)).or(runs.first());
     let Some(shown) = shown else {
@@ -77,6 +80,10 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
         |values: &[f64]| -> PlotPoints<'static> { t.iter().zip(values).map(|(t, v)| [*t, *v]).collect() };
     let models: Vec<_> =
         MODELS.iter().filter_map(|m| shown.models.iter().find(|r| r.model == *m).map(|r| (*m, r))).collect();
+    let gray_box = models.iter().find(|(m, _)| *m == ModelKind::GrayBox).map(|(_, r)| r.y_hat.as_slice());
+    let band = bands.iter().find(|(name, _)| *name == shown.run.name).and_then(|(_, half)| {
+        plot_util::band_around(BAND_NAME, t, gray_box?, half, model_colour(ModelKind::GrayBox))
+    });
     // The key sits above the plot: eight entries inside it covered the first minute of data.
     let key_top = ui.cursor().top();
     ui.horizontal_wrapped(|ui| {
@@ -86,6 +93,16 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
             let (width, dashed) = trace_style(*model);
             ui.add_space(6.0);
             plot_util::line_key_ui(ui, model_colour(*model), width, dashed, model.label());
+        }
+        if band.is_some() {
+            ui.add_space(6.0);
+            plot_util::line_key_ui(
+                ui,
+                model_colour(ModelKind::GrayBox).gamma_multiply(0.3),
+                8.0,
+                false,
+                BAND_NAME,
+            );
         }
     });
     let key_height = ui.cursor().top() - key_top;
@@ -100,6 +117,9 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
             plot_ui.line(
                 Line::new("measured", series(&measured.values)).color(theme::MEASURED).width(MEASURED_WIDTH),
             );
+            if let Some(band) = band {
+                plot_ui.add(band);
+            }
             // The gray-box model last, on top.
             for (model, run) in models.iter().rev() {
                 let (width, dashed) = trace_style(*model);
@@ -115,6 +135,8 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
 }
 
 const MEASURED_WIDTH: f32 = 2.0;
+/// The key of the gray-box model's band.
+const BAND_NAME: &str = "gray-box: 95 % band (parameters)";
 
 /// A model's trace: width and whether dashed (the linear model and the simple references are, so
 /// the nonlinear models stand out).

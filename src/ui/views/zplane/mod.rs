@@ -233,6 +233,10 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
         mark_ui(ui, Mark::Circle { dashed: true }, theme::CLUSTER_INVALID, "invalid cluster");
         ui.add_space(8.0);
         mark_ui(ui, Mark::PoleAndZero, theme::REDUCED, "reduced model");
+        if view.live.as_ref().is_ok_and(|live| live.uncertainty.is_ok()) {
+            ui.add_space(8.0);
+            mark_ui(ui, Mark::Circle { dashed: false }, theme::REDUCED, "its 95 % regions (parameters)");
+        }
     });
 }
 

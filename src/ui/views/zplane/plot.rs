@@ -155,9 +155,29 @@ fn clusters_ui(plot_ui: &mut PlotUi<'_>, clusters: &[Cluster], valid: &[bool], s
     }
 }
 
-/// The reduced model's poles and zeros, large and on top.
+/// Points on each 95 % region's outline (smooth at the size a region is drawn).
+const REGION_POINTS: usize = 72;
+
+/// The reduced model's poles and zeros, large and on top, each with the 95 % region its parameter
+/// uncertainty gives (an ellipse for a pair and its mirror image, a bar along the axis for a real
+/// root) once the model is finished.
 fn reduced_roots_ui(plot_ui: &mut PlotUi<'_>, view: &LiveView<'_>) {
     let Ok(live) = view.live else { return };
+    if let Ok(u) = &live.uncertainty {
+        for region in &u.roots {
+            let outline = region.outline(REGION_POINTS);
+            let mirrored: Vec<[f64; 2]> = outline.iter().map(|[x, y]| [*x, -*y]).collect();
+            for points in [outline, mirrored] {
+                if points.iter().all(|[x, y]| x.is_finite() && y.is_finite()) {
+                    plot_ui.line(
+                        Line::new("95 % region of the roots (parameters)", points)
+                            .color(theme::REDUCED)
+                            .width(1.2),
+                    );
+                }
+            }
+        }
+    }
     let tf = &live.model.wiener.linear.tf;
     let poles = tf.poles().unwrap_or_default();
     let zeros = tf.zeros().unwrap_or_default();

@@ -85,6 +85,30 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
         md.contains("ωn (rad/s) | ζ | τ (s)") && md.contains(" ± "),
         "report.md shows the intervals as ±"
     );
+    // Every operating point carries the 95 % interval of its local gain, around the gain and on
+    // the physical (positive) side; model.json holds the covariance the intervals come from.
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("model.json")).unwrap()).unwrap();
+    for (i, output) in ["shaft_speed_rpm", "thrust_n"].into_iter().enumerate() {
+        for p in report["outputs"][output]["operating_points"].as_array().unwrap() {
+            let gain = p["gain"].as_f64().unwrap();
+            let (lo, hi) = (p["gain_ci95"][0].as_f64().unwrap(), p["gain_ci95"][1].as_f64().unwrap());
+            assert!(0.0 < lo && lo < gain && gain < hi, "{output}: gain {gain} in [{lo}, {hi}]");
+            for pole in p["poles"].as_array().unwrap() {
+                if let Some(tau) = pole["tau_s"].as_f64() {
+                    let ci = &pole["tau_s_ci95"];
+                    assert!(ci[0].as_f64().unwrap() < tau && tau < ci[1].as_f64().unwrap(), "{output}: {pole}");
+                }
+            }
+        }
+        let cov = &model["outputs"][i]["covariance"];
+        let n = cov["names"].as_array().unwrap().len();
+        assert!(n > 0 && cov["matrix"].as_array().unwrap().len() == n, "{output}: {cov}");
+    }
+    assert!(md.contains("x −a/+b") && md.contains("/+"), "report.md shows the operating points' intervals");
+    for figure in ["shaft_speed_rpm_traces_validation.png", "thrust_n_bode.png", "thrust_n_zplane.png"] {
+        assert!(out.join(figure).exists(), "{figure}");
+    }
     for channel in ["fuel_flow_gph", "shaft_speed_rpm", "thrust_n"] {
         let best = report["noise_fit"][channel]["best_by_log_likelihood"].as_str().unwrap();
         assert!(

@@ -54,8 +54,10 @@ fn jetcat_project_identifies_and_scores_runs_a_and_f() {
     );
     // Control-ready after the loop: every operating point has the physical sign and a continuous-time
     // local model, i.e. no pole of the model alternates sign every sample.
+    // The gain's 95 % interval from the parameter covariance stays on the physical side too.
     for point in report["outputs"]["rpm"]["operating_points"].as_array().unwrap() {
         assert!(point["gain"].as_f64().unwrap() > 0.0, "local gain: {point}");
+        assert!(point["gain_ci95"][0].as_f64().is_some_and(|lo| lo > 0.0), "gain interval: {point}");
         assert!(point["continuous_note"].is_null(), "no continuous-time local model: {point}");
         for pole in point["poles"].as_array().unwrap() {
             let z = pole["z"].as_array().unwrap();

@@ -30,7 +30,16 @@ pub struct OutputCurves<'a> {
     chirp: Option<ChirpCurves>,
     /// What could not be drawn, one sentence each.
     notes: Vec<String>,
+    /// The band of the final model's linear block from its parameter uncertainty.
+    bode_band: Option<bands::BodeBand>,
+    /// The 95 % region of each of its roots, as outlines in z.
+    regions: Vec<Vec<[f64; 2]>>,
 }
+
+/// Points on each root region's outline.
+const REGION_POINTS: usize = 72;
+/// Seed of the models drawn for the Bode band (the figure comes out the same on every run).
+const BAND_SEED: u64 = 0x6A65_7469_6402;
 
 /// A compared run with every model's simulation of it.
 struct RunTraces<'a> {
@@ -86,6 +95,14 @@ impl<'a> OutputCurves<'a> {
             traces,
             chirp: freq.and_then(chirp_curves),
             notes: notes.into_inner(),
+            bode_band: uncertain.and_then(|(model, cov)| {
+                let draws = cov.draw_models(model, bands::DRAWS, BAND_SEED).ok()?;
+                Some(bands::bode_band(&draws, &bode_grid(identified.fits.dt_secs)))
+            }),
+            regions: uncertain
+                .and_then(|(model, cov)| bands::root_regions(model, cov).ok())
+                .map(|rs| rs.iter().map(|r| r.outline(REGION_POINTS)).collect())
+                .unwrap_or_default(),
         }
     }
 }
@@ -178,11 +195,21 @@ pub fn output_figures(
     let title = format!("{output}: segment poles/zeros and clusters");
     keep(
         name.clone(),
-        figures::zplane_png(&dir.join(&name), &title, &fits.roots, &curves.identified.evals, fits.dt_secs),
+        figures::zplane_with_regions_png(
+            &dir.join(&name),
+            &title,
+            &fits.roots,
+            &curves.identified.evals,
+            fits.dt_secs,
+            &curves.regions,
+        ),
     );
     let name = format!("{output}_bode.png");
     let title = format!("{output}: segment models and the reduced model");
-    keep(name.clone(), figures::bode_png(&dir.join(&name), &title, &curves.bode, None));
+    keep(
+        name.clone(),
+        figures::bode_with_band_png(&dir.join(&name), &title, &curves.bode, None, curves.bode_band.as_ref()),
+    );
     let name = format!("{output}_static_map.png");
     let title = format!("{output}: static map f(v)");
     let v_label = "v (linear block output)";

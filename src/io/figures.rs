@@ -27,11 +27,11 @@ use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-pub use bode::{BodeCurve, EmpiricalBode, bode_png};
+pub use bode::{BodeCurve, EmpiricalBode, bode_png, bode_with_band_png};
 pub use residuals::residuals_png;
 pub use stats::{boxplot_png, histogram_png};
 pub use xy::{static_map_png, traces_png, traces_with_band_png};
-pub use zplane::{ZPLANE_SIZE, zplane_png};
+pub use zplane::{ZPLANE_SIZE, zplane_png, zplane_with_regions_png};
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/fonts/DejaVuSans-LICENSE.txt`).
 static FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");

@@ -389,4 +389,56 @@ mod tests {
             "the output band covers the true output on {band:.3} of the fresh run's samples"
         );
     }
+
+    /// Each root's region is the covariance of its position: drawn from the covariance, the fitted
+    /// system's roots spread in z as the regions say (variances within 15 % with 4,000 draws, whose
+    /// own sampling spread is √(2/4000) ≈ 2 %; the rest allows for the delta method's curvature),
+    /// and the Bode band and every step band hold the model's own curve.
+    #[test]
+    fn root_regions_and_bands_match_the_drawn_models() {
+        let pair = Complex64::new(0.75, 0.3);
+        let sys = TestSystem::with_poles(&[Complex64::new(0.9, 0.0), pair, pair.conj()], 0, 0.05, 77);
+        let data = IdentData::new(&sys.fits, &sys.run, &sys.settings).unwrap();
+        let start = [
+            RootGroup::free_real(RootKind::Pole, 0.85),
+            RootGroup::free_pair(RootKind::Pole, Complex64::new(0.7, 0.25)),
+        ];
+        let fitted = polish(&data, &start, 2).unwrap();
+        let model = ExtendedModel::new(OUTPUT, fitted.assembled.wiener);
+        let covariance = estimate(&model, &sys.run, &steady_windows(&data)).unwrap();
+        let regions = root_regions(&model, &covariance).unwrap();
+        assert_eq!(regions.len(), 2, "a real pole and a pair");
+        let draws = covariance.draw_models(&model, 4000, 3).unwrap();
+        for region in &regions {
+            let nearest = |m: &ExtendedModel| {
+                let (poles, _) = m.roots().unwrap();
+                poles
+                    .into_iter()
+                    .filter(|p| p.im >= 0.0)
+                    .min_by(|a, b| (a - region.centre).norm().total_cmp(&(b - region.centre).norm()))
+                    .unwrap()
+            };
+            let roots: Vec<Complex64> = draws.iter().map(nearest).collect();
+            let n = roots.len() as f64;
+            let mean = roots.iter().sum::<Complex64>() / n;
+            let var_re = roots.iter().map(|r| (r.re - mean.re).powi(2)).sum::<f64>() / (n - 1.0);
+            let var_im = roots.iter().map(|r| (r.im - mean.im).powi(2)).sum::<f64>() / (n - 1.0);
+            let [[c_re, _], [_, c_im]] = region.covariance;
+            assert!((var_re / c_re - 1.0).abs() < 0.15, "{region:?}: Re variance {var_re} against {c_re}");
+            if region.centre.im > 0.0 {
+                assert!((var_im / c_im - 1.0).abs() < 0.15, "{region:?}: Im variance {var_im} against {c_im}");
+            }
+        }
+        let omegas = crate::core::numerics::tf::log_space(0.01, 30.0, 60);
+        let band = bode_band(&draws, &omegas);
+        let own = model.wiener.linear.tf.bode_response(&omegas);
+        for (k, p) in own.iter().enumerate() {
+            let [lo, hi] = band.mag_db[k];
+            assert!(lo <= p.mag_db + 1e-9 && p.mag_db <= hi + 1e-9, "ω {}: {} outside {lo}..{hi}", p.omega_rad_s, p.mag_db);
+        }
+        let (lo, hi) = step_band(&draws, 2.0, 200).unwrap();
+        let unit = crate::core::control::local_dynamics(&model, 2.0).unwrap();
+        let own = unit.simulate_with_history(&[1.0; 200], 0.0, 0.0);
+        assert!((0..200).all(|k| lo[k] <= own[k] + 1e-9 && own[k] <= hi[k] + 1e-9), "the step band holds the model's own step");
+    }
 }

@@ -8,7 +8,11 @@ use super::legend::{LegendEntry, Swatch, draw_legend};
 use super::{
     Area, DrawResult, FigureError, chart_builder, check_len, house_style, padded_range, palette, render_chart,
 };
+use crate::core::control::bands::BodeBand;
 use crate::core::numerics::tf::BodePoint;
+
+/// The fill of a model's uncertainty band: light grey, under every curve.
+const BAND_FILL: RGBColor = RGBColor(200, 200, 200);
 
 /// Empirical points with at least this coherence are drawn filled, the others hollow and grey.
 pub const GOOD_COHERENCE: f64 = 0.8;
@@ -84,6 +88,22 @@ pub fn bode_png(
     curves: &[BodeCurve],
     empirical: Option<&EmpiricalBode>,
 ) -> Result<(), FigureError> {
+    bode_with_band_png(path, title, curves, empirical, None)
+}
+
+/// [`bode_png`] with a 95 % band (of the reduced model, from its parameter uncertainty) shaded
+/// under the curves, named in the legend.
+pub fn bode_with_band_png(
+    path: &Path,
+    title: &str,
+    curves: &[BodeCurve],
+    empirical: Option<&EmpiricalBode>,
+    band: Option<&BodeBand>,
+) -> Result<(), FigureError> {
+    if let Some(b) = band {
+        check_len(path, "band magnitude", b.mag_db.len(), b.omega_rad_s.len())?;
+        check_len(path, "band phase", b.phase_deg.len(), b.omega_rad_s.len())?;
+    }
     if let Some(e) = empirical {
         let n = e.omega_rad_s.len();
         check_len(path, "empirical magnitude", e.mag_db.len(), n)?;
@@ -104,9 +124,13 @@ pub fn bode_png(
         |chart_area, legend_area, (w_lo, w_hi)| {
             let (_, h) = chart_area.dim_in_pixel();
             let (top, bottom) = chart_area.split_vertically(h / 2);
-            draw_panel(&top, Panel::Magnitude, (w_lo, w_hi), curves, empirical)?;
-            draw_panel(&bottom, Panel::Phase, (w_lo, w_hi), curves, empirical)?;
-            draw_legend(legend_area, &legend_entries(curves, empirical))
+            draw_panel(&top, Panel::Magnitude, (w_lo, w_hi), curves, empirical, band)?;
+            draw_panel(&bottom, Panel::Phase, (w_lo, w_hi), curves, empirical, band)?;
+            let mut entries = legend_entries(curves, empirical);
+            if band.is_some() {
+                entries.push(LegendEntry::new("95 % band (parameters)", Swatch::Bar(BAND_FILL)));
+            }
+            draw_legend(legend_area, &entries)
         },
     )
 }
@@ -127,6 +151,7 @@ fn draw_panel(
     (w_lo, w_hi): (f64, f64),
     curves: &[BodeCurve],
     empirical: Option<&EmpiricalBode>,
+    band: Option<&BodeBand>,
 ) -> DrawResult {
     let values = curves
         .iter()
@@ -137,6 +162,26 @@ fn draw_panel(
     let (y_lo, y_hi) = padded_range(values, 0.05).unwrap_or((-1.0, 1.0));
     let mut chart = chart_builder(area).build_cartesian_2d((w_lo..w_hi).log_scale(), y_lo..y_hi)?;
     house_style(chart.configure_mesh().x_desc("ω (rad/s)").y_desc(panel.desc())).draw()?;
+    if let Some(b) = band {
+        let sides = match panel {
+            Panel::Magnitude => &b.mag_db,
+            Panel::Phase => &b.phase_deg,
+        };
+        // One quadrilateral per frequency step, clipped to the panel's range.
+        let clip = |v: f64| v.clamp(y_lo, y_hi);
+        let quads = (1..b.omega_rad_s.len()).filter_map(|k| {
+            let (w0, w1) = (b.omega_rad_s[k - 1], b.omega_rad_s[k]);
+            let ([l0, h0], [l1, h1]) = (sides[k - 1], sides[k]);
+            let finite = [w0, w1, l0, h0, l1, h1].iter().all(|v| v.is_finite()) && w0 > 0.0;
+            finite.then(|| {
+                Polygon::new(
+                    vec![(w0, clip(l0)), (w1, clip(l1)), (w1, clip(h1)), (w0, clip(h0))],
+                    BAND_FILL.filled(),
+                )
+            })
+        });
+        chart.draw_series(quads)?;
+    }
     // Thick curves first: a thin curve drawn under a thick one that it follows would vanish.
     for pass_emphasis in [true, false] {
         for (curve, color) in coloured(curves).filter(|(c, _)| c.emphasis == pass_emphasis) {

@@ -40,6 +40,19 @@ pub fn zplane_png(
     evals: &[ClusterEval],
     dt_secs: f64,
 ) -> Result<(), FigureError> {
+    zplane_with_regions_png(path, title, roots, evals, dt_secs, &[])
+}
+
+/// [`zplane_png`] with the 95 % region of each of the model's roots drawn over it (closed
+/// outlines in z, a pair's with its mirror image), named in the legend.
+pub fn zplane_with_regions_png(
+    path: &Path,
+    title: &str,
+    roots: &[SegmentRoots],
+    evals: &[ClusterEval],
+    dt_secs: f64,
+    regions: &[Vec<[f64; 2]>],
+) -> Result<(), FigureError> {
     if !(dt_secs.is_finite() && dt_secs > 0.0) {
         return Err(FigureError::InvalidParameter {
             path: path.to_path_buf(),
@@ -61,11 +74,26 @@ pub fn zplane_png(
         for (j, segment) in roots.iter().enumerate() {
             outside += draw_roots(&mut chart, segment, palette::series(j))?;
         }
+        for outline in regions {
+            let finite: Vec<(f64, f64)> = outline
+                .iter()
+                .filter(|[x, y]| x.is_finite() && y.is_finite())
+                .map(|[x, y]| (*x, *y))
+                .collect();
+            let mirrored: Vec<(f64, f64)> = finite.iter().map(|(x, y)| (*x, -*y)).collect();
+            for line in [finite, mirrored] {
+                chart.draw_series(LineSeries::new(line, palette::FIT.stroke_width(2)))?;
+            }
+        }
         if roots.iter().all(|s| s.poles.is_empty() && s.zeros.is_empty()) && evals.is_empty() {
             let style = desc_font().color(&palette::NOTE).pos(Pos::new(HPos::Center, VPos::Center));
             chart.plotting_area().draw(&Text::new("no roots or clusters", (0.0, 0.5), style))?;
         }
-        draw_legend(&legend_area, &legend_entries(roots, evals, dt_secs, outside))
+        let mut entries = legend_entries(roots, evals, dt_secs, outside);
+        if !regions.is_empty() {
+            entries.push(LegendEntry::line("roots' 95 % regions", palette::FIT, 2));
+        }
+        draw_legend(&legend_area, &entries)
     })
 }
 

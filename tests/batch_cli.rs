@@ -97,15 +97,30 @@ fn batch_on_the_bundled_runs_writes_model_and_reports() {
             for pole in p["poles"].as_array().unwrap() {
                 if let Some(tau) = pole["tau_s"].as_f64() {
                     let ci = &pole["tau_s_ci95"];
-                    assert!(ci[0].as_f64().unwrap() < tau && tau < ci[1].as_f64().unwrap(), "{output}: {pole}");
+                    assert!(
+                        ci[0].as_f64().unwrap() < tau && tau < ci[1].as_f64().unwrap(),
+                        "{output}: {pole}"
+                    );
                 }
             }
+        }
+        // The map's coefficients and the continuous-time block's, each inside its interval.
+        let numbers = report["outputs"][output]["parameter_intervals"].as_array().unwrap();
+        for name in ["static map β0", "static map β1", "G(s) denominator s^0"] {
+            let p = numbers.iter().find(|p| p["name"] == name).unwrap_or_else(|| panic!("{output}: {name}"));
+            let (v, lo, hi) = (
+                p["value"].as_f64().unwrap(),
+                p["ci95"][0].as_f64().unwrap(),
+                p["ci95"][1].as_f64().unwrap(),
+            );
+            assert!(lo < v && v < hi, "{output}: {p}");
         }
         let cov = &model["outputs"][i]["covariance"];
         let n = cov["names"].as_array().unwrap().len();
         assert!(n > 0 && cov["matrix"].as_array().unwrap().len() == n, "{output}: {cov}");
     }
     assert!(md.contains("x −a/+b") && md.contains("/+"), "report.md shows the operating points' intervals");
+    assert!(md.contains("### Parameter uncertainty"), "report.md lists the parameters' intervals");
     for figure in ["shaft_speed_rpm_traces_validation.png", "thrust_n_bode.png", "thrust_n_zplane.png"] {
         assert!(out.join(figure).exists(), "{figure}");
     }

@@ -41,3 +41,16 @@ pub(super) fn control_report(
         .ok();
     (points, continuous)
 }
+
+/// The final model's numbers with their 95 % intervals; what could not be computed goes to `notes`.
+pub(super) fn parameter_report(
+    model: &ExtendedModel,
+    covariance: Option<&ParameterCovariance>,
+    notes: &mut Vec<String>,
+) -> Vec<bands::ParameterInterval> {
+    let Some(covariance) = covariance else { return Vec::new() };
+    bands::parameter_intervals(model, covariance).unwrap_or_else(|e| {
+        notes.push(format!("parameter intervals of '{}': {e}", model.output));
+        Vec::new()
+    })
+}

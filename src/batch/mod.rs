@@ -255,6 +255,7 @@ impl Batch<'_> {
         (out.operating_points, out.continuous) = timings.time(&format!("control_{output}"), || {
             control::control_report(extended, entry.covariance.as_ref(), runs, notes)
         });
+        out.parameter_intervals = control::parameter_report(extended, entry.covariance.as_ref(), notes);
         part.figures.extend(figs);
         if runs.steady.is_some() && self.input_noise.is_some() {
             part.monte_carlo = Some(compare::monte_carlo_summaries(&studies.monte_carlo));

@@ -52,6 +52,7 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
         failing: Vec::new(),
         failure_reasons: BTreeMap::new(),
         operating_points: Vec::new(),
+        parameter_intervals: Vec::new(),
         continuous: None,
         preparation: None,
     }

@@ -154,6 +154,68 @@ pub fn output_half_widths(
         .collect())
 }
 
+/// One number of the model with its 95 % interval (percentiles over models drawn from the
+/// covariance); `None` where too few draws have the number.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ParameterInterval {
+    pub name: String,
+    pub value: f64,
+    pub ci95: Option<[f64; 2]>,
+}
+
+/// Seed of the draws behind [`parameter_intervals`].
+const PARAMETER_SEED: u64 = 0x6A65_7469_6403;
+
+/// The numbers of `model` a user reads, each with its 95 % interval over [`DRAWS`] models drawn
+/// from the covariance:
+/// - the static map's plain coefficients β0, β1, … of f(v);
+/// - each effect's parameters in physical units, as its record names them;
+/// - the coefficients of the linear block's zero-order-hold continuous equivalent (descending
+///   powers of s, denominator monic), when the block has one.
+pub fn parameter_intervals(
+    model: &ExtendedModel,
+    covariance: &ParameterCovariance,
+) -> Result<Vec<ParameterInterval>, CovarianceError> {
+    let draws = covariance.draw_models(model, DRAWS, PARAMETER_SEED)?;
+    let numbers = |m: &ExtendedModel| -> Vec<(String, f64)> {
+        let mut out: Vec<(String, f64)> = m
+            .wiener
+            .map
+            .beta()
+            .into_iter()
+            .enumerate()
+            .map(|(k, b)| (format!("static map β{k}"), b))
+            .collect();
+        for record in m.records() {
+            out.extend(record.params.iter().map(|(name, v)| (format!("{}.{name}", record.id), *v)));
+        }
+        if let Ok(c) = super::d2c::d2c_zoh(&m.wiener.linear.tf) {
+            let n = c.num_s.len();
+            out.extend(
+                c.num_s.iter().enumerate().map(|(k, b)| (format!("G(s) numerator s^{}", n - 1 - k), *b)),
+            );
+            let d = c.den_s.len();
+            out.extend(
+                c.den_s
+                    .iter()
+                    .enumerate()
+                    .skip(1)
+                    .map(|(k, a)| (format!("G(s) denominator s^{}", d - 1 - k), *a)),
+            );
+        }
+        out
+    };
+    let drawn: Vec<Vec<(String, f64)>> = draws.iter().map(numbers).collect();
+    Ok(numbers(model)
+        .into_iter()
+        .map(|(name, value)| {
+            let values: Vec<f64> =
+                drawn.iter().filter_map(|d| d.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)).collect();
+            ParameterInterval { ci95: percentile_interval(values, DRAWS), name, value }
+        })
+        .collect())
+}
+
 /// The 2.5 and 97.5 percentiles, sample by sample, of the unit step responses of the drawn
 /// models' local dynamics at the steady input `u` (each normalised by its final value, as the
 /// operating points' step figures are), over `samples` samples; `None` when too few draws have
@@ -426,7 +488,10 @@ mod tests {
             let [[c_re, _], [_, c_im]] = region.covariance;
             assert!((var_re / c_re - 1.0).abs() < 0.15, "{region:?}: Re variance {var_re} against {c_re}");
             if region.centre.im > 0.0 {
-                assert!((var_im / c_im - 1.0).abs() < 0.15, "{region:?}: Im variance {var_im} against {c_im}");
+                assert!(
+                    (var_im / c_im - 1.0).abs() < 0.15,
+                    "{region:?}: Im variance {var_im} against {c_im}"
+                );
             }
         }
         let omegas = crate::core::numerics::tf::log_space(0.01, 30.0, 60);
@@ -434,11 +499,19 @@ mod tests {
         let own = model.wiener.linear.tf.bode_response(&omegas);
         for (k, p) in own.iter().enumerate() {
             let [lo, hi] = band.mag_db[k];
-            assert!(lo <= p.mag_db + 1e-9 && p.mag_db <= hi + 1e-9, "ω {}: {} outside {lo}..{hi}", p.omega_rad_s, p.mag_db);
+            assert!(
+                lo <= p.mag_db + 1e-9 && p.mag_db <= hi + 1e-9,
+                "ω {}: {} outside {lo}..{hi}",
+                p.omega_rad_s,
+                p.mag_db
+            );
         }
         let (lo, hi) = step_band(&draws, 2.0, 200).unwrap();
         let unit = crate::core::control::local_dynamics(&model, 2.0).unwrap();
         let own = unit.simulate_with_history(&[1.0; 200], 0.0, 0.0);
-        assert!((0..200).all(|k| lo[k] <= own[k] + 1e-9 && own[k] <= hi[k] + 1e-9), "the step band holds the model's own step");
+        assert!(
+            (0..200).all(|k| lo[k] <= own[k] + 1e-9 && own[k] <= hi[k] + 1e-9),
+            "the step band holds the model's own step"
+        );
     }
 }

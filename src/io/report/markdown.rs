@@ -307,6 +307,42 @@ fn control_section(out: &mut String, o: &OutputReport, input_unit: &str) {
     }
 }
 
+/// The final model's numbers with their 95 % intervals (report.json `parameter_intervals`).
+fn parameters_section(out: &mut String, o: &OutputReport) {
+    if o.parameter_intervals.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "\n### Parameter uncertainty\n\n\
+         The final model's numbers with their 95 % intervals: 2.5 and 97.5 percentiles over models drawn \
+         from the covariance of its fit to the identification run (stored in model.json). *not estimated*: \
+         a number the covariance does not move (set by the structure, or solved from the others inside \
+         its effect's own fit), so its spread is not known here; –: fewer than 90 % of the draws have it (a drawn pole on the \
+         negative real axis has no continuous-time equivalent).\n\n\
+         | number | value | 95 % interval |\n|---|---|---|"
+    );
+    for p in &o.parameter_intervals {
+        let interval = match p.ci95 {
+            Some([lo, hi]) if hi <= lo => "not estimated".to_owned(),
+            Some([lo, hi]) => format!("{} … {}", significant(lo), significant(hi)),
+            None => "–".to_owned(),
+        };
+        let _ = writeln!(out, "| {} | {} | {interval} |", p.name, significant(p.value));
+    }
+}
+
+/// Six significant digits, in scientific notation outside 0.001 to 10⁶.
+fn significant(x: f64) -> String {
+    match x.abs() {
+        a if a == 0.0 || (1e-3..1e6).contains(&a) => {
+            let digits = (5 - a.log10().floor().max(0.0) as i32).max(0) as usize;
+            format!("{x:.digits$}")
+        }
+        _ => format!("{x:.5e}"),
+    }
+}
+
 /// `value −a/+b`: the value and how far its 95 % interval reaches below and above it (the
 /// operating points' intervals are percentiles of drawn models, not symmetric); the value alone
 /// without an interval.
@@ -436,6 +472,7 @@ pub fn render_markdown(report: &Report) -> String {
         error_history_line(&mut out, o);
         diagnosis_table(&mut out, o);
         control_section(&mut out, o, &report.input_unit);
+        parameters_section(&mut out, o);
         residuals_section(&mut out, &o.residuals, &o.unit);
     }
     table1_section(&mut out, report);

@@ -91,6 +91,10 @@ pub struct OutputReport {
     /// its local linear model.
     #[serde(default)]
     pub operating_points: Vec<crate::core::control::OperatingPoint>,
+    /// The final model's numbers (static map, effects, continuous-time block) with their 95 %
+    /// intervals from its parameter covariance.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parameter_intervals: Vec<crate::core::control::bands::ParameterInterval>,
     /// Zero-order-hold continuous equivalent of the final model's linear block (input to v).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub continuous: Option<crate::core::control::ContinuousTf>,

@@ -102,7 +102,7 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &BodeViewState) {
         if let Ok(live) = view.live {
             plot_util::line_key_ui(ui, theme::REDUCED, 3.0, false, REDUCED_NAME);
             if live.uncertainty.is_ok() {
-                plot_util::line_key_ui(ui, theme::REDUCED.gamma_multiply(0.3), 8.0, false, BAND_NAME);
+                plot_util::line_key_ui(ui, theme::REDUCED.gamma_multiply(0.6), 8.0, false, BAND_NAME);
             }
         }
         if !view.output.empirical_bode.points.is_empty() {

@@ -98,7 +98,7 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
             ui.add_space(6.0);
             plot_util::line_key_ui(
                 ui,
-                model_colour(ModelKind::GrayBox).gamma_multiply(0.3),
+                model_colour(ModelKind::GrayBox).gamma_multiply(0.6),
                 8.0,
                 false,
                 BAND_NAME,

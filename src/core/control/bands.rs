@@ -13,7 +13,9 @@
 use num_complex::Complex64;
 
 use super::covariance::{CovarianceError, ParameterCovariance, Slot, model_at};
-use super::operating_point::{LocalPole, OperatingPoint, operating_points};
+#[cfg(test)]
+use super::operating_point::operating_points;
+use super::operating_point::{LocalPole, OperatingPoint, operating_points_without_continuous};
 use crate::core::effects::ExtendedModel;
 use crate::core::parallel::on_two_threads;
 use crate::core::run::Run;
@@ -74,7 +76,7 @@ pub fn with_intervals(
 ) -> Result<usize, CovarianceError> {
     let models = covariance.draw_models(model, DRAWS, SEED)?;
     let drawn: Vec<Vec<OperatingPoint>> =
-        on_two_threads(&models, |m| operating_points(m, input_range, plateaus).ok())
+        on_two_threads(&models, |m| operating_points_without_continuous(m, input_range, plateaus).ok())
             .into_iter()
             .flatten()
             .filter(|ps| ps.len() == points.len())

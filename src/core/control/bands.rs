@@ -366,6 +366,21 @@ mod tests {
     use crate::core::identification::wiener::unit_gain_tf;
     use crate::core::run::Channel;
 
+    /// The test system of `truth_poles` (noise σ 0.05, `seed`) fitted from a real root and a pair
+    /// started away from the truth, and its parameter covariance.
+    fn fitted(truth_poles: &[Complex64], seed: u64) -> (ExtendedModel, ParameterCovariance) {
+        let sys = TestSystem::with_poles(truth_poles, 0, 0.05, seed);
+        let data = IdentData::new(&sys.fits, &sys.run, &sys.settings).unwrap();
+        let start = [
+            RootGroup::free_real(RootKind::Pole, 0.85),
+            RootGroup::free_pair(RootKind::Pole, Complex64::new(0.7, 0.25)),
+        ];
+        let fitted = polish(&data, &start, 2).unwrap();
+        let model = ExtendedModel::new(OUTPUT, fitted.assembled.wiener);
+        let covariance = estimate(&model, &sys.run, &steady_windows(&data)).unwrap();
+        (model, covariance)
+    }
+
     /// A fresh run of the true system, noiseless: other levels than the identification run's,
     /// inside its range.
     fn fresh_truth(tf: &crate::core::numerics::tf::DiscreteTf) -> Run {
@@ -405,15 +420,7 @@ mod tests {
         let (mut gain_in, mut gains, mut tau_in, mut wn_in, mut zeta_in, mut seeds) = (0, 0, 0, 0, 0, 0);
         let (mut band_in, mut band_samples) = (0usize, 0usize);
         for seed in 0..40 {
-            let sys = TestSystem::with_poles(&truth_poles, 0, 0.05, 5000 + seed);
-            let data = IdentData::new(&sys.fits, &sys.run, &sys.settings).unwrap();
-            let start = [
-                RootGroup::free_real(RootKind::Pole, 0.85),
-                RootGroup::free_pair(RootKind::Pole, Complex64::new(0.7, 0.25)),
-            ];
-            let fitted = polish(&data, &start, 2).unwrap();
-            let model = ExtendedModel::new(OUTPUT, fitted.assembled.wiener);
-            let covariance = estimate(&model, &sys.run, &steady_windows(&data)).unwrap();
+            let (model, covariance) = fitted(&truth_poles, 5000 + seed);
             let mut points = operating_points(&model, (lo, hi), &[]).unwrap();
             with_intervals(&mut points, &model, &covariance, (lo, hi), &[]).unwrap();
             seeds += 1;
@@ -461,15 +468,7 @@ mod tests {
     #[test]
     fn root_regions_and_bands_match_the_drawn_models() {
         let pair = Complex64::new(0.75, 0.3);
-        let sys = TestSystem::with_poles(&[Complex64::new(0.9, 0.0), pair, pair.conj()], 0, 0.05, 77);
-        let data = IdentData::new(&sys.fits, &sys.run, &sys.settings).unwrap();
-        let start = [
-            RootGroup::free_real(RootKind::Pole, 0.85),
-            RootGroup::free_pair(RootKind::Pole, Complex64::new(0.7, 0.25)),
-        ];
-        let fitted = polish(&data, &start, 2).unwrap();
-        let model = ExtendedModel::new(OUTPUT, fitted.assembled.wiener);
-        let covariance = estimate(&model, &sys.run, &steady_windows(&data)).unwrap();
+        let (model, covariance) = fitted(&[Complex64::new(0.9, 0.0), pair, pair.conj()], 77);
         let regions = root_regions(&model, &covariance).unwrap();
         assert_eq!(regions.len(), 2, "a real pole and a pair");
         let draws = covariance.draw_models(&model, 4000, 3).unwrap();

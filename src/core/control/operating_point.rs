@@ -151,14 +151,7 @@ pub fn operating_points(
     input_range: (f64, f64),
     plateaus: &[(String, f64)],
 ) -> Result<Vec<OperatingPoint>, OperatingPointError> {
-    let (lo, hi) = input_range;
-    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
-        return Err(OperatingPointError::BadRange { output: model.output.clone(), lo, hi });
-    }
-    let grid =
-        (0..GRID_POINTS).map(|i| (PointSource::Grid, lo + (hi - lo) * i as f64 / (GRID_POINTS - 1) as f64));
-    let steady = plateaus.iter().map(|(run, u)| (PointSource::SteadyRun(run.clone()), *u));
-    grid.chain(steady).map(|(source, u)| operating_point(model, source, u, Detail::Full)).collect()
+    points_at(model, input_range, plateaus, Detail::Full)
 }
 
 /// [`operating_points`] for the models drawn from a covariance: without the continuous-time
@@ -169,11 +162,24 @@ pub(crate) fn operating_points_without_continuous(
     input_range: (f64, f64),
     plateaus: &[(String, f64)],
 ) -> Result<Vec<OperatingPoint>, OperatingPointError> {
+    points_at(model, input_range, plateaus, Detail::Draw)
+}
+
+/// The grid's points and the plateaus' in `detail`; a range that is empty or not finite refused.
+fn points_at(
+    model: &ExtendedModel,
+    input_range: (f64, f64),
+    plateaus: &[(String, f64)],
+    detail: Detail,
+) -> Result<Vec<OperatingPoint>, OperatingPointError> {
     let (lo, hi) = input_range;
+    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return Err(OperatingPointError::BadRange { output: model.output.clone(), lo, hi });
+    }
     let grid =
         (0..GRID_POINTS).map(|i| (PointSource::Grid, lo + (hi - lo) * i as f64 / (GRID_POINTS - 1) as f64));
     let steady = plateaus.iter().map(|(run, u)| (PointSource::SteadyRun(run.clone()), *u));
-    grid.chain(steady).map(|(source, u)| operating_point(model, source, u, Detail::Draw)).collect()
+    grid.chain(steady).map(|(source, u)| operating_point(model, source, u, detail)).collect()
 }
 
 /// How much of an operating point to compute.

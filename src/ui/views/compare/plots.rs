@@ -86,25 +86,8 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
     });
     // The key sits above the plot: eight entries inside it covered the first minute of data.
     let key_top = ui.cursor().top();
-    ui.horizontal_wrapped(|ui| {
-        ui.spacing_mut().item_spacing.x = 4.0;
-        plot_util::line_key_ui(ui, theme::MEASURED, MEASURED_WIDTH, false, "measured");
-        for (model, _) in &models {
-            let (width, dashed) = trace_style(*model);
-            ui.add_space(6.0);
-            plot_util::line_key_ui(ui, model_colour(*model), width, dashed, model.label());
-        }
-        if band.is_some() {
-            ui.add_space(6.0);
-            plot_util::line_key_ui(
-                ui,
-                model_colour(ModelKind::GrayBox).gamma_multiply(0.6),
-                8.0,
-                false,
-                BAND_NAME,
-            );
-        }
-    });
+    let kinds: Vec<ModelKind> = models.iter().map(|(m, _)| *m).collect();
+    key_ui(ui, &kinds, band.is_some());
     let key_height = ui.cursor().top() - key_top;
     Plot::new(("compare_traces", &comparison.output, &shown.run.name))
         .height(height - ui.spacing().interact_size.y - key_height)
@@ -132,6 +115,24 @@ fn traces_ui(ui: &mut egui::Ui, row: &Row<'_>) -> Option<String> {
             }
         });
     picked
+}
+
+/// The traces' key: the measurement, each model as its trace is drawn, and the band when there is one.
+fn key_ui(ui: &mut egui::Ui, models: &[ModelKind], band: bool) {
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 4.0;
+        plot_util::line_key_ui(ui, theme::MEASURED, MEASURED_WIDTH, false, "measured");
+        for model in models {
+            let (width, dashed) = trace_style(*model);
+            ui.add_space(6.0);
+            plot_util::line_key_ui(ui, model_colour(*model), width, dashed, model.label());
+        }
+        if band {
+            ui.add_space(6.0);
+            let colour = model_colour(ModelKind::GrayBox).gamma_multiply(0.6);
+            plot_util::line_key_ui(ui, colour, 8.0, false, BAND_NAME);
+        }
+    });
 }
 
 const MEASURED_WIDTH: f32 = 2.0;

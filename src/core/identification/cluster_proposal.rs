@@ -22,8 +22,13 @@
 //!
 //! The proposed circle keeps the centre and widens the radius by a margin for display, never past
 //! half-way to the nearest non-member nor so far that an off-axis centre would count as on the axis.
-//! Results are sorted by kind, then angle, then modulus. The search is O(R² · rounds) in the number
-//! of roots R, which is small (J · model order).
+//! Results are sorted by kind, then angle, then modulus.
+//!
+//! **Cost.** Growing a candidate looks at every segment's roots, O(R) for R = J · model order roots.
+//! Up to [`SEED_SEGMENTS`] segments every root in play seeds a candidate (O(R²) per accepted
+//! cluster); a long run's many segments seed from [`SEED_SEGMENTS`] of them spread evenly over the
+//! run, and the aggregation condition is relaxed in at most [`MAX_LEVELS`] steps, so that the search
+//! grows linearly with the segments (see those constants for why nothing is lost).
 //!
 //! **Relaxing the aggregation condition step by step.** A mode shared by 7 of 8 segment models is
 //! still a mode of the engine (one segment's ARX model may have put that root elsewhere, or the
@@ -52,6 +57,18 @@ const RADIUS_MARGIN: f64 = 1.25;
 const MIN_CIRCLE_RADIUS: f64 = 2e-3;
 /// Radii closer than this count as tied in the ranking.
 const RADIUS_TIE_TOL: f64 = 1e-9;
+/// Segments whose roots seed candidates when a run has more. A cluster the proposal may accept has
+/// members in a majority of the segments, and growing from any member converges on the same
+/// members (re-centring on their mean); it is missed only if none of these segments holds one. For
+/// a mode of the engine, whose absence from a segment's model has nothing to do with the segment's
+/// place in the run, that chance is at most 2⁻¹⁶ ≈ 1.5e-5. Up to this many segments every segment
+/// seeds, as the method has it.
+pub const SEED_SEGMENTS: usize = 16;
+/// Most aggregation conditions the relaxation tries, from all J segments down to a majority. At
+/// J ≤ 16 that is every condition, one segment at a time; beyond, the steps are J/16 segments wide
+/// or less. A finer step means nothing there: the share of segment models that hold a mode is known
+/// only to its binomial standard error √(p(1−p)/J), ≥ 0.05 for a share p ≥ 0.55 up to J = 100.
+pub const MAX_LEVELS: usize = 8;
 
 /// Proposes clusters of poles and zeros from the segment models' roots.
 ///
@@ -76,13 +93,15 @@ pub fn propose_clusters(
         return Err(ClusterError::TooFewSegments { found: needed, needed: 2 });
     }
     let floor = relaxed_floor(segments).min(needed);
+    let seeds = seed_segments(segments);
     let mut clusters = Vec::new();
     for kind in [RootKind::Pole, RootKind::Zero] {
         let folded = folded_roots(roots, kind);
         let mut in_play = folded.clone();
-        for m in (floor..=needed).rev() {
+        for m in relaxation_levels(needed, floor) {
             let own = (m < needed).then_some(m);
-            let found = propose_kind(kind, &folded, &mut in_play, &clusters, settings, m, dt_secs);
+            let search = Search { kind, folded: &folded, seeds: &seeds, settings, needed: m, dt_secs };
+            let found = search.propose(&mut in_play, &clusters);
             clusters.extend(found.into_iter().map(|c| c.with_min_segments(own)));
         }
     }
@@ -114,43 +133,86 @@ pub fn relaxed_floor(segments: usize) -> usize {
     (segments / 2 + 1).max(2)
 }
 
-/// Clusters of `kind` at aggregation condition `needed`, grown over the roots still `in_play`
-/// (their members are taken out of play), disjoint from the clusters in `earlier`.
-fn propose_kind(
+/// The segments whose roots seed candidates: all of them up to [`SEED_SEGMENTS`], else that many
+/// spread evenly over the run.
+fn seed_segments(segments: usize) -> Vec<bool> {
+    let mut seeds = vec![segments <= SEED_SEGMENTS; segments];
+    if segments > SEED_SEGMENTS {
+        for k in 0..SEED_SEGMENTS {
+            if let Some(s) = seeds.get_mut(k * segments / SEED_SEGMENTS) {
+                *s = true;
+            }
+        }
+    }
+    seeds
+}
+
+/// The aggregation conditions tried, strictest first: every one from `needed` down to `floor`
+/// when there are at most [`MAX_LEVELS`], else [`MAX_LEVELS`] of them evenly spaced, both ends kept.
+fn relaxation_levels(needed: usize, floor: usize) -> Vec<usize> {
+    let span = needed.saturating_sub(floor);
+    if span < MAX_LEVELS {
+        return (floor..=needed).rev().collect();
+    }
+    let mut levels: Vec<usize> = (0..MAX_LEVELS).map(|k| needed - k * span / (MAX_LEVELS - 1)).collect();
+    levels.dedup();
+    levels
+}
+
+/// One search for clusters of one kind at one aggregation condition.
+struct Search<'a> {
     kind: RootKind,
-    folded: &[Vec<FoldedRoot>],
-    in_play: &mut [Vec<FoldedRoot>],
-    earlier: &[Cluster],
-    settings: &ClusterSettings,
+    folded: &'a [Vec<FoldedRoot>],
+    /// Which segments' roots seed candidates ([`seed_segments`]).
+    seeds: &'a [bool],
+    settings: &'a ClusterSettings,
     needed: usize,
     dt_secs: f64,
-) -> Vec<Cluster> {
-    let mut accepted: Vec<Cluster> = earlier.iter().filter(|c| c.kind == kind).cloned().collect();
-    let before = accepted.len();
-    loop {
+}
+
+impl Search<'_> {
+    /// Clusters grown over the roots still `in_play` (their members are taken out of play), disjoint
+    /// from the clusters in `earlier`.
+    fn propose(&self, in_play: &mut [Vec<FoldedRoot>], earlier: &[Cluster]) -> Vec<Cluster> {
+        let mut accepted: Vec<Cluster> = earlier.iter().filter(|c| c.kind == self.kind).cloned().collect();
+        let before = accepted.len();
+        while let Some((candidate, cluster)) = self.best(in_play, &accepted) {
+            let taken: std::collections::HashSet<(usize, usize)> =
+                candidate.members.iter().map(|m| (m.segment, m.root_index)).collect();
+            for seg in in_play.iter_mut() {
+                seg.retain(|p| !taken.contains(&(p.segment, p.root_index)));
+            }
+            accepted.push(cluster);
+        }
+        accepted.split_off(before)
+    }
+
+    /// The acceptable candidate that ranks first, grown from every seed root still in play.
+    fn best(&self, in_play: &[Vec<FoldedRoot>], accepted: &[Cluster]) -> Option<(Candidate, Cluster)> {
         let mut best: Option<(Candidate, Cluster)> = None;
-        for seed in in_play.iter().flatten() {
-            let Some(candidate) = grow(seed.z, in_play, needed, settings) else {
+        let seeds = in_play.iter().flatten().filter(|p| self.seeds.get(p.segment).copied().unwrap_or(true));
+        for seed in seeds {
+            let Some(candidate) = grow(seed.z, in_play, self.needed, self.settings) else {
                 continue;
             };
             if best.as_ref().is_some_and(|(b, _)| !ranks_before(&candidate, b)) {
                 continue;
             }
-            if let Some(cluster) = accept(kind, &candidate, folded, &accepted, needed, settings, dt_secs) {
+            let accepted_as = accept(
+                self.kind,
+                &candidate,
+                self.folded,
+                accepted,
+                self.needed,
+                self.settings,
+                self.dt_secs,
+            );
+            if let Some(cluster) = accepted_as {
                 best = Some((candidate, cluster));
             }
         }
-        let Some((candidate, cluster)) = best else {
-            break;
-        };
-        for seg in in_play.iter_mut() {
-            seg.retain(|p| {
-                !candidate.members.iter().any(|m| m.segment == p.segment && m.root_index == p.root_index)
-            });
-        }
-        accepted.push(cluster);
+        best
     }
-    accepted.split_off(before)
 }
 
 /// Strictly better: smaller radius, then lower angle, then smaller modulus.

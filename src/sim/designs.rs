@@ -89,6 +89,9 @@ pub struct Segment {
 pub struct FuelProfile {
     pub segments: Vec<Segment>,
     pub n_samples: usize,
+    /// Where each segment ends, s from the start: the command at a time is found by bisection, so a
+    /// long profile (a test repeated for hours) costs log(segments) a sample, not segments.
+    ends_secs: Vec<f64>,
 }
 
 const fn hold(duration_secs: f64, fuel_gph: f64) -> Segment {
@@ -112,13 +115,25 @@ impl FuelProfile {
         }
         let total: f64 = segments.iter().map(|s| s.duration_secs).sum();
         let n_samples = (total / dt_secs).floor() as usize + 1;
-        Ok(Self { segments, n_samples })
+        let ends_secs = ends_of(&segments);
+        Ok(Self { segments, n_samples, ends_secs })
     }
 
     /// A constant command of `n_samples` samples.
     pub fn constant(fuel_gph: f64, n_samples: usize, dt_secs: f64) -> Self {
         let duration_secs = (n_samples as f64 * dt_secs).max(dt_secs);
-        Self { segments: vec![hold(duration_secs, fuel_gph)], n_samples }
+        let segments = vec![hold(duration_secs, fuel_gph)];
+        Self { ends_secs: ends_of(&segments), segments, n_samples }
+    }
+
+    /// The same profile played `times` times end to end, sampled at `dt_secs` (a long log: the
+    /// engine runs through without a stop, so each repeat starts from where the last one ended).
+    pub fn repeated(&self, times: usize, dt_secs: f64) -> Result<Self, SimError> {
+        if times == 0 {
+            return Err(SimError::BadProfile { segment: 0 });
+        }
+        let segments = (0..times).flat_map(|_| self.segments.iter().copied()).collect();
+        Self::new(segments, dt_secs)
     }
 
     /// The designs of METHOD.md, all within [`IDLE_FUEL_GPH`, `MAX_FUEL_GPH`].
@@ -137,31 +152,35 @@ impl FuelProfile {
 
     /// Times at which one segment ends and the next begins (where the command may jump), s.
     pub fn boundaries_secs(&self) -> Vec<f64> {
-        let mut t_secs = 0.0;
-        let mut out = Vec::with_capacity(self.segments.len());
-        for segment in self.segments.iter().take(self.segments.len().saturating_sub(1)) {
-            t_secs += segment.duration_secs;
-            out.push(t_secs);
-        }
-        out
+        self.ends_secs.iter().take(self.segments.len().saturating_sub(1)).copied().collect()
     }
 
     /// The command at time `t_secs`; before the start the first value, after the end the last.
     pub fn fuel_at(&self, t_secs: f64) -> f64 {
-        let mut start = 0.0;
-        let mut last = 0.0;
-        for segment in &self.segments {
-            let local = (t_secs - start).max(0.0);
-            last = segment.shape.value_at(local.min(segment.duration_secs), segment.duration_secs);
-            // A time within rounding of a boundary belongs to the next segment, so steps fall exactly
-            // on the sample (and integration) grid.
-            if local < segment.duration_secs - BOUNDARY_TOL_SECS {
-                return last;
-            }
-            start += segment.duration_secs;
-        }
-        last
+        // A time within rounding of a boundary belongs to the next segment, so steps fall exactly on
+        // the sample (and integration) grid.
+        let index = self.ends_secs.partition_point(|&end| end - BOUNDARY_TOL_SECS <= t_secs);
+        let Some(segment) = self.segments.get(index).or(self.segments.last()) else {
+            return 0.0;
+        };
+        let start = match index.min(self.segments.len() - 1) {
+            0 => 0.0,
+            i => self.ends_secs.get(i - 1).copied().unwrap_or(0.0),
+        };
+        let local = (t_secs - start).max(0.0);
+        segment.shape.value_at(local.min(segment.duration_secs), segment.duration_secs)
     }
+}
+
+/// The running sums of the segments' durations.
+fn ends_of(segments: &[Segment]) -> Vec<f64> {
+    segments
+        .iter()
+        .scan(0.0, |t_secs, s| {
+            *t_secs += s.duration_secs;
+            Some(*t_secs)
+        })
+        .collect()
 }
 
 impl Shape {

@@ -232,7 +232,10 @@ fn step_across(
 ) -> State {
     let mut x = *x;
     let mut lo = a_secs;
-    let inner = breaks_secs.iter().copied().filter(|&t| t > a_secs + INSIDE_SECS && t < b_secs - INSIDE_SECS);
+    // The breaks are sorted: bisect to those inside the step.
+    let from = breaks_secs.partition_point(|&t| t <= a_secs + INSIDE_SECS);
+    let inner =
+        breaks_secs.get(from..).unwrap_or_default().iter().copied().take_while(|&t| t < b_secs - INSIDE_SECS);
     for hi in inner.chain(std::iter::once(b_secs)) {
         let inside = |t: f64| drive_at(t.clamp(lo + INSIDE_SECS, hi - INSIDE_SECS));
         x = engine.rk4_step(&x, lo, hi - lo, &inside);

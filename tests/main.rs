@@ -23,6 +23,7 @@ mod export_parity;
 mod figures;
 mod hostile;
 mod identification;
+mod long_runs;
 mod parser_props;
 mod realdata;
 mod residuals;

@@ -209,6 +209,25 @@ impl Run {
         }
     }
 
+    /// The samples `range` of the run (clipped to its length), every channel alike.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Run {
+        let end = range.end.min(self.len());
+        let range = range.start.min(end)..end;
+        let cut = |c: &Channel| Channel {
+            name: c.name.clone(),
+            unit: c.unit.clone(),
+            values: c.values.get(range.clone()).unwrap_or_default().to_vec(),
+        };
+        Run {
+            name: self.name.clone(),
+            dt_secs: self.dt_secs,
+            t_secs: self.t_secs.get(range.clone()).unwrap_or_default().to_vec(),
+            input: cut(&self.input),
+            outputs: self.outputs.iter().map(cut).collect(),
+            aux: self.aux.iter().map(cut).collect(),
+        }
+    }
+
     /// Any channel (input, output or auxiliary) by name.
     pub fn channel(&self, name: &str) -> Option<&Channel> {
         std::iter::once(&self.input).chain(&self.outputs).chain(&self.aux).find(|c| c.name == name)

@@ -15,6 +15,7 @@
 //! functions step by step (the slow ones on worker threads) from the session, which a project file
 //! opens and saves. Neither composes core steps itself, so the same project gives the same model in
 //! both (a test holds them to 1e-9).
+pub mod long_runs;
 pub mod model;
 pub mod model_file;
 pub mod overrides;

@@ -15,6 +15,7 @@ use crate::core::numerics::stats::significant;
 use crate::core::run::{Run, RunError, RunRole, join_runs};
 use crate::io::csv_run::load_run_with_notes;
 use crate::io::project::{Project, RunSource};
+use crate::workflow::long_runs::{FIT_SAMPLES, FitWindow};
 
 /// Runs sampled more than this fraction off the identification run are on another grid: the
 /// models are discrete-time, so a 2 % different sample time is a 2 % different time scale, beyond
@@ -114,6 +115,32 @@ pub fn join_identification(parts: &[Run]) -> Result<(Run, Vec<usize>), RunError>
         [one] => Ok((one.clone(), Vec::new())),
         _ => join_runs(parts),
     }
+}
+
+/// The identification run its model is fitted on: the run itself, or, when its segments (detected
+/// as [`segments`] and [`steps_from`] would) span more than [`FIT_SAMPLES`], its first segments up to
+/// that many samples ([`FitWindow`]), with the junctions inside, where the cut starts and a note
+/// saying so. Runs whose segments are given keep them (they count samples of the whole run). The
+/// batch and the app both cut here.
+pub fn within_fit_budget(
+    run: Run,
+    junctions: Vec<usize>,
+    named_steps_from: Option<&str>,
+    segments_given: bool,
+) -> (Run, Vec<usize>, Option<(usize, String)>) {
+    if segments_given || run.len() <= FIT_SAMPLES {
+        return (run, junctions, None);
+    }
+    let found = steps_from(&run, &junctions, named_steps_from);
+    let Ok(all) = segments(&run, &junctions, None, found.channel()) else {
+        return (run, junctions, None);
+    };
+    let Some(window) = FitWindow::of(&all, FIT_SAMPLES) else {
+        return (run, junctions, None);
+    };
+    let (cut, inside) = window.apply(&run, &junctions);
+    let cut_at = (window.range.start, window.words(&run));
+    (cut, inside, Some(cut_at))
 }
 
 /// The segments of the identification run: the given ones (checked against the run), else the steps
@@ -240,6 +267,9 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
     let parts = project.ident.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let (ident, ident_junctions) = join_identification(&parts).context("joining the identification runs")?;
     step_signal(&ident, project.steps_from.as_deref())?;
+    let segments_given = !project.segments.is_empty();
+    let (ident, ident_junctions, window_note) =
+        within_fit_budget(ident, ident_junctions, project.steps_from.as_deref(), segments_given);
     let mut validate = project.validate.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let mut held_out = project.held_out.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let mut chirp = project.chirp.as_ref().map(&mut load).transpose()?;
@@ -259,6 +289,7 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
         }
     }
     let steps_from = steps_from(&ident, &ident_junctions, project.steps_from.as_deref());
+    notes.extend(window_note.map(|(_, note)| note));
     notes.extend(steps_from.note());
     let mut runs = Runs { ident, ident_junctions, steps_from, validate, held_out, chirp, steady, notes };
     runs.name_apart(project);

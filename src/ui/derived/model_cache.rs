@@ -44,8 +44,14 @@ pub struct IdentCache {
     source_indices: Vec<usize>,
     /// Where each later identification run starts in `run`.
     junctions: Vec<usize>,
-    /// How `run` was made from several runs, or why it could not be, in words.
+    /// How `run` was made from several runs, or why it could not be, in words (and where a long run
+    /// was cut to the part its model is fitted on).
     join_note: Option<String>,
+    /// What the cut of a long run depends on: whether segments are given, and the setup's
+    /// `steps_from` ([`runs::within_fit_budget`]).
+    window_key: (bool, Option<String>),
+    /// Where `run` starts in the joined identification runs: 0 unless a long run was cut.
+    window_start: usize,
     given_segments: Option<Vec<Segment>>,
     /// The setup's `steps_from`, and where the steps are detected given it ([`runs::steps_from`]).
     named_steps_from: Option<String>,
@@ -68,12 +74,16 @@ impl IdentCache {
         let same_sources = old.as_ref().is_some_and(|o| {
             o.sources.len() == sources.len() && o.sources.iter().zip(&sources).all(|(a, b)| Arc::ptr_eq(a, b))
         });
-        let (run, junctions, join_note) = match &old {
-            Some(o) if same_sources => (Arc::clone(&o.run), o.junctions.clone(), o.join_note.clone()),
-            _ => join_identification(&sources)?,
-        };
         let given = session.setup.segments.clone();
         let named_steps_from = session.setup.steps_from.clone();
+        let segments_given = given.is_some() || session.setup.outputs.values().any(|o| o.segments.is_some());
+        let window_key = (segments_given, named_steps_from.clone());
+        let (run, junctions, join_note, window_start) = match &old {
+            Some(o) if same_sources && o.window_key == window_key => {
+                (Arc::clone(&o.run), o.junctions.clone(), o.join_note.clone(), o.window_start)
+            }
+            _ => within_fit_budget(join_identification(&sources)?, &window_key)?,
+        };
         let same_run =
             old.as_ref().is_some_and(|o| Arc::ptr_eq(&o.run, &run) && o.named_steps_from == named_steps_from);
         let steps_from = match &old {
@@ -119,6 +129,8 @@ impl IdentCache {
             source_indices,
             junctions,
             join_note,
+            window_key,
+            window_start,
             given_segments: given,
             named_steps_from,
             steps_from,
@@ -129,6 +141,12 @@ impl IdentCache {
 
     pub fn output(&self, name: &str) -> Option<&OutputCache> {
         self.outputs.iter().find(|o| o.name == name)
+    }
+
+    /// Where the identification run starts in the session's joined identification runs: 0 unless a
+    /// long run was cut to the part its model is fitted on.
+    pub fn window_start(&self) -> usize {
+        self.window_start
     }
 
     /// Where the session's run `index` starts in the identification run, when it is part of it
@@ -490,4 +508,28 @@ impl OutputCache {
             settings: self.setup.settings.clone(),
         })
     }
+}
+
+/// The identification run, the junctions in it, the note on how it was made, and where it starts in
+/// the joined identification runs.
+type IdentRun = (Arc<Run>, Vec<usize>, Option<String>, usize);
+
+/// The joined identification run cut to the part its model is fitted on when it is long
+/// ([`runs::within_fit_budget`], as the batch cuts it), with where the cut starts; the note says so.
+fn within_fit_budget(
+    joined: (Arc<Run>, Vec<usize>, Option<String>),
+    (segments_given, named_steps_from): &(bool, Option<String>),
+) -> Option<IdentRun> {
+    let (run, junctions, join_note) = joined;
+    if *segments_given || run.len() <= crate::workflow::long_runs::FIT_SAMPLES {
+        return Some((run, junctions, join_note, 0));
+    }
+    let (cut, inside, window) =
+        runs::within_fit_budget(Arc::unwrap_or_clone(run), junctions, named_steps_from.as_deref(), false);
+    let (start, window_note) = window.map_or((0, None), |(start, note)| (start, Some(note)));
+    let note = match (join_note, window_note) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    };
+    Some((Arc::new(cut), inside, note, start))
 }

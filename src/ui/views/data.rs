@@ -6,6 +6,7 @@ use std::collections::BTreeSet;
 use egui::RichText;
 use egui_plot::{Line, Plot, PlotPoints};
 
+use crate::core::identification::segment::Segment;
 use crate::ui::derived::{ChannelKind, Derived, Trace};
 use crate::ui::state::command::Command;
 use crate::ui::state::session::{Session, SessionRun};
@@ -72,15 +73,25 @@ pub fn data_ui(
         .chain(run_traces.outputs())
         .chain(aux.iter().copied().filter(|t| state.shown_aux.contains(&t.name)))
         .collect();
-    let overlay = part.and_then(|(ident, offset)| Some((ident.segments.as_ref().ok()?, offset))).map(
-        |(segments, offset)| SegmentOverlay {
-            segments,
-            offset,
-            t0_secs: entry.run.t_secs.first().copied().unwrap_or(0.0),
-            dt_secs: entry.run.dt_secs,
-            samples: entry.run.len(),
-        },
-    );
+    // The segments count samples of the identification run, which starts `window_start` samples
+    // into the session's runs when a long run was cut to the part its model is fitted on.
+    let in_session = part.and_then(|(ident, offset)| {
+        let shift = ident.window_start();
+        let moved = |s: &Segment| Segment {
+            label: s.label.clone(),
+            start: s.start + shift,
+            step_at: s.step_at + shift,
+            end: s.end + shift,
+        };
+        Some((ident.segments.as_ref().ok()?.iter().map(moved).collect::<Vec<_>>(), offset))
+    });
+    let overlay = in_session.as_ref().map(|(segments, offset)| SegmentOverlay {
+        segments,
+        offset: *offset,
+        t0_secs: entry.run.t_secs.first().copied().unwrap_or(0.0),
+        dt_secs: entry.run.dt_secs,
+        samples: entry.run.len(),
+    });
     commands.extend(plots_ui(ui, index, &shown, overlay.as_ref(), state));
     commands
 }

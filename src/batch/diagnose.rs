@@ -10,13 +10,14 @@ use crate::workflow::runs::Runs;
 
 /// The diagnosis of `current` (report.json `diagnosis`, best first) and, in words, the candidates
 /// not tried and the structure note. `done` is that diagnosis when the missing-physics loop already
-/// made it (it ended on `current`): it is not computed twice.
+/// made it (it ended on `current`): it is not computed twice. `progress` hears the fraction done.
 pub fn diagnose_output(
     plan: &OutputPlan,
     runs: &Runs,
     identified: &Identified,
     current: &ExtendedModel,
     done: Option<diagnose::DiagnosisReport>,
+    progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<(Vec<DiagnosisEntry>, Vec<String>)> {
     let output = plan.output.as_str();
     let validation = runs.validation_of(output);
@@ -28,7 +29,7 @@ pub fn diagnose_output(
             &identified.fits,
             &validation,
             &plan.settings,
-            &mut |_| true,
+            progress,
         )?,
     };
     let skipped = report

@@ -34,7 +34,7 @@ pub fn effects_and_diagnosis(
 ) -> Result<Built> {
     let output = plan.output.as_str();
     let validation = runs.validation_of(output);
-    let mut effects = timings.time(&format!("effects_{output}"), || {
+    let mut effects = timings.time_with_fraction(&format!("effects_{output}"), |progress| {
         model::add_effects(
             &identified.model,
             &plan.effects,
@@ -42,15 +42,15 @@ pub fn effects_and_diagnosis(
             &identified.fits,
             &plan.settings,
             &validation,
-            &mut |_| true,
+            progress,
         )
     });
     effects.check(output)?;
     notes.extend(effects.notes(output, &plan.effects));
     // The loop's last diagnosis is of the final model: it is not computed again.
     let done = effects.sequence.final_diagnosis.take();
-    let diagnosis = timings.time(&format!("diagnosis_{output}"), || {
-        diagnose_output(plan, runs, identified, effects.model(), done)
+    let diagnosis = timings.time_with_fraction(&format!("diagnosis_{output}"), |progress| {
+        diagnose_output(plan, runs, identified, effects.model(), done, progress)
     });
     let (diagnosis, diagnosis_notes) = match diagnosis {
         Ok((entries, skipped)) => (entries, skipped),

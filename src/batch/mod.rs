@@ -64,8 +64,10 @@ struct Batch<'a> {
 /// there unless every output succeeds.
 pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
     let total = Instant::now();
+    staging::stop_on_interrupt();
     let progress = std::sync::Arc::new(std::sync::Mutex::new(Progress::new(quiet)));
     let mut timings = Timings(BTreeMap::new(), progress.clone());
+    let ticker = (!quiet).then(|| progress::Ticker::start(&progress));
     let runs = timings.time("load_runs", || runs::load_runs(&project))?;
     let outputs = runs::outputs_to_model(&project, &runs.ident)?;
     let cluster_notes = take_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
@@ -97,6 +99,7 @@ pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
         report.monte_carlo = Some(serde_json::to_value(monte_carlo).context("Monte Carlo summary")?);
     }
     timings.time("writing the results", || ());
+    drop(ticker);
     if let Ok(mut progress) = timings.1.lock() {
         progress.finish();
     }
@@ -194,9 +197,10 @@ impl Batch<'_> {
             let mut baseline_timings = timings.sibling();
             let baselines = scope.spawn(move || {
                 let mut notes = Vec::new();
-                let models = baseline_timings.time(&format!("baselines_{output}"), || {
-                    fit_baselines(identified, &runs.ident, output, &mut notes)
-                });
+                let models = baseline_timings
+                    .time_with_fraction(&format!("baselines_{output}"), |progress| {
+                        fit_baselines(identified, &runs.ident, output, &mut notes, progress)
+                    });
                 let preparation = baseline_timings
                     .time(&format!("preparation_{output}"), || segmentation_choice(runs, plan, identified));
                 (models, preparation, notes, baseline_timings)

@@ -7,8 +7,14 @@
 //! run into the same folder removes what it did not write again (figures of an output no longer
 //! modelled, of a run no longer scored) instead of leaving stale results beside the new ones. Only
 //! files an earlier jetid listed are ever removed; anything else in the folder is left alone.
+//!
+//! Ctrl+C (SIGINT, and SIGTERM) is the same as a failure ([`stop_on_interrupt`]): the staging folders
+//! are removed and the process exits with status 130, unless the results are being moved into
+//! place, which is then finished first (a few renames), so that `--out` holds either the earlier set
+//! or the new one, never a mix.
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use anyhow::{Context, Result, bail};
 
@@ -16,6 +22,44 @@ use crate::io::atomic::write_atomic;
 
 /// The manifest's file name inside the output folder.
 pub const MANIFEST: &str = "jetid-files.txt";
+
+/// The staging folders in use and whether one is being committed, for the interrupt handler.
+struct Live {
+    folders: Vec<PathBuf>,
+    committing: bool,
+}
+
+static LIVE: Mutex<Live> = Mutex::new(Live { folders: Vec::new(), committing: false });
+
+/// Exit status of a process stopped by SIGINT, as shells report it (128 + 2).
+const INTERRUPTED: i32 = 130;
+
+/// Install the handler that makes Ctrl+C leave nothing half-written (see the module doc). Installing
+/// it again is harmless.
+pub fn stop_on_interrupt() {
+    let _ = ctrlc::set_handler(|| {
+        loop {
+            let Ok(mut live) = LIVE.lock() else { std::process::exit(INTERRUPTED) };
+            if !live.committing {
+                for dir in live.folders.drain(..) {
+                    let _ = std::fs::remove_dir_all(&dir);
+                }
+                eprintln!(
+                    "\njetid: interrupted: nothing was written (the earlier results, if any, are as they were)"
+                );
+                std::process::exit(INTERRUPTED);
+            }
+            drop(live);
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+    });
+}
+
+fn with_live(f: impl FnOnce(&mut Live)) {
+    if let Ok(mut live) = LIVE.lock() {
+        f(&mut live);
+    }
+}
 
 /// A staging folder for the results bound for `out_dir`; removed when dropped uncommitted.
 pub struct Staging {
@@ -37,6 +81,7 @@ impl Staging {
         if dir.exists() {
             std::fs::remove_dir_all(&dir).with_context(|| format!("clearing {}", dir.display()))?;
         }
+        with_live(|live| live.folders.push(dir.clone()));
         std::fs::create_dir(&dir)
             .with_context(|| format!("cannot create a staging folder {}", dir.display()))?;
         Ok(Self { dir, out_dir: out_dir.to_owned() })
@@ -51,6 +96,13 @@ impl Staging {
     /// in its manifest and remove the files the previous manifest listed that are not among them.
     /// Returns the names removed.
     pub fn commit(self, written: &[String]) -> Result<Vec<String>> {
+        with_live(|live| live.committing = true);
+        let moved = self.move_into_place(written);
+        with_live(|live| live.committing = false);
+        moved
+    }
+
+    fn move_into_place(&self, written: &[String]) -> Result<Vec<String>> {
         std::fs::create_dir_all(&self.out_dir)
             .with_context(|| format!("cannot create output folder {}", self.out_dir.display()))?;
         for name in written {
@@ -65,6 +117,7 @@ impl Staging {
 impl Drop for Staging {
     fn drop(&mut self) {
         // Committed or not, nothing of the staging folder stays behind.
+        with_live(|live| live.folders.retain(|d| d != &self.dir));
         let _ = std::fs::remove_dir_all(&self.dir);
     }
 }

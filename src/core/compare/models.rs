@@ -119,16 +119,18 @@ impl OutputModels {
     }
 }
 
-/// Fit both baselines on the identification range the gray-box model was fitted on; a baseline that
-/// fails is a note, not a failed batch.
+/// Fit both baselines on the identification range the gray-box model was fitted on, reporting the
+/// fraction done to `progress`; a baseline that fails is a note, not a failed batch (nor does a
+/// `progress` that answers `false` fail it: the models are then the references alone).
 pub fn fit_baselines(
     identified: &Identified,
     ident: &Run,
     output: &str,
     notes: &mut Vec<String>,
+    progress: &mut dyn FnMut(f64) -> bool,
 ) -> OutputModels {
     let wiener = &identified.model.wiener;
-    fit_baselines_with_progress(&identified.fits, wiener, ident, output, notes, &mut |_| true).unwrap_or_else(
+    fit_baselines_with_progress(&identified.fits, wiener, ident, output, notes, progress).unwrap_or_else(
         |Cancelled| OutputModels {
             output: output.to_owned(),
             initial_state: InitialState::default(),

@@ -1,0 +1,200 @@
+//! The engine's normal band for every delta and for the error, and each run's flag in physical
+//! words: which delta left the band, by how much, and what that means for the engine.
+use crate::core::health::{BAND_SIGMAS, Band, Estimate};
+use crate::core::run::Quantity;
+
+use super::score::{RunScore, Starved};
+
+/// A run's error is unusual only when it is also this many times the engine's usual error. The
+/// reference's error on a run is mostly its structural error, which grows with how hard the run
+/// drives the engine (fast steps against long holds); runs of one engine with different profiles
+/// differ in RMSE by up to about half again, so a smaller ratio says nothing about the engine's
+/// health, however tight the band of a few similar runs is.
+const ERROR_RATIO: f64 = 1.5;
+
+/// The bands of one engine: the shared deltas and, per output (in the reference's order), the map
+/// shift and the error.
+#[derive(Clone, Debug, Default)]
+pub struct EngineBands {
+    pub input_gain: Option<Band>,
+    pub tau_scale: Option<Band>,
+    pub map_shift: Vec<(String, Option<Band>)>,
+    pub rmse: Vec<(String, Option<Band>)>,
+}
+
+impl EngineBands {
+    /// The bands across `runs` (the engine's runs, scored) for the outputs `outputs`.
+    pub fn of(runs: &[&RunScore], outputs: &[String]) -> Self {
+        let band = |estimates: Vec<Option<Estimate>>| {
+            let values: Vec<f64> = estimates.iter().flatten().map(|e| e.value).collect();
+            let errors: Vec<f64> = estimates.iter().flatten().filter_map(Estimate::std_error).collect();
+            Band::of(&values, &errors)
+        };
+        fn per_output<'a>(
+            runs: &'a [&'a RunScore],
+            output: &'a str,
+        ) -> impl Iterator<Item = &'a super::score::OutputScore> {
+            runs.iter().filter_map(move |r| r.outputs.iter().find(|o| o.output == output))
+        }
+        Self {
+            input_gain: band(runs.iter().map(|r| r.input_gain).collect()),
+            tau_scale: band(runs.iter().map(|r| r.tau_scale).collect()),
+            map_shift: outputs
+                .iter()
+                .map(|o| (o.clone(), band(per_output(runs, o).map(|s| s.map_shift).collect())))
+                .collect(),
+            rmse: outputs
+                .iter()
+                .map(|o| (o.clone(), Band::of(&per_output(runs, o).map(|s| s.rmse).collect::<Vec<_>>(), &[])))
+                .collect(),
+        }
+    }
+
+    fn of_output<'a>(list: &'a [(String, Option<Band>)], output: &str) -> Option<&'a Band> {
+        list.iter().find(|(name, _)| name == output).and_then(|(_, b)| b.as_ref())
+    }
+
+    /// The band of `output`'s map shift.
+    pub fn map_shift_of(&self, output: &str) -> Option<&Band> {
+        Self::of_output(&self.map_shift, output)
+    }
+
+    /// The reasons a run's flag gives: the shared deltas and the starved stretches (every row of the
+    /// run), then each output's own (map shift, error), keyed by output.
+    pub fn reasons(&self, run: &RunScore) -> (Vec<String>, Vec<(String, Vec<String>)>) {
+        let mut shared = Vec::new();
+        let (fuel, first) =
+            (fuel_word(&run.input_name), run.outputs.first().map(|o| quantity_word(&o.output)));
+        if let (Some(band), Some(gain)) = (&self.input_gain, run.input_gain)
+            && band.outside(gain.value, gain.ci95)
+        {
+            let more = 100.0 * (1.0 / gain.value - 1.0);
+            let usual = 100.0 * (1.0 / band.centre - 1.0);
+            shared.push(format!(
+                "needs {} {fuel} for the same {} than the reference (usually {})",
+                signed(more, "more", "less"),
+                first.unwrap_or_else(|| "output".into()),
+                signed(usual, "more", "less")
+            ));
+        }
+        if let (Some(band), Some(tau)) = (&self.tau_scale, run.tau_scale)
+            && band.outside(tau.value, tau.ci95)
+        {
+            let slower = 100.0 * (tau.value - 1.0);
+            shared.push(format!(
+                "spool {} than the reference (usually {})",
+                signed(slower, "slower", "faster"),
+                signed(100.0 * (band.centre - 1.0), "slower", "faster")
+            ));
+        }
+        for starved in &run.starved {
+            let typical = Self::of_output(&self.rmse, &starved.output).map_or(0.0, |b| b.centre);
+            if starved.shortfall > BAND_SIGMAS * typical && starved.shortfall > 0.0 {
+                shared.push(starvation_words(starved));
+            }
+        }
+        let own = run.outputs.iter().map(|o| (o.output.clone(), self.output_reasons(o))).collect();
+        (shared, own)
+    }
+
+    fn output_reasons(&self, o: &super::score::OutputScore) -> Vec<String> {
+        let mut reasons = Vec::new();
+        if let (Some(band), Some(shift)) = (self.map_shift_of(&o.output), o.map_shift)
+            && band.outside(shift.value, shift.ci95)
+        {
+            reasons.push(format!(
+                "{} map {} {} {} ({} % of its range; usually {})",
+                quantity_word(&o.output),
+                plain(shift.value.abs(), 3),
+                o.unit,
+                if shift.value >= 0.0 { "high" } else { "low" },
+                plain(100.0 * shift.value.abs() / o.range.max(f64::MIN_POSITIVE), 2),
+                plain(band.centre, 3)
+            ));
+        }
+        if let Some(band) = Self::of_output(&self.rmse, &o.output)
+            && o.rmse > band.high()
+            && o.rmse > ERROR_RATIO * band.centre
+        {
+            reasons.push(format!(
+                "{} fits {}× worse than usual (RMSE {} {} against {})",
+                quantity_word(&o.output),
+                plain(o.rmse / band.centre, 2),
+                plain(o.rmse, 3),
+                o.unit,
+                plain(band.centre, 3)
+            ));
+        }
+        reasons
+    }
+}
+
+/// "pump at its limit (7.09 V) for 160 s while speed falls 21000 rpm short of the 101000 rpm the
+/// reference gives at 4.96 V: fuel supply".
+fn starvation_words(s: &Starved) -> String {
+    let device = if s.input.to_ascii_lowercase().contains("pump") {
+        "pump".to_owned()
+    } else if s.input.to_ascii_lowercase().contains("fuel") {
+        "fuel flow".to_owned()
+    } else {
+        format!("input '{}'", s.input)
+    };
+    format!(
+        "{device} at its limit ({} {}) for {} s while {} falls {} {} short of the {} {} the reference gives at {} {}: fuel supply",
+        plain(s.limit, 3),
+        s.input_unit,
+        plain(s.duration_secs, 2),
+        quantity_word(&s.output),
+        plain(s.shortfall, 2),
+        s.unit,
+        plain(s.expected, 3),
+        s.unit,
+        plain(s.probe_input, 3),
+        s.input_unit
+    )
+}
+
+/// "6.1 % more" or "6.1 % less" of a percentage `pct`.
+fn signed(pct: f64, up: &str, down: &str) -> String {
+    format!("{} % {}", plain(pct.abs(), 2), if pct >= 0.0 { up } else { down })
+}
+
+/// "fuel" for a fuel flow or a fuel pump's signal, else the input's name.
+fn fuel_word(input: &str) -> String {
+    let lower = input.to_ascii_lowercase();
+    if lower.contains("fuel") || lower.contains("pump") { "fuel".to_owned() } else { format!("'{input}'") }
+}
+
+/// "speed", "thrust" or the output's name.
+pub fn quantity_word(output: &str) -> String {
+    match Quantity::of(output) {
+        Some(Quantity::ShaftSpeed) => "speed".to_owned(),
+        Some(Quantity::Thrust) => "thrust".to_owned(),
+        None => output.to_owned(),
+    }
+}
+
+/// `x` rounded to `digits` significant digits, written plainly (101234 → "101000", 0.01234 → "0.0123").
+pub fn plain(x: f64, digits: i32) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    if x.abs() < f64::MIN_POSITIVE {
+        return "0".to_owned();
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    let decimals = (digits - 1 - magnitude).max(0) as usize;
+    let unit = 10f64.powi(magnitude - digits + 1);
+    format!("{:.decimals$}", (x / unit).round() * unit)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_read_plainly() {
+        assert_eq!(super::plain(101_234.0, 3), "101000");
+        assert_eq!(super::plain(0.012_34, 3), "0.0123");
+        assert_eq!(super::plain(6.149, 2), "6.1");
+        assert_eq!(super::plain(-350.4, 2), "-350");
+    }
+}

@@ -14,6 +14,7 @@ pub mod inspect;
 pub mod predict;
 pub mod read_args;
 pub mod simulate;
+pub mod simulate_fleet;
 
 /// The view `--screenshot` takes unless `--view` says otherwise.
 const DEFAULT_VIEW: &str = "data";
@@ -51,6 +52,8 @@ pub enum Command {
     Export(export::ExportArgs),
     /// Score every engine's runs against its reference: health deltas, flags, trends.
     Fleet(fleet::FleetArgs),
+    /// Simulate a fleet of engines with hidden health states, its manifest and its truth.
+    SimulateFleet(simulate_fleet::SimulateFleetArgs),
 }
 
 /// A duration on the command line (`--sample-time`): a positive finite number of seconds; a
@@ -71,6 +74,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Predict(args)) => predict::run(&args),
         Some(Command::Export(args)) => export::run(&args),
         Some(Command::Fleet(args)) => fleet::run(&args),
+        Some(Command::SimulateFleet(args)) => simulate_fleet::run(&args),
         None if cli.batch => {
             if cli.screenshot.is_some() {
                 anyhow::bail!("--screenshot takes a picture of the app; it cannot be combined with --batch");

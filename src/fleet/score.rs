@@ -40,6 +40,8 @@ pub struct Starved {
     pub input: String,
     pub input_unit: String,
     pub limit: f64,
+    /// The stretch's first sample.
+    pub start: usize,
     pub duration_secs: f64,
     /// The input the reference was asked at: the limit, or the top of its identified range.
     pub probe_input: f64,
@@ -178,6 +180,7 @@ fn starved_stretches(data: &Run, reference: &Reference, present: &[usize]) -> Re
                 input: data.input.name.clone(),
                 input_unit: data.input.unit.clone(),
                 limit: pinned.limit,
+                start: pinned.start,
                 duration_secs: pinned.len as f64 * data.dt_secs,
                 probe_input,
                 expected,

@@ -110,10 +110,10 @@ impl EngineBands {
             && band.outside(shift.value, shift.ci95)
         {
             reasons.push(format!(
-                "{} map {} {} {} ({} % of its range; usually {})",
+                "{} map {}{} {} ({} % of its range; usually {})",
                 quantity_word(&o.output),
                 plain(shift.value.abs(), 3),
-                o.unit,
+                unit_after(&o.unit),
                 if shift.value >= 0.0 { "high" } else { "low" },
                 plain(100.0 * shift.value.abs() / o.range.max(f64::MIN_POSITIVE), 2),
                 plain(band.centre, 3)
@@ -124,11 +124,11 @@ impl EngineBands {
             && o.rmse > ERROR_RATIO * band.centre
         {
             reasons.push(format!(
-                "{} fits {}× worse than usual (RMSE {} {} against {})",
+                "{} fits {}× worse than usual (RMSE {}{} against {})",
                 quantity_word(&o.output),
                 plain(o.rmse / band.centre, 2),
                 plain(o.rmse, 3),
-                o.unit,
+                unit_after(&o.unit),
                 plain(band.centre, 3)
             ));
         }
@@ -147,23 +147,28 @@ fn starvation_words(s: &Starved) -> String {
         format!("input '{}'", s.input)
     };
     format!(
-        "{device} at its limit ({} {}) for {} s while {} falls {} {} short of the {} {} the reference gives at {} {}: fuel supply",
+        "{device} at its limit ({}{}) for {} s while {} falls {}{} short of the {}{} the reference gives at {}{}: fuel supply",
         plain(s.limit, 3),
-        s.input_unit,
+        unit_after(&s.input_unit),
         plain(s.duration_secs, 2),
         quantity_word(&s.output),
         plain(s.shortfall, 2),
-        s.unit,
+        unit_after(&s.unit),
         plain(s.expected, 3),
-        s.unit,
+        unit_after(&s.unit),
         plain(s.probe_input, 3),
-        s.input_unit
+        unit_after(&s.input_unit)
     )
 }
 
 /// "6.1 % more" or "6.1 % less" of a percentage `pct`.
 fn signed(pct: f64, up: &str, down: &str) -> String {
     format!("{} % {}", plain(pct.abs(), 2), if pct >= 0.0 { up } else { down })
+}
+
+/// A unit after a number: " rpm", or nothing for a ratio ("-") or an unknown unit.
+fn unit_after(unit: &str) -> String {
+    if unit.is_empty() || unit == "-" { String::new() } else { format!(" {unit}") }
 }
 
 /// "fuel" for a fuel flow or a fuel pump's signal, else the input's name.

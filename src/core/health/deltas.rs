@@ -425,7 +425,7 @@ mod tests {
         let reference = model(&[0.0, 1.0]);
         let short = run_with(vec![1.0; 10], vec![1.0; 10]);
         assert!(matches!(
-            fit_deltas(&[reference.clone()], &short, InitialState::Steady),
+            fit_deltas(std::slice::from_ref(&reference), &short, InitialState::Steady),
             Err(HealthError::TooShort { .. })
         ));
         let mut other = reference;

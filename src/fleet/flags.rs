@@ -1,6 +1,6 @@
 //! The engine's normal band for every delta and for the error, and each run's flag in physical
 //! words: which delta left the band, by how much, and what that means for the engine.
-use crate::core::health::{BAND_SIGMAS, Band, Estimate};
+use crate::core::health::{BAND_SIGMAS, Band, Estimate, local_bands};
 use crate::core::run::Quantity;
 
 use super::score::{RunScore, Starved};
@@ -13,77 +13,93 @@ use super::score::{RunScore, Starved};
 /// choice of operating points does, and a fault that small shows in its delta first.
 const ERROR_RATIO: f64 = 3.0;
 
-/// The bands of one engine: the shared deltas and, per output (in the reference's order), the map
-/// shift and the error.
+/// The smallest changes that matter, whatever the statistics say: below them a deviation is within
+/// what an instrument or a test day changes with a healthy engine. The input gain: 1 %, a fuel flow
+/// meter's calibration tolerance (turbine meters are specified to ±0.5–1 % of reading, and drift by
+/// that between calibrations). The time-constant scale: 5 %, what a day's inlet temperature does (±15 K
+/// moves the corrected speed by ±2.5 % and with it the spool's time constant, τ ∝ 1/N, by as much,
+/// twice over a range of test days). A map shift: 1 % of the output's range, a load cell's or speed
+/// pick-up's calibration tolerance plus the day-to-day spread of a bench.
+pub const SMALLEST_GAIN_CHANGE: f64 = 0.01;
+pub const SMALLEST_TAU_CHANGE: f64 = 0.05;
+pub const SMALLEST_MAP_SHIFT_OF_RANGE: f64 = 0.01;
+
+/// The bands of one engine, per run in date order (see `core::health::band`): the shared deltas and,
+/// per output (in the reference's order), the map shift; the error's band is the engine's as a whole
+/// (a run's error is judged against the engine's usual error, which drifts with nothing).
 #[derive(Clone, Debug, Default)]
 pub struct EngineBands {
-    pub input_gain: Option<Band>,
-    pub tau_scale: Option<Band>,
-    pub map_shift: Vec<(String, Option<Band>)>,
+    pub input_gain: Vec<Option<Band>>,
+    pub tau_scale: Vec<Option<Band>>,
+    pub map_shift: Vec<(String, Vec<Option<Band>>)>,
     pub rmse: Vec<(String, Option<Band>)>,
 }
 
 impl EngineBands {
-    /// The bands across `runs` (the engine's runs, scored) for the outputs `outputs`.
+    /// The bands across `runs` (the engine's runs in date order, scored) for the outputs `outputs`.
     pub fn of(runs: &[&RunScore], outputs: &[String]) -> Self {
-        let band = |estimates: Vec<Option<Estimate>>| {
-            let values: Vec<f64> = estimates.iter().flatten().map(|e| e.value).collect();
+        let bands = |estimates: Vec<Option<Estimate>>| {
+            let values: Vec<f64> = estimates.iter().map(|e| e.map_or(f64::NAN, |e| e.value)).collect();
             let errors: Vec<f64> = estimates.iter().flatten().filter_map(Estimate::std_error).collect();
-            Band::of(&values, &errors)
+            local_bands(&values, &errors)
         };
-        fn per_output<'a>(
-            runs: &'a [&'a RunScore],
-            output: &'a str,
-        ) -> impl Iterator<Item = &'a super::score::OutputScore> {
-            runs.iter().filter_map(move |r| r.outputs.iter().find(|o| o.output == output))
-        }
+        let of_output = |r: &RunScore, output: &str| r.outputs.iter().find(|o| o.output == output).cloned();
         Self {
-            input_gain: band(runs.iter().map(|r| r.input_gain).collect()),
-            tau_scale: band(runs.iter().map(|r| r.tau_scale).collect()),
+            input_gain: bands(runs.iter().map(|r| r.input_gain).collect()),
+            tau_scale: bands(runs.iter().map(|r| r.tau_scale).collect()),
             map_shift: outputs
                 .iter()
-                .map(|o| (o.clone(), band(per_output(runs, o).map(|s| s.map_shift).collect())))
+                .map(|o| {
+                    (
+                        o.clone(),
+                        bands(runs.iter().map(|r| of_output(r, o).and_then(|s| s.map_shift)).collect()),
+                    )
+                })
                 .collect(),
             rmse: outputs
                 .iter()
-                .map(|o| (o.clone(), Band::of(&per_output(runs, o).map(|s| s.rmse).collect::<Vec<_>>(), &[])))
+                .map(|o| {
+                    let errors: Vec<f64> =
+                        runs.iter().filter_map(|r| of_output(r, o)).map(|s| s.rmse).collect();
+                    (o.clone(), Band::of(&errors, &[]))
+                })
                 .collect(),
         }
     }
 
-    fn of_output<'a>(list: &'a [(String, Option<Band>)], output: &str) -> Option<&'a Band> {
-        list.iter().find(|(name, _)| name == output).and_then(|(_, b)| b.as_ref())
+    fn rmse_of(&self, output: &str) -> Option<&Band> {
+        self.rmse.iter().find(|(name, _)| name == output).and_then(|(_, b)| b.as_ref())
     }
 
-    /// The band of `output`'s map shift.
-    pub fn map_shift_of(&self, output: &str) -> Option<&Band> {
-        Self::of_output(&self.map_shift, output)
+    /// The band of `output`'s map shift for run `index`.
+    pub fn map_shift_of(&self, output: &str, index: usize) -> Option<&Band> {
+        self.map_shift.iter().find(|(name, _)| name == output).and_then(|(_, b)| b.get(index)?.as_ref())
     }
 
     /// The reasons a run's flag gives: the shared deltas and the starved stretches (every row of the
     /// run), then each output's own (map shift, error), keyed by output.
-    pub fn reasons(&self, run: &RunScore) -> (Vec<String>, Vec<(String, Vec<String>)>) {
+    pub fn reasons(&self, index: usize, run: &RunScore) -> (Vec<String>, Vec<(String, Vec<String>)>) {
         let mut shared = Vec::new();
         let (fuel, first) =
             (fuel_word(&run.input_name), run.outputs.first().map(|o| quantity_word(&o.output)));
-        if let (Some(band), Some(gain)) = (&self.input_gain, run.input_gain)
-            && band.outside(gain.value, gain.ci95)
+        if let (Some(Some(band)), Some(gain)) = (self.input_gain.get(index), run.input_gain)
+            && band.outside(gain.value, gain.ci95, SMALLEST_GAIN_CHANGE)
         {
             let more = 100.0 * (1.0 / gain.value - 1.0);
             let usual = 100.0 * (1.0 / band.centre - 1.0);
             shared.push(format!(
-                "needs {} {fuel} for the same {} than the reference (usually {})",
+                "needs {} {fuel} for the same {} than the reference (its trend: {})",
                 signed(more, "more", "less"),
                 first.unwrap_or_else(|| "output".into()),
                 signed(usual, "more", "less")
             ));
         }
-        if let (Some(band), Some(tau)) = (&self.tau_scale, run.tau_scale)
-            && band.outside(tau.value, tau.ci95)
+        if let (Some(Some(band)), Some(tau)) = (self.tau_scale.get(index), run.tau_scale)
+            && band.outside(tau.value, tau.ci95, SMALLEST_TAU_CHANGE)
         {
             let slower = 100.0 * (tau.value - 1.0);
             shared.push(format!(
-                "spool {} than the reference (usually {})",
+                "spool {} than the reference (its trend: {})",
                 signed(slower, "slower", "faster"),
                 signed(100.0 * (band.centre - 1.0), "slower", "faster")
             ));
@@ -91,7 +107,7 @@ impl EngineBands {
         // One reason per stretch, on the first output that shows it (speed before thrust).
         let mut said: Vec<usize> = Vec::new();
         for starved in &run.starved {
-            let typical = Self::of_output(&self.rmse, &starved.output).map_or(0.0, |b| b.centre);
+            let typical = self.rmse_of(&starved.output).map_or(0.0, |b| b.centre);
             if starved.shortfall > BAND_SIGMAS * typical
                 && starved.shortfall > 0.0
                 && !said.contains(&starved.start)
@@ -100,17 +116,17 @@ impl EngineBands {
                 shared.push(starvation_words(starved));
             }
         }
-        let own = run.outputs.iter().map(|o| (o.output.clone(), self.output_reasons(o))).collect();
+        let own = run.outputs.iter().map(|o| (o.output.clone(), self.output_reasons(index, o))).collect();
         (shared, own)
     }
 
-    fn output_reasons(&self, o: &super::score::OutputScore) -> Vec<String> {
+    fn output_reasons(&self, index: usize, o: &super::score::OutputScore) -> Vec<String> {
         let mut reasons = Vec::new();
-        if let (Some(band), Some(shift)) = (self.map_shift_of(&o.output), o.map_shift)
-            && band.outside(shift.value, shift.ci95)
+        if let (Some(band), Some(shift)) = (self.map_shift_of(&o.output, index), o.map_shift)
+            && band.outside(shift.value, shift.ci95, SMALLEST_MAP_SHIFT_OF_RANGE * o.range)
         {
             reasons.push(format!(
-                "{} map {}{} {} ({} % of its range; usually {})",
+                "{} map {}{} {} ({} % of its range; its trend: {})",
                 quantity_word(&o.output),
                 plain(shift.value.abs(), 3),
                 unit_after(&o.unit),
@@ -119,7 +135,7 @@ impl EngineBands {
                 plain(band.centre, 3)
             ));
         }
-        if let Some(band) = Self::of_output(&self.rmse, &o.output)
+        if let Some(band) = self.rmse_of(&o.output)
             && o.rmse > band.high()
             && o.rmse > ERROR_RATIO * band.centre
         {

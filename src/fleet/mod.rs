@@ -118,8 +118,8 @@ fn file_safe(name: &str, index: usize) -> String {
 /// The rows of one engine: its runs in trend order, each output of each.
 fn rows_of(result: &EngineResult<'_>) -> Vec<Row> {
     let mut rows = Vec::new();
-    for (run, score) in result.engine.runs.iter().zip(&result.scores) {
-        let (shared, own) = result.bands.reasons(score);
+    for (index, (run, score)) in result.engine.runs.iter().zip(&result.scores).enumerate() {
+        let (shared, own) = result.bands.reasons(index, score);
         for o in &score.outputs {
             let mut reasons = shared.clone();
             reasons.extend(
@@ -147,55 +147,54 @@ fn rows_of(result: &EngineResult<'_>) -> Vec<Row> {
     rows
 }
 
-/// The trend figure's panels: the input gain, the time-constant scale and each output's map shift.
+/// The trend figure's panels: the input gain, the time-constant scale and each output's map shift,
+/// each run with the band it was judged against.
 fn panels(result: &EngineResult<'_>, rows: &[Row]) -> Vec<TrendPanel> {
     let flagged = |run: &str| rows.iter().any(|r| r.run == run && !r.flag.is_empty());
-    let point = |i: usize, e: Option<Estimate>, run: &str| {
-        e.map(|e| TrendPoint { x: i as f64, value: e.value, ci95: e.ci95, flagged: flagged(run) })
-    };
-    let band = |b: Option<&crate::core::health::Band>| b.map(|b| [b.low(), b.centre, b.high()]);
     let runs = &result.engine.runs;
+    let panel =
+        |label: String, estimates: Vec<Option<Estimate>>, bands: &[Option<crate::core::health::Band>]| {
+            let points = estimates
+                .iter()
+                .enumerate()
+                .filter_map(|(i, e)| {
+                    let e = (*e)?;
+                    let band = bands.get(i).copied().flatten().map(|b| [b.low(), b.centre, b.high()]);
+                    Some(TrendPoint {
+                        x: i as f64,
+                        value: e.value,
+                        ci95: e.ci95,
+                        band,
+                        flagged: flagged(&runs[i].name),
+                    })
+                })
+                .collect();
+            TrendPanel { label, points }
+        };
+    let bands = &result.bands;
     let mut out = vec![
-        TrendPanel {
-            label: "input gain".into(),
-            points: result
-                .scores
-                .iter()
-                .zip(runs)
-                .enumerate()
-                .filter_map(|(i, (s, r))| point(i, s.input_gain, &r.name))
-                .collect(),
-            band: band(result.bands.input_gain.as_ref()),
-        },
-        TrendPanel {
-            label: "time-constant scale".into(),
-            points: result
-                .scores
-                .iter()
-                .zip(runs)
-                .enumerate()
-                .filter_map(|(i, (s, r))| point(i, s.tau_scale, &r.name))
-                .collect(),
-            band: band(result.bands.tau_scale.as_ref()),
-        },
+        panel("input gain".into(), result.scores.iter().map(|s| s.input_gain).collect(), &bands.input_gain),
+        panel(
+            "time-constant scale".into(),
+            result.scores.iter().map(|s| s.tau_scale).collect(),
+            &bands.tau_scale,
+        ),
     ];
-    for (model, unit) in result.reference.models.iter().zip(&result.reference.units) {
+    for ((model, unit), (_, shift_bands)) in
+        result.reference.models.iter().zip(&result.reference.units).zip(&bands.map_shift)
+    {
         let output = &model.output;
-        let points = result
+        let estimates = result
             .scores
             .iter()
-            .zip(runs)
-            .enumerate()
-            .filter_map(|(i, (s, r))| {
-                point(i, s.outputs.iter().find(|o| o.output == *output)?.map_shift, &r.name)
-            })
+            .map(|s| s.outputs.iter().find(|o| o.output == *output).and_then(|o| o.map_shift))
             .collect();
         let label = if unit.is_empty() {
             format!("{output} map shift")
         } else {
             format!("{output} map shift ({unit})")
         };
-        out.push(TrendPanel { label, points, band: band(result.bands.map_shift_of(output)) });
+        out.push(panel(label, estimates, shift_bands));
     }
     out
 }

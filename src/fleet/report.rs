@@ -30,8 +30,8 @@ pub(super) fn markdown(name: &str, results: &[EngineResult<'_>], rows: &[Row], f
         "{} engines, {runs} runs, {} flagged. Each run is scored against its engine's reference model and its \
          health deltas are fitted by output error from the reference (input gain u → g·u, time-constant scale, \
          each output's map shift; the input offset is not fitted: it reads as a map shift of every output). \
-         A run is flagged when a delta lies more than {BAND_SIGMAS} robust σ from the median of its engine's runs \
-         and its own 95 % interval excludes that median, when it fits much worse than the engine's usual error, \
+         A run is flagged when a delta lies more than {BAND_SIGMAS} robust σ from its engine's trend over the \
+         runs, by more than the smallest change that matters, and its own 95 % interval excludes the trend, when it fits much worse than the engine's usual error, \
          or when its input sits at its limit while the output falls short of the reference.\n",
         results.len(),
         flagged.len()

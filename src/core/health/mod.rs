@@ -7,6 +7,6 @@ pub mod band;
 pub mod deltas;
 pub mod saturation;
 
-pub use band::{BAND_SIGMAS, Band};
+pub use band::{BAND_SIGMAS, Band, local_bands};
 pub use deltas::{Deltas, Estimate, HealthError, HealthFit, fit_deltas, scale_time_constants, simulate_with};
 pub use saturation::{Pinned, pinned_stretches, resolution};

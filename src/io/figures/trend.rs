@@ -1,5 +1,5 @@
 //! An engine's health over its runs: one panel per delta, each run's value with its 95 % interval
-//! as an error bar, the engine's normal band shaded, flagged runs in red.
+//! as an error bar, the band it was judged against shaded behind it, flagged runs in red.
 use std::path::Path;
 
 use plotters::prelude::*;
@@ -21,15 +21,16 @@ pub struct TrendPoint {
     pub x: f64,
     pub value: f64,
     pub ci95: Option<[f64; 2]>,
+    /// The band the run was judged against, `[low, centre, high]`.
+    pub band: Option<[f64; 3]>,
     pub flagged: bool,
 }
 
-/// One delta over the runs, with the engine's normal band `[low, centre, high]`.
+/// One delta over the runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrendPanel {
     pub label: String,
     pub points: Vec<TrendPoint>,
-    pub band: Option<[f64; 3]>,
 }
 
 /// Draws the panels one above the other to `path`.
@@ -47,6 +48,7 @@ pub fn trend_png(path: &Path, title: &str, x_desc: &str, panels: &[TrendPanel]) 
             LegendEntry::line("run, 95 % interval", palette::series(0), 2),
             LegendEntry::line("flagged run", palette::FIT, 2),
             LegendEntry::new("normal band (3.5σ)", Swatch::Bar(palette::GRID_BOLD)),
+            LegendEntry::text("  (the engine's trend)"),
             LegendEntry::line("band centre", palette::REFERENCE, 1),
         ];
         draw_legend(&legend_area, &entries)
@@ -64,7 +66,7 @@ fn draw_panel(area: &Area<'_>, panel: &TrendPanel, x_desc: &str) -> DrawResult {
         .iter()
         .flat_map(|p| [Some(p.value), p.ci95.map(|c| c[0]), p.ci95.map(|c| c[1])])
         .flatten()
-        .chain(panel.band.iter().flat_map(|b| b.iter().copied()))
+        .chain(panel.points.iter().flat_map(|p| p.band.into_iter().flatten()))
         .filter(finite);
     let Some((y_lo, y_hi)) = padded_range(ys, 0.08) else {
         return draw_note(area, &format!("{}: not fitted", panel.label));
@@ -82,12 +84,13 @@ fn draw_panel(area: &Area<'_>, panel: &TrendPanel, x_desc: &str) -> DrawResult {
         .y_label_formatter(&|v| tick_label(*v))
         .x_label_formatter(&|v| tick_label(*v))
         .draw()?;
-    if let Some([low, centre, high]) = panel.band {
-        let (lo, hi) = (low.max(y_lo), high.min(y_hi));
+    for p in &panel.points {
+        let Some([low, centre, high]) = p.band.filter(|b| b.iter().all(finite)) else { continue };
+        let (lo, hi, left, right) = (low.max(y_lo), high.min(y_hi), p.x - 0.45, p.x + 0.45);
         chart
-            .draw_series([Rectangle::new([(x_lo, lo), (x_hi, hi)], palette::GRID_BOLD.mix(0.6).filled())])?;
+            .draw_series([Rectangle::new([(left, lo), (right, hi)], palette::GRID_BOLD.mix(0.6).filled())])?;
         chart.draw_series(LineSeries::new(
-            [(x_lo, centre), (x_hi, centre)],
+            [(left, centre), (right, centre)],
             palette::REFERENCE.stroke_width(1),
         ))?;
     }

@@ -201,3 +201,43 @@ fn jetcat_runs_c_and_e_are_flagged_for_their_fuel_supply() {
         assert_eq!(!row["flag"].is_empty(), starved, "{row:?}");
     }
 }
+
+#[test]
+fn a_run_on_another_input_or_a_bad_fleet_size_is_refused() {
+    let (data, _) = simulated();
+    let dir = tempfile::tempdir().unwrap();
+    // The same run with its input under another name, mapped as the input: not the reference's.
+    let text =
+        std::fs::read_to_string(data.join("e001_r01.csv")).unwrap().replacen("fuel_flow_gph", "pump_V", 1);
+    std::fs::write(dir.path().join("renamed.csv"), text).unwrap();
+    let reference = data.join("e001_reference.json");
+    let manifest = dir.path().join("fleet.toml");
+    std::fs::write(
+        &manifest,
+        format!(
+            "[[engine]]\nname = \"E1\"\nreference = \"{}\"\nruns = [{{ path = \"renamed.csv\", name = \"R\" }}]\n\
+             [engine.load]\nmap = [\"input=pump_V\"]\n",
+            reference.display()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = jetid(&["fleet", manifest.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("'E1'") && stderr.contains("'R'") && stderr.contains("pump_V"), "{stderr}");
+    assert!(!out.exists());
+    for (args, needle) in [
+        (vec!["--engines", "0"], "at least one engine"),
+        (vec!["--run-secs", "30"], "at least"),
+        (vec!["--fault-rate", "1.5"], "not a probability"),
+    ] {
+        let out = dir.path().join("sim");
+        let mut all = vec!["simulate-fleet", "--out", out.to_str().unwrap()];
+        all.extend(args);
+        let o = jetid(&all);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.code() == Some(1) && stderr.contains(needle), "{stderr}");
+        assert!(!out.exists());
+    }
+}

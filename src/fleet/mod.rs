@@ -81,10 +81,13 @@ pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
     for (i, result) in results.iter().enumerate() {
         let engine_rows = rows_of(result);
         let figure = format!("trend_{}.png", file_safe(&result.engine.name, i));
+        let labels: Vec<String> = result.engine.runs.iter().map(|r| r.name.clone()).collect();
+        let title = format!("Health of engine {}", result.engine.name);
         trend_png(
             &staging.path().join(&figure),
-            &format!("Health of engine {}", result.engine.name),
-            "run (date order)",
+            &title,
+            "run (in date order)",
+            &labels,
             &panels(result, &engine_rows),
         )?;
         written.push(figure.clone());

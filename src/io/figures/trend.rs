@@ -33,8 +33,14 @@ pub struct TrendPanel {
     pub points: Vec<TrendPoint>,
 }
 
-/// Draws the panels one above the other to `path`.
-pub fn trend_png(path: &Path, title: &str, x_desc: &str, panels: &[TrendPanel]) -> Result<(), FigureError> {
+/// Draws the panels one above the other to `path`; the x axis names run `i` by `x_labels[i]`.
+pub fn trend_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    x_labels: &[String],
+    panels: &[TrendPanel],
+) -> Result<(), FigureError> {
     let height = 120 + PANEL_HEIGHT * panels.len().max(1) as u32;
     render(path, (WIDTH, height), |root| {
         let (chart_area, legend_area) = titled_with_legend(root, title)?;
@@ -42,7 +48,7 @@ pub fn trend_png(path: &Path, title: &str, x_desc: &str, panels: &[TrendPanel]) 
             return draw_note(&chart_area, "no health deltas");
         }
         for (area, panel) in chart_area.split_evenly((panels.len(), 1)).iter().zip(panels) {
-            draw_panel(area, panel, x_desc)?;
+            draw_panel(area, panel, x_desc, x_labels)?;
         }
         let entries = [
             LegendEntry::line("run, 95 % interval", palette::series(0), 2),
@@ -55,7 +61,7 @@ pub fn trend_png(path: &Path, title: &str, x_desc: &str, panels: &[TrendPanel]) 
     })
 }
 
-fn draw_panel(area: &Area<'_>, panel: &TrendPanel, x_desc: &str) -> DrawResult {
+fn draw_panel(area: &Area<'_>, panel: &TrendPanel, x_desc: &str, x_labels: &[String]) -> DrawResult {
     let xs = panel.points.iter().map(|p| p.x);
     let Some((x_lo, x_hi)) = padded_range(xs.chain([-0.5]), 0.05) else {
         return draw_note(area, "no runs");
@@ -82,7 +88,12 @@ fn draw_panel(area: &Area<'_>, panel: &TrendPanel, x_desc: &str) -> DrawResult {
         .y_desc(panel.label.as_str())
         .label_style(label_font())
         .y_label_formatter(&|v| tick_label(*v))
-        .x_label_formatter(&|v| tick_label(*v))
+        .x_labels(x_labels.len().clamp(2, 20) + 1)
+        .x_label_formatter(&|v| {
+            let i = v.round();
+            let whole = (v - i).abs() < 1e-6 && i >= 0.0;
+            if whole { x_labels.get(i as usize).cloned().unwrap_or_default() } else { String::new() }
+        })
         .draw()?;
     for p in &panel.points {
         let Some([low, centre, high]) = p.band.filter(|b| b.iter().all(finite)) else { continue };

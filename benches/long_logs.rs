@@ -16,7 +16,8 @@ const DT_SECS: f64 = 1.0 / 8.85;
 
 fn segment_roots(segments: usize) -> Vec<SegmentRoots> {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let mut polar = |lo: f64, hi: f64| Complex::from_polar(rng.random_range(lo..hi), rng.random_range(0.0..3.1));
+    let mut polar =
+        |lo: f64, hi: f64| Complex::from_polar(rng.random_range(lo..hi), rng.random_range(0.0..3.1));
     (0..segments)
         .map(|j| {
             let pair = Complex::new(0.80, 0.21) + polar(0.0, 0.01);

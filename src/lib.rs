@@ -7,6 +7,7 @@
 pub mod batch;
 pub mod cli;
 pub mod core;
+pub mod fleet;
 pub mod io;
 pub mod sim;
 #[cfg(feature = "gui")]

@@ -69,6 +69,12 @@ fn the_workflow_imports_only_the_core_and_the_files() {
     assert!(found.is_empty(), "{found:#?}");
 }
 
+#[test]
+fn the_fleet_imports_only_the_core_the_files_and_the_workflow() {
+    let found = offenders("fleet", &["crate::batch", "crate::cli", "crate::ui", "crate::sim"], &[]);
+    assert!(found.is_empty(), "{found:#?}");
+}
+
 /// Every file of `src` as a module path (`core::identification::pipeline`; a `mod.rs` is its
 /// folder's module), with the modules its code names (`use` paths and paths in code, through
 /// `crate::`, `super::` and `self::`), each resolved to the deepest module that exists.

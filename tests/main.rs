@@ -21,6 +21,7 @@ mod engine_family;
 mod export;
 mod export_parity;
 mod figures;
+mod fleet;
 mod hostile;
 mod identification;
 mod long_runs;

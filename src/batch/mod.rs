@@ -3,7 +3,7 @@
 //! them there too); the stages here describe and score them, in the order the data flows:
 //! [`effects`] → [`diagnose`] → [`compare`] → [`residuals`] → [`report`] and [`figures`]. Every
 //! file is written into a staging folder and moved into `--out` only when every output succeeded
-//! ([`staging`]). The command line builds the [`Project`] (`workflow::Overrides`).
+//! (`io::staging`). The command line builds the [`Project`] (`workflow::Overrides`).
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
@@ -18,6 +18,7 @@ use crate::core::residuals::steady_noise_sigma;
 use crate::io::model_file::OutputModel;
 use crate::io::project::Project;
 use crate::io::report::OutputReport;
+use crate::io::staging::Staging;
 use crate::workflow::model::{self, OutputPlan};
 use crate::workflow::model_file::{new_model_file, output_entry, take_saved_clusters};
 use crate::workflow::preparation::segmentation_choice;
@@ -32,11 +33,9 @@ pub mod figures;
 mod progress;
 mod report;
 pub mod residuals;
-mod staging;
 
 use progress::Progress;
 pub use progress::Timings;
-use staging::Staging;
 
 /// One output's share of the results, made on its own thread.
 struct OutputPart {
@@ -64,7 +63,7 @@ struct Batch<'a> {
 /// there unless every output succeeds.
 pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
     let total = Instant::now();
-    staging::stop_on_interrupt();
+    crate::io::staging::stop_on_interrupt();
     let progress = std::sync::Arc::new(std::sync::Mutex::new(Progress::new(quiet)));
     let mut timings = Timings(BTreeMap::new(), progress.clone());
     let ticker = (!quiet).then(|| progress::Ticker::start(&progress));

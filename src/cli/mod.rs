@@ -1,5 +1,5 @@
 //! The command line of CONTRACT.md: `jetid`, `jetid --batch`, `jetid predict`, `jetid simulate`,
-//! `jetid export`.
+//! `jetid export`, `jetid fleet`.
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -9,10 +9,12 @@ pub use batch_args::BatchArgs;
 
 pub mod batch_args;
 pub mod export;
+pub mod fleet;
 pub mod inspect;
 pub mod predict;
 pub mod read_args;
 pub mod simulate;
+pub mod simulate_fleet;
 
 /// The view `--screenshot` takes unless `--view` says otherwise.
 const DEFAULT_VIEW: &str = "data";
@@ -48,6 +50,10 @@ pub enum Command {
     Inspect(inspect::InspectArgs),
     /// Write a saved model as a Python, C99 or MATLAB program that reproduces `jetid predict`.
     Export(export::ExportArgs),
+    /// Score every engine's runs against its reference: health deltas, flags, trends.
+    Fleet(fleet::FleetArgs),
+    /// Simulate a fleet of engines with hidden health states, its manifest and its truth.
+    SimulateFleet(simulate_fleet::SimulateFleetArgs),
 }
 
 /// A duration on the command line (`--sample-time`): a positive finite number of seconds; a
@@ -67,6 +73,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Predict(args)) => predict::run(&args),
         Some(Command::Export(args)) => export::run(&args),
+        Some(Command::Fleet(args)) => fleet::run(&args),
+        Some(Command::SimulateFleet(args)) => simulate_fleet::run(&args),
         None if cli.batch => {
             if cli.screenshot.is_some() {
                 anyhow::bail!("--screenshot takes a picture of the app; it cannot be combined with --batch");

@@ -4,6 +4,7 @@ pub mod compare;
 pub mod control;
 pub mod diagnose;
 pub mod effects;
+pub mod health;
 pub mod identification;
 pub mod monte_carlo;
 pub mod numerics;

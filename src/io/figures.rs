@@ -15,6 +15,7 @@ mod legend;
 pub mod palette;
 mod residuals;
 mod stats;
+mod trend;
 mod xy;
 mod zplane;
 
@@ -30,6 +31,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 pub use bode::{BodeCurve, EmpiricalBode, bode_png, bode_with_band_png};
 pub use residuals::residuals_png;
 pub use stats::{boxplot_png, histogram_png};
+pub use trend::{TrendPanel, TrendPoint, trend_png};
 pub use xy::{static_map_png, traces_png, traces_with_band_png};
 pub use zplane::{ZPLANE_SIZE, zplane_png, zplane_with_regions_png};
 

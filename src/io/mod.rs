@@ -7,3 +7,4 @@ pub mod model_file;
 pub mod paths;
 pub mod project;
 pub mod report;
+pub mod staging;

@@ -3,6 +3,9 @@
 /// Everything that can go wrong when configuring or running the simulator.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {
+    #[error("simulated fleet: {reason}")]
+    BadFleet { reason: String },
+
     #[error("unknown effect `{id}`; known effects: {}", known.join(", "))]
     UnknownEffect { id: String, known: Vec<String> },
 

@@ -17,6 +17,7 @@ pub mod effects;
 pub mod engine;
 pub mod error;
 pub mod family;
+pub mod fleet;
 
 pub use designs::{FuelProfile, TestKind};
 pub use effects::{ActiveEffects, EFFECT_IDS, Effect};

@@ -43,6 +43,11 @@ pub fn have_python() -> bool {
     )
 }
 
+/// python3 with pyarrow, which reads the fleet's table as a fleet analyst's tools would.
+pub fn have_pyarrow() -> bool {
+    have("python3 with pyarrow", Command::new("python3").args(["-c", "import pyarrow.parquet"]))
+}
+
 /// A C compiler, for the exported C program.
 pub fn have_cc() -> bool {
     have("a C compiler (cc)", Command::new("cc").arg("--version"))

@@ -1,4 +1,4 @@
-//! Results as a set: a batch writes every file into a staging folder beside its `--out` folder and
+//! Results as a set (the batch's and the fleet's): a batch writes every file into a staging folder beside its `--out` folder and
 //! moves them into place only when every output succeeded. A failed batch leaves the earlier
 //! results untouched and adds no file (the staging folder is removed; the `--out` folder is not even
 //! created).

@@ -1,0 +1,204 @@
+//! `jetid fleet MANIFEST --out DIR`: every run of every engine against its engine's reference model
+//! ([`reference`]): scored per output, its health deltas fitted with their intervals
+//! (`core::health`), each delta and the error judged against the engine's normal band across its
+//! runs, and the runs outside it flagged in physical words ([`flags`]). The results — fleet.csv,
+//! fleet.parquet ([`table`]), report.md and one trend figure per engine — are written into a
+//! staging folder and moved into DIR only when every run was scored (`io::staging`).
+//!
+//! At the workflow's level: it reads files (`io`) and identifies a reference project with the
+//! workflow's steps; the runs are scored on two threads, the output in manifest order.
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+use crate::core::health::Estimate;
+use crate::core::parallel::on_two_threads;
+use crate::io::figures::{TrendPanel, TrendPoint, trend_png};
+use crate::io::staging::Staging;
+
+pub mod flags;
+pub mod manifest;
+pub mod reference;
+mod report;
+pub mod score;
+pub mod table;
+
+use flags::EngineBands;
+use manifest::{Engine, load_manifest};
+use reference::Reference;
+use score::{RunScore, score_run};
+use table::Row;
+
+/// What a fleet run wrote, for the summary line and the tests.
+#[derive(Clone, Debug)]
+pub struct FleetSummary {
+    pub engines: usize,
+    pub runs: usize,
+    /// (engine, run, reasons) of every flagged run.
+    pub flagged: Vec<(String, String, String)>,
+    pub out_dir: PathBuf,
+}
+
+/// One engine's results.
+struct EngineResult<'a> {
+    engine: &'a Engine,
+    reference: Reference,
+    scores: Vec<RunScore>,
+    bands: EngineBands,
+}
+
+/// Run the fleet of the manifest at `manifest_path` and write the results into `out_dir`.
+pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
+    crate::io::staging::stop_on_interrupt();
+    let manifest = load_manifest(manifest_path)?;
+    let references = on_two_threads(&manifest.engines, |engine| {
+        Reference::load(&engine.reference)
+            .with_context(|| format!("the reference of engine '{}'", engine.name))
+    });
+    let references = references.into_iter().collect::<Result<Vec<_>>>()?;
+    let jobs: Vec<(usize, usize)> = manifest
+        .engines
+        .iter()
+        .enumerate()
+        .flat_map(|(e, engine)| (0..engine.runs.len()).map(move |r| (e, r)))
+        .collect();
+    let mut scored = on_two_threads(&jobs, |&(e, r)| {
+        let engine = &manifest.engines[e];
+        score_run(&engine.runs[r], &references[e])
+            .with_context(|| format!("engine '{}', run '{}'", engine.name, engine.runs[r].name))
+    })
+    .into_iter();
+    let mut results = Vec::with_capacity(manifest.engines.len());
+    for (engine, reference) in manifest.engines.iter().zip(references) {
+        let scores = scored.by_ref().take(engine.runs.len()).collect::<Result<Vec<_>>>()?;
+        let outputs: Vec<String> = reference.models.iter().map(|m| m.output.clone()).collect();
+        let bands = EngineBands::of(&scores.iter().collect::<Vec<_>>(), &outputs);
+        results.push(EngineResult { engine, reference, scores, bands });
+    }
+    let staging = Staging::new(out_dir)?;
+    let mut rows = Vec::new();
+    let mut written = vec!["fleet.csv".to_owned(), "fleet.parquet".to_owned(), "report.md".to_owned()];
+    let mut figures = Vec::new();
+    for (i, result) in results.iter().enumerate() {
+        let engine_rows = rows_of(result);
+        let figure = format!("trend_{}.png", file_safe(&result.engine.name, i));
+        let labels: Vec<String> = result.engine.runs.iter().map(|r| r.name.clone()).collect();
+        let title = format!("Health of engine {}", result.engine.name);
+        trend_png(
+            &staging.path().join(&figure),
+            &title,
+            "run (in date order)",
+            &labels,
+            &panels(result, &engine_rows),
+        )?;
+        written.push(figure.clone());
+        figures.push(figure);
+        rows.extend(engine_rows);
+    }
+    table::write_csv(&staging.path().join("fleet.csv"), &rows)?;
+    table::write_parquet(&staging.path().join("fleet.parquet"), &rows)?;
+    let markdown = report::markdown(&manifest.name, &results, &rows, &figures);
+    crate::io::atomic::write_atomic(&staging.path().join("report.md"), markdown.as_bytes())?;
+    staging.commit(&written)?;
+    let mut flagged: Vec<(String, String, String)> = Vec::new();
+    for row in rows.iter().filter(|r| !r.flag.is_empty()) {
+        if !flagged.iter().any(|(e, r, _)| *e == row.engine && *r == row.run) {
+            flagged.push((row.engine.clone(), row.run.clone(), row.flag.clone()));
+        }
+    }
+    Ok(FleetSummary { engines: results.len(), runs: jobs.len(), flagged, out_dir: out_dir.to_owned() })
+}
+
+/// An engine's name as a file name: letters, digits, '-' and '_' kept, the rest '_' (the index
+/// keeps two engines whose names differ only in other characters apart).
+fn file_safe(name: &str, index: usize) -> String {
+    let safe: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .collect();
+    format!("{:02}_{safe}", index + 1)
+}
+
+/// The rows of one engine: its runs in trend order, each output of each.
+fn rows_of(result: &EngineResult<'_>) -> Vec<Row> {
+    let mut rows = Vec::new();
+    for (index, (run, score)) in result.engine.runs.iter().zip(&result.scores).enumerate() {
+        let (shared, own) = result.bands.reasons(index, score);
+        for o in &score.outputs {
+            let mut reasons = shared.clone();
+            reasons.extend(
+                own.iter().filter(|(name, _)| *name == o.output).flat_map(|(_, r)| r.iter().cloned()),
+            );
+            let pct = |x: f64| 100.0 * x / o.range.max(f64::MIN_POSITIVE);
+            rows.push(Row {
+                engine: result.engine.name.clone(),
+                run: run.name.clone(),
+                date: run.date.map(|d| d.to_string()),
+                output: o.output.clone(),
+                rmse: o.rmse,
+                rmspe_pct: o.rmspe_pct,
+                input_gain: score.input_gain,
+                input_offset: None,
+                tau_scale: score.tau_scale,
+                map_shift: o.map_shift,
+                map_shift_pct: o
+                    .map_shift
+                    .map(|e| Estimate { value: pct(e.value), ci95: e.ci95.map(|[a, b]| [pct(a), pct(b)]) }),
+                flag: reasons.join("; "),
+            });
+        }
+    }
+    rows
+}
+
+/// The trend figure's panels: the input gain, the time-constant scale and each output's map shift,
+/// each run with the band it was judged against.
+fn panels(result: &EngineResult<'_>, rows: &[Row]) -> Vec<TrendPanel> {
+    let flagged = |run: &str| rows.iter().any(|r| r.run == run && !r.flag.is_empty());
+    let runs = &result.engine.runs;
+    let panel =
+        |label: String, estimates: Vec<Option<Estimate>>, bands: &[Option<crate::core::health::Band>]| {
+            let points = estimates
+                .iter()
+                .enumerate()
+                .filter_map(|(i, e)| {
+                    let e = (*e)?;
+                    let band = bands.get(i).copied().flatten().map(|b| [b.low(), b.centre, b.high()]);
+                    Some(TrendPoint {
+                        x: i as f64,
+                        value: e.value,
+                        ci95: e.ci95,
+                        band,
+                        flagged: flagged(&runs[i].name),
+                    })
+                })
+                .collect();
+            TrendPanel { label, points }
+        };
+    let bands = &result.bands;
+    let mut out = vec![
+        panel("input gain".into(), result.scores.iter().map(|s| s.input_gain).collect(), &bands.input_gain),
+        panel(
+            "time-constant scale".into(),
+            result.scores.iter().map(|s| s.tau_scale).collect(),
+            &bands.tau_scale,
+        ),
+    ];
+    for ((model, unit), (_, shift_bands)) in
+        result.reference.models.iter().zip(&result.reference.units).zip(&bands.map_shift)
+    {
+        let output = &model.output;
+        let estimates = result
+            .scores
+            .iter()
+            .map(|s| s.outputs.iter().find(|o| o.output == *output).and_then(|o| o.map_shift))
+            .collect();
+        let label = if unit.is_empty() {
+            format!("{output} map shift")
+        } else {
+            format!("{output} map shift ({unit})")
+        };
+        out.push(panel(label, estimates, shift_bands));
+    }
+    out
+}

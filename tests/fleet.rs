@@ -130,6 +130,30 @@ fn fleet_table_has_its_columns_in_csv_and_parquet() {
     }
 }
 
+/// The micro gas turbine's T07 runs of 2023-04-05, against the reference identified on 2023-02-10:
+/// both flagged, each with the direction of the change against the reference, the same for both;
+/// the reference day's own runs are not flagged.
+#[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
+fn the_t07_april_runs_are_flagged_with_the_direction_of_the_change() {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/fleet/mgt.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let o = jetid(&["fleet", manifest.to_str().unwrap(), "--out", dir.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = read_csv(&dir.path().join("fleet.csv"));
+    let t07: Vec<_> = rows.iter().filter(|r| r["engine"] == "T07").collect();
+    let direction = |flag: &str| {
+        ["more fuel", "less fuel"]
+            .into_iter()
+            .find(|d| flag.contains("against the reference") && flag.contains(d))
+    };
+    let april: Vec<_> =
+        t07.iter().filter(|r| r["date"] == "2023-04-05").map(|r| direction(&r["flag"])).collect();
+    assert!(!april.is_empty() && april.iter().all(Option::is_some), "{t07:?}");
+    assert!(april.windows(2).all(|w| w[0] == w[1]), "{april:?}");
+    assert!(t07.iter().filter(|r| r["date"] == "2023-02-10").all(|r| r["flag"].is_empty()), "{t07:?}");
+}
+
 /// fleet.parquet reads back with pyarrow (what Dask, Spark, Polars and DuckDB read it with): the
 /// same columns as fleet.csv, the same rows, the same numbers.
 #[test]

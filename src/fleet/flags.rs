@@ -90,7 +90,7 @@ impl EngineBands {
             shared.push(format!(
                 "needs {} {fuel} for the same {} than the reference (its trend: {})",
                 signed(more, "more", "less"),
-                first.unwrap_or_else(|| "output".into()),
+                first.clone().unwrap_or_else(|| "output".into()),
                 signed(usual, "more", "less")
             ));
         }
@@ -116,7 +116,17 @@ impl EngineBands {
                 shared.push(starvation_words(starved));
             }
         }
-        let own = run.outputs.iter().map(|o| (o.output.clone(), self.output_reasons(index, o))).collect();
+        let own: Vec<(String, Vec<String>)> =
+            run.outputs.iter().map(|o| (o.output.clone(), self.output_reasons(index, o))).collect();
+        let flagged = !shared.is_empty() || own.iter().any(|(_, r)| !r.is_empty());
+        // A starved run's gain is fitted where the pump is pinned, beyond the reference's range: it
+        // says nothing about the calibration, and the starvation is the direction.
+        let gain_said = shared.iter().any(|r| r.starts_with("needs ")) || !said.is_empty();
+        if let (true, false, Some(gain)) = (flagged, gain_said, run.input_gain)
+            && let Some(words) = direction_from_reference(gain, &fuel, first.as_deref())
+        {
+            shared.push(words);
+        }
         (shared, own)
     }
 
@@ -150,6 +160,26 @@ impl EngineBands {
         }
         reasons
     }
+}
+
+/// The direction a flagged run moved from the reference, when the band could not say it (a run
+/// flagged for its error, or an engine whose band the flagged runs themselves widen): the input gain
+/// against the reference's 1, when its interval excludes 1 and the change is beyond
+/// [`SMALLEST_GAIN_CHANGE`]. "against the reference: needs 41 % less fuel for the same PR (gain
+/// 1.70, 95 % interval 1.62–1.79)".
+fn direction_from_reference(gain: Estimate, fuel: &str, first: Option<&str>) -> Option<String> {
+    let [lo, hi] = gain.ci95?;
+    let beyond = (gain.value - 1.0).abs() > SMALLEST_GAIN_CHANGE && !(lo..=hi).contains(&1.0);
+    beyond.then(|| {
+        format!(
+            "against the reference: needs {} {fuel} for the same {} (input gain {}, 95 % interval {}–{})",
+            signed(100.0 * (1.0 / gain.value - 1.0), "more", "less"),
+            first.unwrap_or("output"),
+            plain(gain.value, 3),
+            plain(lo, 3),
+            plain(hi, 3)
+        )
+    })
 }
 
 /// "pump at its limit (7.09 V) for 160 s while speed falls 21000 rpm short of the 101000 rpm the

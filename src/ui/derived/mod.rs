@@ -6,6 +6,7 @@
 //! `empirical_bode`, `model_build`, `diagnosis_model`, `residuals` ← `model_cache` ← this one.
 pub mod diagnosis_model;
 pub mod empirical_bode;
+pub mod fleet_history;
 mod ident_runs;
 pub mod jobs;
 pub mod live_model;

@@ -24,7 +24,7 @@ use crate::ui::widgets::hint;
 
 /// How often a frame looks at the fleet job's progress while it runs.
 const POLL: Duration = Duration::from_millis(100);
-const ENGINE_LIST_WIDTH: f32 = 190.0;
+const ENGINE_LIST_WIDTH: f32 = 160.0;
 
 /// Where the fleet stands, for the view and for tests.
 #[derive(Clone, Debug, PartialEq)]
@@ -243,7 +243,7 @@ fn run_view_ui(ui: &mut egui::Ui, state: &HistoryViewState, height: f32) {
     ui.strong(format!("Run {} ({}) against the reference of {}", run.run.name, run.date_text(), engine.name));
     if run.flagged() {
         for reason in &run.reasons {
-            ui.label(RichText::new(format!("⚠ {reason}")).color(theme::ERROR));
+            ui.label(RichText::new(format!("• {reason}")).color(theme::ERROR));
         }
     } else {
         ui.label(RichText::new("Within the engine's normal band.").color(theme::OK));

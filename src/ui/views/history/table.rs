@@ -9,8 +9,13 @@ use crate::ui::theme;
 
 /// Background of a flagged run's row.
 const FLAGGED_ROW: egui::Color32 = egui::Color32::from_rgba_premultiplied(90, 30, 28, 200);
-/// Background of the selected run's row.
+/// A flag's words on its shaded row.
+const FLAG_TEXT: egui::Color32 = egui::Color32::from_rgb(255, 200, 190);
+/// The flag column's width: its first reason, cut.
+const FLAG_WIDTH: f32 = 340.0;
+/// Background of the selected run's row, and of the selected run's when it is flagged.
 const SELECTED_ROW: egui::Color32 = egui::Color32::from_rgba_premultiplied(40, 60, 95, 200);
+const SELECTED_FLAGGED_ROW: egui::Color32 = egui::Color32::from_rgba_premultiplied(130, 45, 40, 230);
 
 /// The engine list; returns the engine clicked.
 pub fn engines_ui(ui: &mut egui::Ui, fleet: &FleetHistory, selected: usize) -> Option<usize> {
@@ -18,7 +23,7 @@ pub fn engines_ui(ui: &mut egui::Ui, fleet: &FleetHistory, selected: usize) -> O
     ui.strong("Engines");
     for (i, engine) in fleet.engines.iter().enumerate() {
         let flagged = engine.flagged_runs();
-        let text = format!("{} — {flagged} of {} flagged", engine.name, engine.runs.len());
+        let text = format!("{}: {flagged} of {} runs flagged", engine.name, engine.runs.len());
         let text = if flagged > 0 { RichText::new(text).color(theme::WARNING) } else { RichText::new(text) };
         if ui.selectable_label(i == selected, text).clicked() {
             clicked = Some(i);
@@ -40,14 +45,14 @@ pub fn estimate_text(estimate: Option<Estimate>, digits: i32) -> String {
 
 /// The column headers of an engine's run table.
 pub fn run_columns(engine: &EngineHistory) -> Vec<String> {
-    let mut columns = vec!["run".to_owned(), "date".to_owned()];
+    let mut columns = vec!["run".to_owned(), "date".to_owned(), "flag".to_owned()];
     for (output, unit) in engine.outputs() {
         let unit = if unit.is_empty() || unit == "-" { String::new() } else { format!(" [{unit}]") };
-        columns.push(format!("{output} RMSE{unit}"));
-        columns.push(format!("{output} RMSPE [%]"));
-        columns.push(format!("{output} map shift{unit}"));
+        columns.push(format!("{output}\nRMSE{unit}"));
+        columns.push(format!("{output}\nRMSPE [%]"));
+        columns.push(format!("{output}\nmap shift{unit}"));
     }
-    columns.extend(["input gain".to_owned(), "τ scale".to_owned(), "flag".to_owned()]);
+    columns.extend(["input gain".to_owned(), "τ scale".to_owned()]);
     columns
 }
 
@@ -62,12 +67,11 @@ pub fn runs_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize
         .with_row_color(move |row, _style| {
             // Row 0 is the header.
             let run = row.checked_sub(1)?;
-            if Some(run) == selected {
-                Some(SELECTED_ROW)
-            } else if flagged.get(run).copied().unwrap_or(false) {
-                Some(FLAGGED_ROW)
-            } else {
-                None
+            match (Some(run) == selected, flagged.get(run).copied().unwrap_or(false)) {
+                (true, true) => Some(SELECTED_FLAGGED_ROW),
+                (true, false) => Some(SELECTED_ROW),
+                (false, true) => Some(FLAGGED_ROW),
+                (false, false) => None,
             }
         })
         .show(ui, |ui| {
@@ -80,6 +84,23 @@ pub fn runs_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize
                     clicked = Some(i);
                 }
                 ui.label(run.date_text());
+                if run.flagged() {
+                    let more = run.reasons.len().saturating_sub(1);
+                    let first = run.reasons.first().map_or("", String::as_str);
+                    let text = if more > 0 { format!("{first} (+{more} more)") } else { first.to_owned() };
+                    let label =
+                        egui::Label::new(RichText::new(text).color(FLAG_TEXT)).sense(egui::Sense::click()).truncate();
+                    // The whole reasons on hover and beside the comparison; the row stays one line.
+                    let response = ui.scope(|ui| {
+                        ui.set_max_width(FLAG_WIDTH);
+                        ui.add(label).on_hover_text(run.reasons.join("\n"))
+                    });
+                    if response.inner.clicked() {
+                        clicked = Some(i);
+                    }
+                } else {
+                    ui.label(RichText::new("within the normal band").color(theme::OK));
+                }
                 for (output, _) in &outputs {
                     match run.score.outputs.iter().find(|o| o.output == *output) {
                         Some(o) => {
@@ -96,17 +117,6 @@ pub fn runs_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize
                 }
                 ui.label(estimate_text(run.score.input_gain, 4));
                 ui.label(estimate_text(run.score.tau_scale, 3));
-                if run.flagged() {
-                    let more = run.reasons.len().saturating_sub(1);
-                    let first = run.reasons.first().map_or("", String::as_str);
-                    let text = if more > 0 { format!("{first} (+{more} more)") } else { first.to_owned() };
-                    let label = egui::Label::new(RichText::new(text).color(theme::ERROR)).sense(egui::Sense::click());
-                    if ui.add(label).on_hover_text(run.reasons.join("\n")).clicked() {
-                        clicked = Some(i);
-                    }
-                } else {
-                    ui.label(RichText::new("within the normal band").color(theme::OK));
-                }
                 ui.end_row();
             }
         });

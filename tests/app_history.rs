@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
 
 use jetid::cli::simulate_fleet::{ReferenceArg, SimulateFleetArgs};
 use jetid::core::run::RunRole;
@@ -72,9 +72,12 @@ fn app_history_lists_engines_flags_runs_and_opens_a_clicked_run_against_its_refe
             .iter()
             .enumerate()
             .flat_map(|(e, engine)| {
-                engine.runs.iter().enumerate().filter(|(_, r)| r.flagged()).map(move |(r, run)| {
-                    (e, r, run.reasons.first().cloned().unwrap_or_default())
-                })
+                engine
+                    .runs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, r)| r.flagged())
+                    .map(move |(r, run)| (e, r, run.reasons.first().cloned().unwrap_or_default()))
             })
             .collect();
         (names, flagged)
@@ -92,7 +95,8 @@ fn app_history_lists_engines_flags_runs_and_opens_a_clicked_run_against_its_refe
     assert!(!harness.query_all_by_label_contains(&reason).collect::<Vec<_>>().is_empty(), "{reason}");
 
     // A click on the run's name opens it against its reference.
-    let run_name = harness.state().view.views.history.fleet().unwrap().engines[engine].runs[run].run.name.clone();
+    let run_name =
+        harness.state().view.views.history.fleet().unwrap().engines[engine].runs[run].run.name.clone();
     harness.get_by_label(&run_name).click();
     harness.run();
     let history = &harness.state().view.views.history;

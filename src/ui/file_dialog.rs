@@ -94,7 +94,9 @@ impl PendingPick {
             FileAction::ImportModel => ("Import model", "Model (JSON)", "json", "model.json"),
             FileAction::SaveProject => ("Save project", "Project (TOML)", "toml", "project.toml"),
             FileAction::OpenProject => ("Open project", "Project (TOML)", "toml", "project.toml"),
-            FileAction::OpenFleet => ("Open fleet manifest", "Fleet manifest (TOML)", "toml", "manifest.toml"),
+            FileAction::OpenFleet => {
+                ("Open fleet manifest", "Fleet manifest (TOML)", "toml", "manifest.toml")
+            }
         };
         let mut dialog = rfd::AsyncFileDialog::new()
             .set_title(title)

@@ -118,9 +118,11 @@ impl HistoryViewState {
     /// Open the first flagged run of the first engine that has one, else the first run.
     pub fn select_first_flagged(&mut self) {
         let Some(fleet) = &self.fleet else { return };
-        let first = fleet.engines.iter().enumerate().find_map(|(e, engine)| {
-            engine.runs.iter().position(|r| r.flagged()).map(|r| (e, r))
-        });
+        let first = fleet
+            .engines
+            .iter()
+            .enumerate()
+            .find_map(|(e, engine)| engine.runs.iter().position(|r| r.flagged()).map(|r| (e, r)));
         let (engine, run) = first.unwrap_or((0, 0));
         self.select_engine(engine);
         self.select_run(run);
@@ -173,10 +175,10 @@ pub fn history_ui(ui: &mut egui::Ui, state: &mut HistoryViewState) -> Vec<Comman
         ui.vertical(|ui| {
             let Some(engine) = fleet.engines.get(state.engine) else { return };
             ui.label(format!("Engine {} — reference: {}", engine.name, engine.reference.described));
-            egui::ScrollArea::both().id_salt("history_run_table").max_height(ui.available_height() * 0.32).show(
-                ui,
-                |ui| run_clicked = runs_ui(ui, engine, state.run),
-            );
+            egui::ScrollArea::both()
+                .id_salt("history_run_table")
+                .max_height(ui.available_height() * 0.32)
+                .show(ui, |ui| run_clicked = runs_ui(ui, engine, state.run));
             ui.separator();
             let plot_height = ui.available_height();
             ui.columns(2, |columns| {
@@ -215,11 +217,11 @@ fn header_ui(ui: &mut egui::Ui, state: &mut HistoryViewState) -> bool {
     let mut cancel = false;
     if let Some((job, path)) = &state.job {
         ui.horizontal(|ui| {
-            ui.add(
-                egui::ProgressBar::new(job.progress() as f32)
-                    .desired_width(240.0)
-                    .text(format!("{} ({:.0} s)", job.label(), job.elapsed().as_secs_f64())),
-            );
+            ui.add(egui::ProgressBar::new(job.progress() as f32).desired_width(240.0).text(format!(
+                "{} ({:.0} s)",
+                job.label(),
+                job.elapsed().as_secs_f64()
+            )));
             ui.label(RichText::new(path.display().to_string()).color(theme::HINT));
             cancel = ui.button("Cancel").clicked();
         });

@@ -53,7 +53,12 @@ pub fn trend_panels(engine: &EngineHistory) -> Vec<TrendPanel> {
 }
 
 /// Every trend panel of `engine`, stacked, `height` each; returns the run whose point was clicked.
-pub fn trends_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize>, height: f32) -> Option<usize> {
+pub fn trends_ui(
+    ui: &mut egui::Ui,
+    engine: &EngineHistory,
+    selected: Option<usize>,
+    height: f32,
+) -> Option<usize> {
     let labels: Vec<String> = engine.runs.iter().map(|r| r.run.name.clone()).collect();
     let flagged: Vec<bool> = engine.runs.iter().map(|r| r.flagged()).collect();
     let mut clicked = None;
@@ -122,7 +127,10 @@ fn trend_ui(
                 plot_ui.points(Points::new("delta", vec![[x, estimate.value]]).color(colour).radius(radius));
             }
             let clicked = plot_ui.response().clicked();
-            clicked.then(|| plot_ui.pointer_coordinate()).flatten().map(|p| p.x.round().clamp(0.0, last) as usize)
+            clicked
+                .then(|| plot_ui.pointer_coordinate())
+                .flatten()
+                .map(|p| p.x.round().clamp(0.0, last) as usize)
         });
     response.inner.filter(|_| n > 0)
 }
@@ -130,15 +138,18 @@ fn trend_ui(
 /// One run's measured outputs and the reference's prediction, one plot per output, `height` each.
 pub fn comparison_ui(ui: &mut egui::Ui, comparison: &RunComparison, height: f32) {
     for (k, trace) in comparison.outputs.iter().enumerate() {
-        let unit = if trace.unit.is_empty() || trace.unit == "-" { String::new() } else { format!(" [{}]", trace.unit) };
+        let unit = if trace.unit.is_empty() || trace.unit == "-" {
+            String::new()
+        } else {
+            format!(" [{}]", trace.unit)
+        };
         ui.label(format!(
             "{}{unit}: measured and the reference's prediction (RMSE {})",
             trace.output,
             crate::fleet::flags::plain(trace.rmse, 3)
         ));
-        let series = |y: &[f64]| -> Vec<[f64; 2]> {
-            comparison.t_secs.iter().zip(y).map(|(t, v)| [*t, *v]).collect()
-        };
+        let series =
+            |y: &[f64]| -> Vec<[f64; 2]> { comparison.t_secs.iter().zip(y).map(|(t, v)| [*t, *v]).collect() };
         Plot::new(("history_comparison", &comparison.run, &trace.output))
             .height(height)
             .x_axis_label("time [s]")
@@ -147,7 +158,8 @@ pub fn comparison_ui(ui: &mut egui::Ui, comparison: &RunComparison, height: f32)
             .y_grid_spacer(plot_util::grid_125_y)
             .legend(egui_plot::Legend::default())
             .show(ui, |plot_ui| {
-                plot_ui.line(Line::new("measured", series(&trace.measured)).color(theme::MEASURED).width(1.5));
+                plot_ui
+                    .line(Line::new("measured", series(&trace.measured)).color(theme::MEASURED).width(1.5));
                 plot_ui.line(
                     Line::new("reference model", series(&trace.predicted))
                         .color(theme::output_colour(k + 1))

@@ -88,8 +88,9 @@ pub fn runs_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize
                     let more = run.reasons.len().saturating_sub(1);
                     let first = run.reasons.first().map_or("", String::as_str);
                     let text = if more > 0 { format!("{first} (+{more} more)") } else { first.to_owned() };
-                    let label =
-                        egui::Label::new(RichText::new(text).color(FLAG_TEXT)).sense(egui::Sense::click()).truncate();
+                    let label = egui::Label::new(RichText::new(text).color(FLAG_TEXT))
+                        .sense(egui::Sense::click())
+                        .truncate();
                     // The whole reasons on hover and beside the comparison; the row stays one line.
                     let response = ui.scope(|ui| {
                         ui.set_max_width(FLAG_WIDTH);

@@ -13,6 +13,8 @@ const BAND_FILL: Color32 = Color32::from_rgba_premultiplied(40, 70, 40, 90);
 const BAND_EDGE: Color32 = Color32::from_rgb(90, 150, 90);
 const POINT: Color32 = theme::MEASURED;
 const Y_AXIS_WIDTH: f32 = 64.0;
+/// At most this many runs get a label on a trend's axis.
+const LABELLED_RUNS: usize = 10;
 
 /// One delta across an engine's runs.
 pub struct TrendPanel {
@@ -94,7 +96,15 @@ fn trend_ui(
         .include_x(-0.5)
         .include_x(last + 0.5)
         .x_axis_formatter(formatter)
+        .x_grid_spacer(move |_| {
+            // A labelled mark on every run, or every k-th one when there are many (egui_plot paints a
+            // label when its step spans 60 points: twice the run spacing does at ten runs per plot).
+            let every = n.div_ceil(LABELLED_RUNS).max(1);
+            let step_size = 2.0 * every as f64;
+            (0..n).step_by(every).map(|i| egui_plot::GridMark { value: i as f64, step_size }).collect()
+        })
         .y_grid_spacer(plot_util::grid_125_y)
+        .y_axis_formatter(plot_util::range_label)
         .allow_drag(false)
         .allow_zoom(false)
         .allow_scroll(false)
@@ -158,13 +168,14 @@ pub fn comparison_ui(ui: &mut egui::Ui, comparison: &RunComparison, height: f32)
             .y_grid_spacer(plot_util::grid_125_y)
             .legend(egui_plot::Legend::default())
             .show(ui, |plot_ui| {
-                plot_ui
-                    .line(Line::new("measured", series(&trace.measured)).color(theme::MEASURED).width(1.5));
+                // The model wide underneath, the measurement thin on top: both stay visible where
+                // they agree.
                 plot_ui.line(
                     Line::new("reference model", series(&trace.predicted))
                         .color(theme::output_colour(k + 1))
-                        .width(1.5),
+                        .width(3.0),
                 );
+                plot_ui.line(Line::new("measured", series(&trace.measured)).color(theme::MEASURED).width(1.0));
             });
     }
 }

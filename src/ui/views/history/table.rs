@@ -12,7 +12,7 @@ const FLAGGED_ROW: egui::Color32 = egui::Color32::from_rgba_premultiplied(90, 30
 /// A flag's words on its shaded row.
 const FLAG_TEXT: egui::Color32 = egui::Color32::from_rgb(255, 200, 190);
 /// The flag column's width: its first reason, cut.
-const FLAG_WIDTH: f32 = 340.0;
+const FLAG_WIDTH: f32 = 300.0;
 /// Background of the selected run's row, and of the selected run's when it is flagged.
 const SELECTED_ROW: egui::Color32 = egui::Color32::from_rgba_premultiplied(40, 60, 95, 200);
 const SELECTED_FLAGGED_ROW: egui::Color32 = egui::Color32::from_rgba_premultiplied(130, 45, 40, 230);
@@ -45,14 +45,13 @@ pub fn estimate_text(estimate: Option<Estimate>, digits: i32) -> String {
 
 /// The column headers of an engine's run table.
 pub fn run_columns(engine: &EngineHistory) -> Vec<String> {
-    let mut columns = vec!["run".to_owned(), "date".to_owned(), "flag".to_owned()];
+    let mut columns = ["run", "date", "flag", "input gain", "τ scale"].map(ToOwned::to_owned).to_vec();
     for (output, unit) in engine.outputs() {
         let unit = if unit.is_empty() || unit == "-" { String::new() } else { format!(" [{unit}]") };
         columns.push(format!("{output}\nRMSE{unit}"));
         columns.push(format!("{output}\nRMSPE [%]"));
         columns.push(format!("{output}\nmap shift{unit}"));
     }
-    columns.extend(["input gain".to_owned(), "τ scale".to_owned()]);
     columns
 }
 
@@ -102,6 +101,8 @@ pub fn runs_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize
                 } else {
                     ui.label(RichText::new("within the normal band").color(theme::OK));
                 }
+                ui.label(estimate_text(run.score.input_gain, 4));
+                ui.label(estimate_text(run.score.tau_scale, 3));
                 for (output, _) in &outputs {
                     match run.score.outputs.iter().find(|o| o.output == *output) {
                         Some(o) => {
@@ -116,8 +117,6 @@ pub fn runs_ui(ui: &mut egui::Ui, engine: &EngineHistory, selected: Option<usize
                         }
                     }
                 }
-                ui.label(estimate_text(run.score.input_gain, 4));
-                ui.label(estimate_text(run.score.tau_scale, 3));
                 ui.end_row();
             }
         });

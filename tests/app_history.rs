@@ -152,3 +152,27 @@ fn app_history_fleet_is_refused_with_batch() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("--fleet") && stderr.contains("--batch"), "{stderr}");
 }
+
+#[test]
+fn app_history_file_menu_opens_a_fleet_through_the_path_field_without_a_native_dialog() {
+    let mut harness = app_with_a_run();
+    harness.state_mut().view.native_dialogs = false;
+    harness.run();
+    harness.get_by_label("File").click();
+    harness.run();
+    harness.get_by_label("Open fleet manifest…").click();
+    harness.run();
+
+    // The in-app path field asks for the manifest; OK computes the fleet in the History view.
+    harness.get_by_label("Open fleet manifest");
+    harness.state_mut().view.path_prompt.as_mut().expect("the path window is open").text =
+        tiny_fleet().display().to_string();
+    harness.get_by_label("OK").click();
+    harness.run();
+    assert!(harness.state().view.path_prompt.is_none(), "the window closes");
+    assert_eq!(harness.state().view.tab, Tab::History);
+    harness.state_mut().view.views.history.wait();
+    harness.run();
+    assert_eq!(harness.state().view.views.history.status(), HistoryStatus::Ready);
+    harness.get_by_label_contains("e001: ");
+}

@@ -176,3 +176,25 @@ fn app_history_file_menu_opens_a_fleet_through_the_path_field_without_a_native_d
     assert_eq!(harness.state().view.views.history.status(), HistoryStatus::Ready);
     harness.get_by_label_contains("e001: ");
 }
+
+#[test]
+fn app_history_a_click_on_a_trend_point_opens_that_run() {
+    let mut harness = app_with_a_run();
+    open_fleet(&mut harness, tiny_fleet());
+    let transform = harness.state().view.views.history.last_trend_transform.expect("the trends were drawn");
+    let (run, gain) = {
+        let engine = &harness.state().view.views.history.fleet().unwrap().engines[0];
+        let run = engine.runs.len() - 1;
+        (run, engine.runs[run].score.input_gain.expect("the input gain was fitted").value)
+    };
+    let at = transform.position_from_point(&egui_plot::PlotPoint::new(run as f64, gain));
+    harness.hover_at(at);
+    harness.step();
+    harness.drag_at(at);
+    harness.step();
+    harness.drop_at(at);
+    harness.run();
+    let history = &harness.state().view.views.history;
+    assert_eq!(history.run, Some(run));
+    assert!(matches!(history.comparison(), Some(Ok(_))));
+}

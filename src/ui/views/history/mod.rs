@@ -49,6 +49,8 @@ pub struct HistoryViewState {
     pub run: Option<usize>,
     /// The comparison of (engine, run) with its reference, or why there is none.
     comparison: Option<((usize, usize), Result<RunComparison, String>)>,
+    /// Where the first trend's points were drawn last frame (for tests).
+    pub last_trend_transform: Option<egui_plot::PlotTransform>,
 }
 
 impl HistoryViewState {
@@ -166,6 +168,7 @@ pub fn history_ui(ui: &mut egui::Ui, state: &mut HistoryViewState) -> Vec<Comman
     };
     let mut engine_clicked = None;
     let mut run_clicked = None;
+    let mut trend_transform = None;
     ui.horizontal_top(|ui| {
         ui.vertical(|ui| {
             ui.set_width(ENGINE_LIST_WIDTH);
@@ -186,14 +189,15 @@ pub fn history_ui(ui: &mut egui::Ui, state: &mut HistoryViewState) -> Vec<Comman
                 let panels = 2 + engine.outputs().len();
                 let each = (plot_height / panels as f32 - 2.0 * left.spacing().interact_size.y).max(60.0);
                 egui::ScrollArea::vertical().id_salt("history_trends").show(left, |ui| {
-                    if let Some(run) = trends_ui(ui, engine, state.run, each) {
-                        run_clicked = Some(run);
-                    }
+                    let (run, transform) = trends_ui(ui, engine, state.run, each);
+                    run_clicked = run_clicked.or(run);
+                    trend_transform = transform;
                 });
                 run_view_ui(right, state, plot_height);
             });
         });
     });
+    state.last_trend_transform = trend_transform;
     if let Some(engine) = engine_clicked {
         state.select_engine(engine);
     }

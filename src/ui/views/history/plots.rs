@@ -2,7 +2,7 @@
 //! interval as an error bar, the engine's normal band shaded), and one run's measured outputs against
 //! its reference's prediction.
 use egui::Color32;
-use egui_plot::{Line, LineStyle, Plot, PlotPoints, Points, Polygon};
+use egui_plot::{Line, LineStyle, Plot, PlotPoints, PlotTransform, Points, Polygon};
 
 use crate::core::health::{Band, Estimate};
 use crate::ui::derived::fleet_history::{EngineHistory, RunComparison};
@@ -54,23 +54,27 @@ pub fn trend_panels(engine: &EngineHistory) -> Vec<TrendPanel> {
     panels
 }
 
-/// Every trend panel of `engine`, stacked, `height` each; returns the run whose point was clicked.
+/// Every trend panel of `engine`, stacked, `height` each; returns the run whose point was clicked
+/// and the first panel's transform (where its points are on screen, for tests).
 pub fn trends_ui(
     ui: &mut egui::Ui,
     engine: &EngineHistory,
     selected: Option<usize>,
     height: f32,
-) -> Option<usize> {
+) -> (Option<usize>, Option<PlotTransform>) {
     let labels: Vec<String> = engine.runs.iter().map(|r| r.run.name.clone()).collect();
     let flagged: Vec<bool> = engine.runs.iter().map(|r| r.flagged()).collect();
     let mut clicked = None;
+    let mut first = None;
     for panel in trend_panels(engine) {
         ui.label(egui::RichText::new(&panel.label).small());
-        if let Some(run) = trend_ui(ui, (&engine.name, &panel), &labels, &flagged, selected, height) {
-            clicked = Some(run);
+        let (run, transform) = trend_ui(ui, (&engine.name, &panel), &labels, &flagged, selected, height);
+        if run.is_some() {
+            clicked = run;
         }
+        first = first.or(Some(transform));
     }
-    clicked
+    (clicked, first)
 }
 
 fn trend_ui(
@@ -80,7 +84,7 @@ fn trend_ui(
     flagged: &[bool],
     selected: Option<usize>,
     height: f32,
-) -> Option<usize> {
+) -> (Option<usize>, PlotTransform) {
     let n = panel.points.len();
     let last = n.saturating_sub(1) as f64;
     let formatter = |mark: egui_plot::GridMark, _: &std::ops::RangeInclusive<f64>| {
@@ -142,7 +146,7 @@ fn trend_ui(
                 .flatten()
                 .map(|p| p.x.round().clamp(0.0, last) as usize)
         });
-    response.inner.filter(|_| n > 0)
+    (response.inner.filter(|_| n > 0), response.transform)
 }
 
 /// One run's measured outputs and the reference's prediction, one plot per output, `height` each.
@@ -175,7 +179,8 @@ pub fn comparison_ui(ui: &mut egui::Ui, comparison: &RunComparison, height: f32)
                         .color(theme::output_colour(k + 1))
                         .width(3.0),
                 );
-                plot_ui.line(Line::new("measured", series(&trace.measured)).color(theme::MEASURED).width(1.0));
+                plot_ui
+                    .line(Line::new("measured", series(&trace.measured)).color(theme::MEASURED).width(1.0));
             });
     }
 }

@@ -98,6 +98,10 @@ fn app_history_lists_engines_flags_runs_and_opens_a_clicked_run_against_its_refe
     let run_name =
         harness.state().view.views.history.fleet().unwrap().engines[engine].runs[run].run.name.clone();
     harness.get_by_label(&run_name).click();
+    // The click's frame starts the simulation on a worker; wait for it, then draw it.
+    harness.step();
+    harness.step();
+    harness.state_mut().view.views.history.wait();
     harness.run();
     let history = &harness.state().view.views.history;
     assert_eq!(history.run, Some(run));
@@ -193,6 +197,9 @@ fn app_history_a_click_on_a_trend_point_opens_that_run() {
     harness.drag_at(at);
     harness.step();
     harness.drop_at(at);
+    harness.step();
+    harness.step();
+    harness.state_mut().view.views.history.wait();
     harness.run();
     let history = &harness.state().view.views.history;
     assert_eq!(history.run, Some(run));

@@ -37,6 +37,12 @@ pub enum HistoryStatus {
     Ready,
 }
 
+/// A run against its reference: simulated on a worker (a long run takes a moment), then kept.
+enum Comparison {
+    Running(Job<RunComparison>),
+    Done(Result<RunComparison, String>),
+}
+
 /// The History view's state: the fleet (computed or being computed), the engine and run selected,
 /// and the selected run's comparison with its reference.
 #[derive(Default)]
@@ -47,8 +53,8 @@ pub struct HistoryViewState {
     error: Option<String>,
     pub engine: usize,
     pub run: Option<usize>,
-    /// The comparison of (engine, run) with its reference, or why there is none.
-    comparison: Option<((usize, usize), Result<RunComparison, String>)>,
+    /// The comparison of (engine, run) with its reference: being computed, or done.
+    comparison: Option<((usize, usize), Comparison)>,
     /// Where the first trend's points were drawn last frame (for tests).
     pub last_trend_transform: Option<egui_plot::PlotTransform>,
 }
@@ -63,8 +69,14 @@ impl HistoryViewState {
         self.error = None;
     }
 
-    /// Collect the job's result; call every frame, whichever view is shown.
+    /// Collect the jobs' results; call every frame, whichever view is shown.
     pub fn poll(&mut self) {
+        if let Some((_, comparison)) = &mut self.comparison
+            && let Comparison::Running(job) = comparison
+            && let Some(outcome) = job.poll()
+        {
+            *comparison = Comparison::Done(outcome.map_err(|e| e.to_string()));
+        }
         let Some((job, path)) = &self.job else { return };
         let Some(outcome) = job.poll() else { return };
         let path = path.clone();
@@ -87,15 +99,19 @@ impl HistoryViewState {
         }
     }
 
+    /// True while the fleet or the selected run's comparison is computed.
     pub fn is_running(&self) -> bool {
-        self.job.is_some()
+        self.job.is_some() || matches!(self.comparison, Some((_, Comparison::Running(_))))
     }
 
-    /// Block until the fleet job ends (tests and screenshots, never in a frame).
+    /// Block until the fleet job and the comparison end (tests and screenshots, never in a frame).
     pub fn wait(&mut self) {
         if let Some((job, path)) = self.job.take() {
             let outcome = job.wait();
             self.finish(path, outcome);
+        }
+        if let Some((key, Comparison::Running(job))) = self.comparison.take() {
+            self.comparison = Some((key, Comparison::Done(job.wait().map_err(|e| e.to_string()))));
         }
     }
 
@@ -114,7 +130,10 @@ impl HistoryViewState {
 
     /// The comparison shown, or why there is none.
     pub fn comparison(&self) -> Option<&Result<RunComparison, String>> {
-        self.comparison.as_ref().map(|(_, c)| c)
+        match &self.comparison {
+            Some((_, Comparison::Done(result))) => Some(result),
+            _ => None,
+        }
     }
 
     /// Open the first flagged run of the first engine that has one, else the first run.
@@ -146,8 +165,13 @@ impl HistoryViewState {
         }
         let Some(engine) = self.fleet.as_ref().and_then(|f| f.engines.get(self.engine)) else { return };
         let Some(history) = engine.runs.get(run) else { return };
-        let compared = compare_run(&history.run, &engine.reference).map_err(|e| format!("{e:#}"));
-        self.comparison = Some((key, compared));
+        let (run, reference) = (history.run.clone(), engine.reference.clone());
+        let job = Job::spawn(
+            format!("Simulating the reference on run {}", run.name),
+            || {},
+            move |_| compare_run(&run, &reference).map_err(|e| JobError::Failed(format!("{e:#}"))),
+        );
+        self.comparison = Some((key, Comparison::Running(job)));
     }
 }
 
@@ -256,6 +280,13 @@ fn run_view_ui(ui: &mut egui::Ui, state: &HistoryViewState, height: f32) {
     }
     for note in &run.score.notes {
         ui.label(RichText::new(note).small().color(theme::HINT));
+    }
+    if let Some((_, Comparison::Running(job))) = &state.comparison {
+        ui.horizontal(|ui| {
+            ui.spinner();
+            ui.label(job.label());
+        });
+        ui.ctx().request_repaint_after(POLL);
     }
     match state.comparison() {
         Some(Ok(comparison)) => {

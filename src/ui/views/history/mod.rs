@@ -182,7 +182,8 @@ pub fn history_ui(ui: &mut egui::Ui, state: &mut HistoryViewState) -> Vec<Comman
         commands.push(Command::ChooseFile(FileAction::OpenFleet));
     }
     if let Some(error) = &state.error {
-        ui.label(RichText::new(error).color(theme::ERROR));
+        // Monospace: a TOML error's caret points at its column.
+        ui.label(RichText::new(error).color(theme::ERROR).monospace());
     }
     let Some(fleet) = &state.fleet else {
         if !state.is_running() {

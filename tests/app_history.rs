@@ -55,6 +55,16 @@ fn open_fleet(harness: &mut Harness<'_, App>, manifest: &Path) {
     harness.run();
 }
 
+/// Draw the frames a click takes (the run it opens is simulated on a worker: wait for it after each
+/// frame), then draw the result.
+fn settle(harness: &mut Harness<'_, App>) {
+    for _ in 0..6 {
+        harness.step();
+        harness.state_mut().view.views.history.wait();
+    }
+    harness.run();
+}
+
 #[test]
 fn app_history_lists_engines_flags_runs_and_opens_a_clicked_run_against_its_reference() {
     let mut harness = app_with_a_run();
@@ -98,11 +108,7 @@ fn app_history_lists_engines_flags_runs_and_opens_a_clicked_run_against_its_refe
     let run_name =
         harness.state().view.views.history.fleet().unwrap().engines[engine].runs[run].run.name.clone();
     harness.get_by_label(&run_name).click();
-    // The click's frame starts the simulation on a worker; wait for it, then draw it.
-    harness.step();
-    harness.step();
-    harness.state_mut().view.views.history.wait();
-    harness.run();
+    settle(&mut harness);
     let history = &harness.state().view.views.history;
     assert_eq!(history.run, Some(run));
     let comparison = history.comparison().unwrap().as_ref().unwrap();
@@ -197,11 +203,9 @@ fn app_history_a_click_on_a_trend_point_opens_that_run() {
     harness.drag_at(at);
     harness.step();
     harness.drop_at(at);
-    harness.step();
-    harness.step();
-    harness.state_mut().view.views.history.wait();
-    harness.run();
+    settle(&mut harness);
     let history = &harness.state().view.views.history;
     assert_eq!(history.run, Some(run));
-    assert!(matches!(history.comparison(), Some(Ok(_))));
+    let comparison = history.comparison().map(|c| c.as_ref().map(|c| c.run.clone()));
+    assert!(matches!(comparison, Some(Ok(_))), "{comparison:?}");
 }

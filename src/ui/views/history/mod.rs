@@ -110,8 +110,12 @@ impl HistoryViewState {
             let outcome = job.wait();
             self.finish(path, outcome);
         }
-        if let Some((key, Comparison::Running(job))) = self.comparison.take() {
-            self.comparison = Some((key, Comparison::Done(job.wait().map_err(|e| e.to_string()))));
+        if let Some((key, comparison)) = self.comparison.take() {
+            let comparison = match comparison {
+                Comparison::Running(job) => Comparison::Done(job.wait().map_err(|e| e.to_string())),
+                done @ Comparison::Done(_) => done,
+            };
+            self.comparison = Some((key, comparison));
         }
     }
 

@@ -43,7 +43,7 @@ impl App {
     fn open_fleet(&mut self, path: &Path) {
         self.view.views.history.open(path.to_owned());
         self.view.tab = crate::ui::state::Tab::History;
-        self.view.status = Some(format!("Scoring the fleet {} in the History view", file_label(path)));
+        self.view.status = Some(format!("Fleet {}: see the History view", file_label(path)));
     }
 
     fn export_model(&mut self, path: &Path) -> Result<()> {

@@ -255,7 +255,8 @@ fn the_circle_check_finds_a_circle() {
 
 #[test]
 fn views_import_no_other_view_nor_the_shell() {
-    let views = ["bode", "compare", "control", "data", "diagnosis", "static_map", "traces", "zplane"];
+    let views =
+        ["bode", "compare", "control", "data", "diagnosis", "history", "static_map", "traces", "zplane"];
     for view in views {
         let others: Vec<String> =
             views.iter().filter(|v| **v != view).map(|v| format!("crate::ui::views::{v}")).collect();

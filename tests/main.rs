@@ -9,6 +9,7 @@ mod app;
 mod app_compare;
 mod app_control;
 mod app_diagnosis;
+mod app_history;
 mod app_roles;
 mod app_zplane;
 mod architecture;

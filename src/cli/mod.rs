@@ -33,9 +33,13 @@ pub struct Cli {
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
     /// The view to capture with --screenshot: data, zplane, bode, static, traces, compare, diagnosis,
-    /// failures (the Diagnosis view's "Where it fails" section) or control.
+    /// failures (the Diagnosis view's "Where it fails" section), control or history (with --fleet).
     #[arg(long, default_value = DEFAULT_VIEW)]
     pub view: String,
+    /// Open a fleet manifest in the app's History view (every engine's runs against its reference);
+    /// with --screenshot, picture it with --view history.
+    #[arg(long, value_name = "MANIFEST")]
+    pub fleet: Option<PathBuf>,
     #[command(subcommand)]
     pub command: Option<Command>,
 }
@@ -76,6 +80,12 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Fleet(args)) => fleet::run(&args),
         Some(Command::SimulateFleet(args)) => simulate_fleet::run(&args),
         None if cli.batch => {
+            if cli.fleet.is_some() {
+                anyhow::bail!(
+                    "--fleet opens a fleet in the app's History view; it cannot be combined with --batch \
+                     (write a fleet's results with `jetid fleet MANIFEST --out DIR`)"
+                );
+            }
             if cli.screenshot.is_some() {
                 anyhow::bail!("--screenshot takes a picture of the app; it cannot be combined with --batch");
             }
@@ -93,22 +103,23 @@ pub fn run(cli: Cli) -> Result<()> {
             // PROJECT and `--add-effect ID` picture a project's runs with effects applied.
             let args = &cli.batch_args;
             let output = args.outputs.first().map(String::as_str);
-            crate::ui::screenshot(out, &cli.view, output, args.project.as_deref(), &args.add_effects)
+            let fleet = cli.fleet.as_deref();
+            crate::ui::screenshot(out, &cli.view, output, args.project.as_deref(), &args.add_effects, fleet)
         }
         None if cli.view != DEFAULT_VIEW => {
             anyhow::bail!("--view {} chooses the view of --screenshot; give --screenshot OUT.png", cli.view)
         }
-        None => run_app(&cli.batch_args),
+        None => run_app(&cli.batch_args, cli.fleet.as_deref()),
     }
 }
 
 #[cfg(feature = "gui")]
-fn run_app(args: &BatchArgs) -> Result<()> {
+fn run_app(args: &BatchArgs, fleet: Option<&std::path::Path>) -> Result<()> {
     let output = args.outputs.first().map(String::as_str);
-    crate::ui::run_app(args.project.as_deref(), output, &args.add_effects)
+    crate::ui::run_app(args.project.as_deref(), output, &args.add_effects, fleet)
 }
 
 #[cfg(not(feature = "gui"))]
-fn run_app(_: &BatchArgs) -> Result<()> {
+fn run_app(_: &BatchArgs, _: Option<&std::path::Path>) -> Result<()> {
     anyhow::bail!("this jetid was built without the desktop app (feature `gui`); use `jetid --batch`")
 }

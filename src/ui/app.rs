@@ -110,6 +110,7 @@ impl App {
             Command::ImportModel(path) => self.file_action_shown(FileAction::ImportModel, &path),
             Command::SaveProject(path) => self.file_action_shown(FileAction::SaveProject, &path),
             Command::OpenProject(path) => self.file_action_shown(FileAction::OpenProject, &path),
+            Command::OpenFleet(path) => self.file_action_shown(FileAction::OpenFleet, &path),
             Command::OpenRunDialog => self.view.dialog_requested = Some(PickPurpose::Runs),
             Command::ChooseFile(action) => self.view.dialog_requested = Some(PickPurpose::File(action)),
             Command::SubmitPath => self.submit_path(),
@@ -276,6 +277,7 @@ impl App {
         self.poll_picker();
         self.refresh();
         self.view.views.compare.poll();
+        self.view.views.history.poll();
 
         let mut commands = shortcut_commands(ui);
         egui::Panel::top("menu_bar").show(ui, |ui| {
@@ -341,7 +343,8 @@ impl App {
             }
         });
         ui.separator();
-        if self.session.runs.is_empty() {
+        // The History view shows a fleet, not the session's runs.
+        if self.session.runs.is_empty() && self.view.tab != Tab::History {
             panels_ui::empty_session_ui(ui);
             return commands;
         }

@@ -94,6 +94,9 @@ impl PendingPick {
             FileAction::ImportModel => ("Import model", "Model (JSON)", "json", "model.json"),
             FileAction::SaveProject => ("Save project", "Project (TOML)", "toml", "project.toml"),
             FileAction::OpenProject => ("Open project", "Project (TOML)", "toml", "project.toml"),
+            FileAction::OpenFleet => {
+                ("Open fleet manifest", "Fleet manifest (TOML)", "toml", "manifest.toml")
+            }
         };
         let mut dialog = rfd::AsyncFileDialog::new()
             .set_title(title)
@@ -110,7 +113,7 @@ impl PendingPick {
                     future.await.map(|f| f.path().to_owned()).into_iter().collect()
                 })
             }
-            FileAction::ImportModel | FileAction::OpenProject => {
+            FileAction::ImportModel | FileAction::OpenProject | FileAction::OpenFleet => {
                 let future = dialog.pick_file();
                 Self::spawn(purpose, repaint, async move {
                     future.await.map(|f| f.path().to_owned()).into_iter().collect()

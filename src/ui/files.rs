@@ -31,7 +31,19 @@ impl App {
             FileAction::ImportModel => self.import_model(path),
             FileAction::SaveProject => self.save_project(path),
             FileAction::OpenProject => self.open_project(path),
+            FileAction::OpenFleet => {
+                self.open_fleet(path);
+                Ok(())
+            }
         }
+    }
+
+    /// Compute the fleet of the manifest at `path` in the background and show the History view;
+    /// its errors are shown there, and the session is not touched.
+    fn open_fleet(&mut self, path: &Path) {
+        self.view.views.history.open(path.to_owned());
+        self.view.tab = crate::ui::state::Tab::History;
+        self.view.status = Some(format!("Fleet {}: see the History view", file_label(path)));
     }
 
     fn export_model(&mut self, path: &Path) -> Result<()> {

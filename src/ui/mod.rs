@@ -59,6 +59,7 @@ pub fn run_app(
     project: Option<&Path>,
     output: Option<&str>,
     add_effects: &[crate::core::effects::EffectId],
+    fleet: Option<&Path>,
 ) -> Result<()> {
     let opened = match project {
         Some(path) => Some(screenshot::app_on_project(path, add_effects)?),
@@ -68,6 +69,7 @@ pub fn run_app(
     check_display()?;
     let options = native_options(None);
     let output = output.map(ToOwned::to_owned);
+    let fleet = fleet.map(Path::to_path_buf);
     eframe::run_native(
         "jetid",
         options,
@@ -76,21 +78,27 @@ pub fn run_app(
             if output.is_some() {
                 app.app.view.output = output;
             }
+            if let Some(manifest) = fleet {
+                // Computed in the background; the History view shows its progress.
+                app.app.apply(Command::OpenFleet(manifest));
+            }
             Ok(Box::new(app))
         }),
     )
     .map_err(|err| anyhow!("could not open the app window ({err}): {NO_DISPLAY_HINT}"))
 }
 
-/// `jetid --screenshot OUT [--view NAME] [--output NAME] [PROJECT] [--add-effect ID]…`: a picture of
-/// one view on the bundled sample runs or on `project` (model views show `output`, else the first
-/// output), with `add_effects` applied to every output.
+/// `jetid --screenshot OUT [--view NAME] [--output NAME] [PROJECT] [--add-effect ID]… [--fleet
+/// MANIFEST]`: a picture of one view on the bundled sample runs or on `project` (model views show
+/// `output`, else the first output), with `add_effects` applied to every output; with `fleet`, the
+/// History view on that fleet, computed first, its first flagged run opened.
 pub fn screenshot(
     out: &Path,
     view: &str,
     output: Option<&str>,
     project: Option<&Path>,
     add_effects: &[crate::core::effects::EffectId],
+    fleet: Option<&Path>,
 ) -> Result<()> {
     // `failures`: the Diagnosis view's "Where it fails" section.
     let failures = view.eq_ignore_ascii_case(FAILURES_VIEW);
@@ -110,6 +118,11 @@ pub fn screenshot(
     app.view.output = output.map(ToOwned::to_owned);
     if failures {
         app.view.views.diagnosis.section = views::diagnosis::Section::WhereItFails;
+    }
+    if let Some(manifest) = fleet {
+        app.apply(Command::OpenFleet(manifest.to_owned()));
+        app.view.views.history.wait();
+        app.view.views.history.select_first_flagged();
     }
     let result = eframe::run_native(
         "jetid",

@@ -17,6 +17,7 @@ pub fn menu_bar_ui(ui: &mut egui::Ui, history: &History) -> Vec<Command> {
             let items = [
                 ("Open run…", Command::OpenRunDialog),
                 ("Open project…", Command::ChooseFile(FileAction::OpenProject)),
+                ("Open fleet manifest…", Command::ChooseFile(FileAction::OpenFleet)),
                 ("Save project…", Command::ChooseFile(FileAction::SaveProject)),
                 ("Import model (clusters)…", Command::ChooseFile(FileAction::ImportModel)),
                 ("Export model…", Command::ChooseFile(FileAction::ExportModel)),

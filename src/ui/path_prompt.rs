@@ -49,6 +49,7 @@ impl PathPrompt {
             PickPurpose::File(FileAction::ImportModel) => "Import model",
             PickPurpose::File(FileAction::SaveProject) => "Save project",
             PickPurpose::File(FileAction::OpenProject) => "Open project",
+            PickPurpose::File(FileAction::OpenFleet) => "Open fleet manifest",
         }
     }
 
@@ -62,6 +63,7 @@ pub fn default_name(action: FileAction) -> (&'static str, &'static str) {
     match action {
         FileAction::ExportModel | FileAction::ImportModel => ("model", "json"),
         FileAction::SaveProject | FileAction::OpenProject => ("project", "toml"),
+        FileAction::OpenFleet => ("manifest", "toml"),
     }
 }
 

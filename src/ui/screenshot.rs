@@ -136,6 +136,13 @@ impl eframe::App for ScreenshotApp {
         if self.done {
             return;
         }
+        if self.app.view.views.history.is_running() {
+            // Picture the computed fleet, as the diagnosis below.
+            self.app.view.views.history.wait();
+            self.frames = 0;
+            ctx.request_repaint();
+            return;
+        }
         if self.app.view.views.diagnosis.is_running() {
             // Picture the finished diagnosis: wait for it, then let the frame settle again.
             self.app.view.views.diagnosis.wait();

@@ -4,8 +4,10 @@
 //!
 //! The modules import one way: `jobs` and `live_model` (the data) ← `ident_runs`,
 //! `empirical_bode`, `model_build`, `diagnosis_model`, `residuals` ← `model_cache` ← this one.
+//! `fleet_history` (a fleet for the History view, not from the session) imports only `jobs`.
 pub mod diagnosis_model;
 pub mod empirical_bode;
+pub mod fleet_history;
 mod ident_runs;
 pub mod jobs;
 pub mod live_model;

@@ -74,6 +74,9 @@ pub enum Command {
     SaveProject(PathBuf),
     /// Replace the session by a project file's runs and setup.
     OpenProject(PathBuf),
+    /// Compute the fleet of a manifest for the History view (the session is not touched; errors
+    /// are shown in the view).
+    OpenFleet(PathBuf),
 
     // --- App actions (no session change) ---
     /// Show the native file dialog; chosen files are loaded with a role guessed from their names.
@@ -114,6 +117,7 @@ pub enum FileAction {
     ImportModel,
     SaveProject,
     OpenProject,
+    OpenFleet,
 }
 
 impl FileAction {
@@ -124,6 +128,7 @@ impl FileAction {
             Self::ImportModel => Command::ImportModel(path),
             Self::SaveProject => Command::SaveProject(path),
             Self::OpenProject => Command::OpenProject(path),
+            Self::OpenFleet => Command::OpenFleet(path),
         }
     }
 }

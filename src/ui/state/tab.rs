@@ -12,11 +12,12 @@ pub enum Tab {
     Compare,
     Diagnosis,
     Control,
+    History,
 }
 
 impl Tab {
     /// In the order of the tab bar.
-    pub const ALL: [Self; 8] = [
+    pub const ALL: [Self; 9] = [
         Self::Data,
         Self::ZPlane,
         Self::Bode,
@@ -25,6 +26,7 @@ impl Tab {
         Self::Compare,
         Self::Diagnosis,
         Self::Control,
+        Self::History,
     ];
 
     pub fn label(self) -> &'static str {
@@ -37,6 +39,7 @@ impl Tab {
             Self::Compare => "Compare",
             Self::Diagnosis => "Diagnosis",
             Self::Control => "Control",
+            Self::History => "History",
         }
     }
 
@@ -51,6 +54,7 @@ impl Tab {
             Self::Compare => "compare",
             Self::Diagnosis => "diagnosis",
             Self::Control => "control",
+            Self::History => "history",
         }
     }
 

@@ -59,4 +59,5 @@ pub struct ViewStates {
     pub compare: CompareViewState,
     pub diagnosis: DiagnosisViewState,
     pub control: crate::ui::views::control::ControlViewState,
+    pub history: crate::ui::views::history::HistoryViewState,
 }

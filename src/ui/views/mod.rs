@@ -9,6 +9,7 @@ pub mod compare;
 pub mod control;
 pub mod data;
 pub mod diagnosis;
+pub mod history;
 pub mod static_map;
 pub mod traces;
 pub mod zplane;
@@ -95,6 +96,14 @@ impl View for diagnosis::DiagnosisViewState {
     }
 }
 
+impl View for history::HistoryViewState {
+    const MODEL_VIEW: bool = false;
+
+    fn ui(&mut self, ui: &mut egui::Ui, _output: &str, _ctx: &ViewContext<'_>) -> Vec<Command> {
+        history::history_ui(ui, self)
+    }
+}
+
 /// Draw `view` as a model view when it is one: the output bar first, and a hint instead when there
 /// is no identified output.
 fn draw<V: View>(
@@ -137,5 +146,6 @@ pub fn tab_ui(ui: &mut egui::Ui, session: &Session, view: &mut ViewState, cache:
         Tab::Compare => draw(ui, &mut states.compare, output, &ctx),
         Tab::Diagnosis => draw(ui, &mut states.diagnosis, output, &ctx),
         Tab::Control => draw(ui, &mut states.control, output, &ctx),
+        Tab::History => draw(ui, &mut states.history, output, &ctx),
     }
 }

@@ -130,6 +130,18 @@ impl EngineBands {
         (shared, own)
     }
 
+    /// Every reason of run `index`'s flag, each once: the shared ones first, then each output's
+    /// own (the History view lists them; fleet.csv gives each output's row its own and the shared).
+    pub fn all_reasons(&self, index: usize, run: &RunScore) -> Vec<String> {
+        let (mut reasons, own) = self.reasons(index, run);
+        for reason in own.into_iter().flat_map(|(_, r)| r) {
+            if !reasons.contains(&reason) {
+                reasons.push(reason);
+            }
+        }
+        reasons
+    }
+
     fn output_reasons(&self, index: usize, o: &super::score::OutputScore) -> Vec<String> {
         let mut reasons = Vec::new();
         if let (Some(band), Some(shift)) = (self.map_shift_of(&o.output, index), o.map_shift)

@@ -24,7 +24,7 @@ pub mod score;
 pub mod table;
 
 use flags::EngineBands;
-use manifest::{Engine, load_manifest};
+use manifest::{Engine, Manifest, load_manifest};
 use reference::Reference;
 use score::{RunScore, score_run};
 use table::Row;
@@ -39,35 +39,56 @@ pub struct FleetSummary {
     pub out_dir: PathBuf,
 }
 
-/// One engine's results.
-struct EngineResult<'a> {
-    engine: &'a Engine,
-    reference: Reference,
-    scores: Vec<RunScore>,
-    bands: EngineBands,
+/// One engine's results: its reference, its runs scored (in the manifest's trend order) and the
+/// bands each run is judged against.
+pub struct EngineResult<'a> {
+    pub engine: &'a Engine,
+    pub reference: Reference,
+    pub scores: Vec<RunScore>,
+    pub bands: EngineBands,
 }
 
-/// Run the fleet of the manifest at `manifest_path` and write the results into `out_dir`.
-pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
-    crate::io::staging::stop_on_interrupt();
-    let manifest = load_manifest(manifest_path)?;
-    let references = on_two_threads(&manifest.engines, |engine| {
-        Reference::load(&engine.reference)
-            .with_context(|| format!("the reference of engine '{}'", engine.name))
-    });
-    let references = references.into_iter().collect::<Result<Vec<_>>>()?;
+/// Runs scored between two reports of the fraction done: enough to keep both threads busy, few
+/// enough that progress moves and a stop is heard within a second or two.
+const RUNS_PER_REPORT: usize = 32;
+
+/// Every engine of `manifest` against its reference: the references loaded (or identified) and the
+/// runs scored on two threads, then each engine's bands. `progress` hears the fraction done (the
+/// references and the runs count alike) and stops the work when it answers `false`: `Ok(None)`.
+/// `jetid fleet` and the app's History view both evaluate a fleet here.
+pub fn evaluate<'a>(
+    manifest: &'a Manifest,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Result<Option<Vec<EngineResult<'a>>>> {
     let jobs: Vec<(usize, usize)> = manifest
         .engines
         .iter()
         .enumerate()
         .flat_map(|(e, engine)| (0..engine.runs.len()).map(move |r| (e, r)))
         .collect();
-    let mut scored = on_two_threads(&jobs, |&(e, r)| {
-        let engine = &manifest.engines[e];
-        score_run(&engine.runs[r], &references[e])
-            .with_context(|| format!("engine '{}', run '{}'", engine.name, engine.runs[r].name))
-    })
-    .into_iter();
+    let steps = (manifest.engines.len() + jobs.len()).max(1) as f64;
+    let references = on_two_threads(&manifest.engines, |engine| {
+        Reference::load(&engine.reference)
+            .with_context(|| format!("the reference of engine '{}'", engine.name))
+    });
+    let references = references.into_iter().collect::<Result<Vec<_>>>()?;
+    let mut done = manifest.engines.len();
+    if !progress(done as f64 / steps) {
+        return Ok(None);
+    }
+    let mut scored = Vec::with_capacity(jobs.len());
+    for chunk in jobs.chunks(RUNS_PER_REPORT) {
+        scored.extend(on_two_threads(chunk, |&(e, r)| {
+            let (engine, reference) = (&manifest.engines[e], &references[e]);
+            score_run(&engine.runs[r], reference)
+                .with_context(|| format!("engine '{}', run '{}'", engine.name, engine.runs[r].name))
+        }));
+        done += chunk.len();
+        if !progress(done as f64 / steps) {
+            return Ok(None);
+        }
+    }
+    let mut scored = scored.into_iter();
     let mut results = Vec::with_capacity(manifest.engines.len());
     for (engine, reference) in manifest.engines.iter().zip(references) {
         let scores = scored.by_ref().take(engine.runs.len()).collect::<Result<Vec<_>>>()?;
@@ -75,6 +96,17 @@ pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
         let bands = EngineBands::of(&scores.iter().collect::<Vec<_>>(), &outputs);
         results.push(EngineResult { engine, reference, scores, bands });
     }
+    Ok(Some(results))
+}
+
+/// Run the fleet of the manifest at `manifest_path` and write the results into `out_dir`.
+pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
+    crate::io::staging::stop_on_interrupt();
+    let manifest = load_manifest(manifest_path)?;
+    let Some(results) = evaluate(&manifest, &mut progress_line())? else {
+        anyhow::bail!("the fleet was stopped");
+    };
+    let runs = results.iter().map(|r| r.scores.len()).sum::<usize>();
     let staging = Staging::new(out_dir)?;
     let mut rows = Vec::new();
     let mut written = vec!["fleet.csv".to_owned(), "fleet.parquet".to_owned(), "report.md".to_owned()];
@@ -106,7 +138,28 @@ pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
             flagged.push((row.engine.clone(), row.run.clone(), row.flag.clone()));
         }
     }
-    Ok(FleetSummary { engines: results.len(), runs: jobs.len(), flagged, out_dir: out_dir.to_owned() })
+    Ok(FleetSummary { engines: results.len(), runs, flagged, out_dir: out_dir.to_owned() })
+}
+
+/// The fraction done on stderr: rewritten in place on a terminal, a line every tenth in a log.
+fn progress_line() -> impl FnMut(f64) -> bool {
+    use std::io::{IsTerminal, Write};
+    let (started, terminal) = (std::time::Instant::now(), std::io::stderr().is_terminal());
+    let mut said = -1.0_f64;
+    move |fraction| {
+        let secs = started.elapsed().as_secs_f64();
+        if terminal {
+            eprint!("\r\x1b[2K[{secs:6.1} s] scoring the fleet: {:.0} %", 100.0 * fraction);
+            if fraction >= 1.0 {
+                eprintln!();
+            }
+        } else if fraction - said >= 0.1 || fraction >= 1.0 && said < 1.0 {
+            said = fraction;
+            eprintln!("jetid: [{secs:6.1} s] scoring the fleet: {:.0} %", 100.0 * fraction);
+        }
+        let _ = std::io::stderr().flush();
+        true
+    }
 }
 
 /// An engine's name as a file name: letters, digits, '-' and '_' kept, the rest '_' (the index

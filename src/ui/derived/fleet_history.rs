@@ -2,9 +2,9 @@
 //! against it and judged against the engine's normal band, as `jetid fleet` does, but kept in memory
 //! instead of written to files; and one run against its reference, for the view's comparison plot.
 //!
-//! Composed from the fleet's public pieces (`load_manifest`, `Reference::load`, `score_run`,
-//! `EngineBands`); the reasons of a run are those `jetid fleet` writes in its rows' flag column.
-//! Nothing here touches the session.
+//! The fleet is evaluated by the fleet's own `evaluate`, which `jetid fleet` calls too; the reasons
+//! of a run are those `jetid fleet` writes in its rows' flag column. Nothing here touches the
+//! session.
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -14,7 +14,7 @@ use crate::core::numerics::metrics::metrics;
 use crate::fleet::flags::EngineBands;
 use crate::fleet::manifest::{FleetRun, load_manifest};
 use crate::fleet::reference::Reference;
-use crate::fleet::score::{RunScore, score_run};
+use crate::fleet::score::RunScore;
 use crate::ui::derived::jobs::{JobError, JobResult};
 use crate::workflow::runs::load_source;
 
@@ -67,57 +67,30 @@ impl EngineHistory {
     }
 }
 
-/// Read the manifest at `path`, load every engine's reference and score every run; `progress`
-/// gets the fraction done (references and runs count alike) and stops the work when it says `false`.
+/// Read the manifest at `path` and evaluate it as `jetid fleet` does ([`crate::fleet::evaluate`]);
+/// `progress` gets the fraction done and stops the work when it says `false`.
 pub fn compute_fleet(path: &Path, progress: &mut dyn FnMut(f64) -> bool) -> JobResult<FleetHistory> {
     let failed = |err: anyhow::Error| JobError::Failed(format!("{err:#}"));
     let manifest = load_manifest(path).map_err(failed)?;
-    let steps = manifest.engines.iter().map(|e| 1 + e.runs.len()).sum::<usize>().max(1);
-    let mut done = 0usize;
-    let mut step = |done: &mut usize| {
-        *done += 1;
-        if progress(*done as f64 / steps as f64) { Ok(()) } else { Err(JobError::Cancelled) }
-    };
-    let mut engines = Vec::with_capacity(manifest.engines.len());
-    for engine in manifest.engines {
-        let reference = Reference::load(&engine.reference)
-            .with_context(|| format!("the reference of engine '{}'", engine.name))
-            .map_err(failed)?;
-        step(&mut done)?;
-        let mut scores = Vec::with_capacity(engine.runs.len());
-        for run in &engine.runs {
-            let score = score_run(run, &reference)
-                .with_context(|| format!("engine '{}', run '{}'", engine.name, run.name))
-                .map_err(failed)?;
-            scores.push(score);
-            step(&mut done)?;
-        }
-        let outputs: Vec<String> = reference.models.iter().map(|m| m.output.clone()).collect();
-        let bands = EngineBands::of(&scores.iter().collect::<Vec<_>>(), &outputs);
-        let runs = engine
-            .runs
-            .into_iter()
-            .zip(scores)
-            .enumerate()
-            .map(|(index, (run, score))| {
-                let reasons = reasons_of(&bands, index, &score);
-                RunHistory { run, score, reasons }
-            })
-            .collect();
-        engines.push(EngineHistory { name: engine.name, reference, runs, bands });
-    }
-    Ok(FleetHistory { name: manifest.name, path: path.to_owned(), engines })
-}
-
-/// The reasons of every output's flag, each once: the shared ones first, then each output's own.
-fn reasons_of(bands: &EngineBands, index: usize, score: &RunScore) -> Vec<String> {
-    let (mut reasons, own) = bands.reasons(index, score);
-    for reason in own.into_iter().flat_map(|(_, r)| r) {
-        if !reasons.contains(&reason) {
-            reasons.push(reason);
-        }
-    }
-    reasons
+    let results = crate::fleet::evaluate(&manifest, progress).map_err(failed)?.ok_or(JobError::Cancelled)?;
+    let engines = results
+        .into_iter()
+        .map(|result| {
+            let runs = (result.engine.runs.iter().cloned().zip(result.scores).enumerate())
+                .map(|(index, (run, score))| {
+                    let reasons = result.bands.all_reasons(index, &score);
+                    RunHistory { run, score, reasons }
+                })
+                .collect();
+            EngineHistory {
+                name: result.engine.name.clone(),
+                reference: result.reference,
+                runs,
+                bands: result.bands,
+            }
+        })
+        .collect();
+    Ok(FleetHistory { name: manifest.name.clone(), path: path.to_owned(), engines })
 }
 
 /// One output of a run against its reference.

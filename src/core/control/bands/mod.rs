@@ -10,10 +10,12 @@
 //! **The output band: delta method.** The simulated output is a smooth function of the parameters
 //! at every sample, and the first-order propagation needs two simulations per parameter where
 //! percentiles would need hundreds: `var ŷₖ = gₖᵀ Σ gₖ`, `gₖ` the output's gradient at sample k.
-//! - [`points`]: the operating points' intervals and the local step responses' bands;
-//! - [`output`]: the band of the noiseless output;
-//! - [`shape`]: the Bode band of the linear block and the roots' regions in z;
-//! - [`parameters`]: the model's numbers (map, effects, continuous-time block) with intervals.
+//!
+//! The parts:
+//! - `points`: the operating points' intervals and the local step responses' bands;
+//! - `output`: the band of the noiseless output;
+//! - `shape`: the Bode band of the linear block and the roots' regions in z;
+//! - `parameters`: the model's numbers (map, effects, continuous-time block) with intervals.
 mod output;
 mod parameters;
 mod points;
@@ -23,6 +25,7 @@ pub use output::output_half_widths;
 pub use parameters::{ParameterInterval, parameter_intervals};
 pub use points::{step_band, with_intervals};
 pub use shape::{BodeBand, RootRegion, bode_band, root_regions};
+
 /// Models drawn for the operating points' intervals. Each 2.5 % tail then holds 5 draws; the
 /// binomial spread of the share of a distribution below the 2.5 % percentile of 200 draws is
 /// √(0.025·0.975/200) ≈ 1.1 points, so a calibrated interval covers 95 ± 1.6 % of the time, well

@@ -33,17 +33,8 @@ pub fn effects_and_diagnosis(
     timings: &mut Timings,
 ) -> Result<Built> {
     let output = plan.output.as_str();
-    let validation = runs.validation_of(output);
     let mut effects = timings.time_with_fraction(&format!("effects_{output}"), |progress| {
-        model::add_effects(
-            &identified.model,
-            &plan.effects,
-            &runs.ident,
-            &identified.fits,
-            &plan.settings,
-            &validation,
-            progress,
-        )
+        model::add_project_effects(plan, runs, identified, progress)
     });
     effects.check(output)?;
     notes.extend(effects.notes(output, &plan.effects));

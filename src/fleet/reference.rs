@@ -88,16 +88,7 @@ pub fn identify_project(path: &Path) -> Result<(ModelFile, String)> {
         let plan = OutputPlan::of_project(&project, output).with_steps_from(&runs.steps_from);
         let identified = model::identify(&runs.ident, &runs.ident_junctions, &plan)
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
-        let validation = runs.validation_of(output);
-        let effects = model::add_effects(
-            &identified.model,
-            &plan.effects,
-            &runs.ident,
-            &identified.fits,
-            &plan.settings,
-            &validation,
-            &mut |_| true,
-        );
+        let effects = model::add_project_effects(&plan, &runs, &identified, &mut |_| true);
         effects.check(output)?;
         let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
         file.outputs.push(output_entry(&identified.model, effects.model(), &unit));

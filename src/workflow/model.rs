@@ -212,6 +212,20 @@ impl Effects {
     }
 }
 
+/// [`add_effects`] for an output of a project whose runs are loaded: its identified model and
+/// fits, the plan's effects, chosen on the output's validation runs (the batch and a fleet's
+/// reference project build a model alike).
+pub fn add_project_effects(
+    plan: &OutputPlan,
+    runs: &runs::Runs,
+    identified: &Identified,
+    progress: &mut dyn FnMut(f64) -> bool,
+) -> Effects {
+    let validation = runs.validation_of(&plan.output);
+    let (model, fits) = (&identified.model, &identified.fits);
+    add_effects(model, &plan.effects, &runs.ident, fits, &plan.settings, &validation, progress)
+}
+
 /// The gray-box `model` with the effects of `plan`: each effect added by hand refitted on the
 /// identification data (`ident`, `fits`) in turn, then the missing-physics loop, every choice made
 /// on `validation`; the validation error after each step. `progress` gets the fraction of the

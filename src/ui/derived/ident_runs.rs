@@ -120,3 +120,31 @@ pub(super) fn scored_runs(
     }
     scored
 }
+
+/// The identification run, the junctions in it, the note on how it was made, and where it starts in
+/// the joined identification runs.
+pub(super) type IdentRun = (Arc<Run>, Vec<usize>, Option<String>, usize);
+
+/// The joined identification run cut to the part its model is fitted on when it is long
+/// ([`crate::workflow::runs::within_fit_budget`], as the batch cuts it), with where the cut starts; the note says so.
+pub(super) fn within_fit_budget(
+    joined: (Arc<Run>, Vec<usize>, Option<String>),
+    (segments_given, named_steps_from): &(bool, Option<String>),
+) -> Option<IdentRun> {
+    let (run, junctions, join_note) = joined;
+    if *segments_given || run.len() <= crate::workflow::long_runs::FIT_SAMPLES {
+        return Some((run, junctions, join_note, 0));
+    }
+    let (cut, inside, window) = crate::workflow::runs::within_fit_budget(
+        Arc::unwrap_or_clone(run),
+        junctions,
+        named_steps_from.as_deref(),
+        false,
+    );
+    let (start, window_note) = window.map_or((0, None), |(start, note)| (start, Some(note)));
+    let note = match (join_note, window_note) {
+        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+        (a, b) => a.or(b),
+    };
+    Some((Arc::new(cut), inside, note, start))
+}

@@ -16,25 +16,8 @@ fn main() -> ExitCode {
     match jetid::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {}", message(&err));
+            eprintln!("error: {}", jetid::cli::error_message(&err));
             ExitCode::FAILURE
         }
     }
-}
-
-/// The error and its causes joined by ": ", each said once: an error whose message already quotes
-/// its cause (`segmentation of 'run': no steps found …`) does not get the cause appended again.
-fn message(err: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in err.chain() {
-        let text = cause.to_string();
-        if out.contains(&text) {
-            continue;
-        }
-        if !out.is_empty() {
-            out.push_str(": ");
-        }
-        out.push_str(&text);
-    }
-    out
 }

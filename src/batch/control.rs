@@ -8,19 +8,23 @@ use crate::core::numerics::stats::mean;
 
 use crate::workflow::runs::Runs;
 
-/// Operating points of `model` and the ZOH equivalent of its linear block; what could not be
-/// computed goes to `notes`.
-pub(super) fn control_report(
+/// Where the operating points lie: the identified range of the identification run's input, and
+/// each steady run's plateau (its name and mean input).
+pub fn range_and_plateaus(runs: &Runs) -> ((f64, f64), Vec<(String, f64)>) {
+    let range = identified_range(&runs.ident.input.values);
+    let plateaus = runs.steady.iter().map(|s| (s.name.clone(), mean(&s.input.values))).collect();
+    (range, plateaus)
+}
+
+/// Operating points of `model` across `range` and at the `plateaus`, and the ZOH equivalent of its
+/// linear block; what could not be computed goes to `notes`.
+pub fn control_report(
     model: &ExtendedModel,
     covariance: Option<&ParameterCovariance>,
-    runs: &Runs,
+    (range, plateaus): ((f64, f64), Vec<(String, f64)>),
     notes: &mut Vec<String>,
 ) -> (Vec<OperatingPoint>, Option<ContinuousTf>) {
     let output = &model.output;
-    let u = &runs.ident.input.values;
-    let range = identified_range(u);
-    let plateaus: Vec<(String, f64)> =
-        runs.steady.iter().map(|s| (s.name.clone(), mean(&s.input.values))).collect();
     let mut points = operating_points(model, range, &plateaus).unwrap_or_else(|e| {
         notes.push(format!("operating points of '{output}': {e}"));
         Vec::new()
@@ -43,7 +47,7 @@ pub(super) fn control_report(
 }
 
 /// The final model's numbers with their 95 % intervals; what could not be computed goes to `notes`.
-pub(super) fn parameter_report(
+pub fn parameter_report(
     model: &ExtendedModel,
     covariance: Option<&ParameterCovariance>,
     notes: &mut Vec<String>,

@@ -26,8 +26,8 @@ use crate::workflow::runs::{self, Runs};
 use crate::workflow::uncertainty::parameter_covariance;
 
 mod compare;
-mod control;
-mod diagnose;
+pub mod control;
+pub mod diagnose;
 mod effects;
 pub mod figures;
 mod progress;
@@ -256,7 +256,12 @@ impl Batch<'_> {
         out.residuals = residuals;
         out.failing = crate::io::report::markdown::failing_models(out);
         (out.operating_points, out.continuous) = timings.time(&format!("control_{output}"), || {
-            control::control_report(extended, entry.covariance.as_ref(), runs, notes)
+            control::control_report(
+                extended,
+                entry.covariance.as_ref(),
+                control::range_and_plateaus(runs),
+                notes,
+            )
         });
         out.parameter_intervals = control::parameter_report(extended, entry.covariance.as_ref(), notes);
         part.figures.extend(figs);

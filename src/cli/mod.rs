@@ -70,6 +70,24 @@ pub(crate) fn positive_secs(text: &str) -> Result<f64, String> {
     }
 }
 
+/// The error and its causes joined by ": ", each said once: an error whose message already quotes
+/// its cause (`segmentation of 'run': no steps found …`) does not get the cause appended again. The
+/// binary prints it after "error: "; the Python package raises it.
+pub fn error_message(err: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
+}
+
 /// Dispatch a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {

@@ -59,20 +59,19 @@ fn check_stable(model: &ModelFile, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Say on stderr which share of the run's input lies outside the range the model was identified on
-/// (or that it changes sign); with `--strict` refuse the run instead.
-fn check_coverage(model: &ModelFile, run: &Run, args: &PredictArgs) -> Result<()> {
-    let Some(range) = model.input_range else { return Ok(()) };
+/// Which share of the run's input lies outside the range the model was identified on (or that it
+/// changes sign), in words; with `strict` the run is refused instead.
+fn check_coverage(model: &ModelFile, run: &Run, target: &Target<'_>) -> Result<Option<String>> {
+    let Some(range) = model.input_range else { return Ok(None) };
     let coverage = InputCoverage::of(&run.input.values, range);
-    let Some(words) = coverage.words(&model.input.unit) else { return Ok(()) };
-    if args.strict {
+    let Some(words) = coverage.words(&model.input.unit) else { return Ok(None) };
+    if target.strict {
         bail!(
             "{}: {words}; --strict refuses it (without --strict the prediction is written and this is said)",
-            args.input.display()
+            target.input.display()
         );
     }
-    eprintln!("jetid: {}: {words}", args.input.display());
-    Ok(())
+    Ok(Some(format!("{}: {words}", target.input.display())))
 }
 
 /// The parameter of largest magnitude in an output's model, with its path in model.json
@@ -118,30 +117,39 @@ impl From<InitialStateArg> for InitialState {
     }
 }
 
+/// A prediction's model and run, named as the messages name them, and how it is made.
+pub struct Target<'a> {
+    /// The model file (or what stands for it).
+    pub model: &'a Path,
+    /// The run file (or what stands for it).
+    pub input: &'a Path,
+    pub initial_state: InitialState,
+    /// Refuse a run whose input leaves the identified range instead of saying so.
+    pub strict: bool,
+}
+
 pub fn run(args: &PredictArgs) -> Result<()> {
     let inputs = [("--input", args.input.as_path()), ("--model", args.model.as_path())];
     if let Some(why) = overwrites_input("--out", &args.out, &inputs) {
         bail!(why);
     }
     let model = read_model(&args.model)?;
-    check_stable(&model, &args.model)?;
     let mut opts = args.read.options(&args.input)?;
     // Started from the steady state, the model needs the input alone: a fuel schedule without
     // measured outputs, or with gaps in them, is a run to predict from.
     opts.input_only =
         InitialState::from(args.initial_state) == InitialState::Steady && opts.map.outputs.is_empty();
     let run = load_run(&args.input, &opts)?;
-    check_run_fits_model(&model, &run, args)?;
-    check_coverage(&model, &run, args)?;
-    let outputs = model.outputs.iter().map(|out| predict_output(out, &run, args)).collect::<Result<_>>()?;
-    let prediction = Run {
-        name: format!("{} predicted", run.name),
-        dt_secs: run.dt_secs,
-        t_secs: run.t_secs.clone(),
-        input: run.input.clone(),
-        outputs,
-        aux: Vec::new(),
+    let target = Target {
+        model: &args.model,
+        input: &args.input,
+        initial_state: args.initial_state.into(),
+        strict: args.strict,
     };
+    let (prediction, coverage) = predict(&model, &run, &target)?;
+    if let Some(words) = coverage {
+        eprintln!("jetid: {words}");
+    }
     write_run(&args.out, &prediction)?;
     println!(
         "wrote {} ({} samples, outputs: {})",
@@ -152,9 +160,28 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     Ok(())
 }
 
+/// What `jetid predict` writes: every output of `model` simulated from `run`'s input (time, the
+/// input, one channel per output), after the checks that the run fits the model; and which share
+/// of the input lies outside the identified range, in words. The Python package predicts here too.
+pub fn predict(model: &ModelFile, run: &Run, target: &Target<'_>) -> Result<(Run, Option<String>)> {
+    check_stable(model, target.model)?;
+    check_run_fits_model(model, run, target)?;
+    let coverage = check_coverage(model, run, target)?;
+    let outputs = model.outputs.iter().map(|out| predict_output(out, run, target)).collect::<Result<_>>()?;
+    let prediction = Run {
+        name: format!("{} predicted", run.name),
+        dt_secs: run.dt_secs,
+        t_secs: run.t_secs.clone(),
+        input: run.input.clone(),
+        outputs,
+        aux: Vec::new(),
+    };
+    Ok((prediction, coverage))
+}
+
 /// The run drives the model as it was identified: the same input signal, the same sample time, and
 /// a model with at least one output.
-fn check_run_fits_model(model: &ModelFile, run: &Run, args: &PredictArgs) -> Result<()> {
+fn check_run_fits_model(model: &ModelFile, run: &Run, args: &Target<'_>) -> Result<()> {
     if run.input.name != model.input.name {
         bail!(
             "{} was identified from the input '{}', but {} gives '{}' as its input: a model driven by another \
@@ -183,11 +210,11 @@ fn check_run_fits_model(model: &ModelFile, run: &Run, args: &PredictArgs) -> Res
 
 /// One output's prediction on the run, its effects included; an output that overflows names the
 /// model's largest parameter.
-fn predict_output(out: &OutputModel, run: &Run, args: &PredictArgs) -> Result<Channel> {
+fn predict_output(out: &OutputModel, run: &Run, args: &Target<'_>) -> Result<Channel> {
     let extended =
         crate::core::effects::ExtendedModel::from_records(&out.name, out.wiener.clone(), &out.effects)
             .with_context(|| format!("{}: output '{}'", args.model.display(), out.name))?;
-    let initial = InitialState::from(args.initial_state);
+    let initial = args.initial_state;
     if initial == InitialState::Estimated && run.output(&out.name).is_none() {
         bail!(
             "--initial-state estimated fits the start to the measured '{}', which {} does not hold \

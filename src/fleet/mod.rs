@@ -37,6 +37,8 @@ pub struct FleetSummary {
     /// (engine, run, reasons) of every flagged run.
     pub flagged: Vec<(String, String, String)>,
     pub out_dir: PathBuf,
+    /// The table's rows, as fleet.csv holds them.
+    pub rows: Vec<Row>,
 }
 
 /// One engine's results: its reference, its runs scored (in the manifest's trend order) and the
@@ -92,11 +94,20 @@ pub fn evaluate<'a>(
     let mut results = Vec::with_capacity(manifest.engines.len());
     for (engine, reference) in manifest.engines.iter().zip(references) {
         let scores = scored.by_ref().take(engine.runs.len()).collect::<Result<Vec<_>>>()?;
-        let outputs: Vec<String> = reference.models.iter().map(|m| m.output.clone()).collect();
-        let bands = EngineBands::of(&scores.iter().collect::<Vec<_>>(), &outputs);
-        results.push(EngineResult { engine, reference, scores, bands });
+        results.push(EngineResult::of(engine, reference, scores));
     }
     Ok(Some(results))
+}
+
+impl<'a> EngineResult<'a> {
+    /// An engine's result from its reference and its runs' scores (in the manifest's order): the
+    /// bands judged across them. [`evaluate`] gathers every engine's here, and so does a distributed
+    /// engine that scored the runs one task each.
+    pub fn of(engine: &'a Engine, reference: Reference, scores: Vec<RunScore>) -> Self {
+        let outputs: Vec<String> = reference.models.iter().map(|m| m.output.clone()).collect();
+        let bands = EngineBands::of(&scores.iter().collect::<Vec<_>>(), &outputs);
+        Self { engine, reference, scores, bands }
+    }
 }
 
 /// Run the fleet of the manifest at `manifest_path` and write the results into `out_dir`.
@@ -138,7 +149,7 @@ pub fn run(manifest_path: &Path, out_dir: &Path) -> Result<FleetSummary> {
             flagged.push((row.engine.clone(), row.run.clone(), row.flag.clone()));
         }
     }
-    Ok(FleetSummary { engines: results.len(), runs, flagged, out_dir: out_dir.to_owned() })
+    Ok(FleetSummary { engines: results.len(), runs, flagged, out_dir: out_dir.to_owned(), rows })
 }
 
 /// The fraction done on stderr: rewritten in place on a terminal, a line every tenth in a log.
@@ -172,8 +183,8 @@ fn file_safe(name: &str, index: usize) -> String {
     format!("{:02}_{safe}", index + 1)
 }
 
-/// The rows of one engine: its runs in trend order, each output of each.
-fn rows_of(result: &EngineResult<'_>) -> Vec<Row> {
+/// The rows of one engine in fleet.csv: its runs in trend order, each output of each.
+pub fn rows_of(result: &EngineResult<'_>) -> Vec<Row> {
     let mut rows = Vec::new();
     for (index, (run, score)) in result.engine.runs.iter().zip(&result.scores).enumerate() {
         let (shared, own) = result.bands.reasons(index, score);

@@ -10,8 +10,9 @@ use crate::core::run::Run;
 use crate::io::model_file::{ModelFile, read_model};
 use crate::io::project::load_project;
 use crate::workflow::model::{self, OutputPlan};
-use crate::workflow::model_file::{new_model_file, output_entry, take_saved_clusters};
-use crate::workflow::runs::{self, load_runs};
+use crate::workflow::model_file::{new_model_file, output_entry};
+use crate::workflow::project_model::{Covariance, build_project};
+use crate::workflow::runs::load_runs;
 
 use super::manifest::ReferenceSource;
 
@@ -63,14 +64,19 @@ impl Reference {
 
     /// The reference `source` names.
     pub fn load(source: &ReferenceSource) -> Result<Self> {
+        let (file, described) = Self::model_file(source)?;
+        Self::of_model_file(&file, described)
+    }
+
+    /// The model file of the reference `source` names (read, or identified from its project) and
+    /// how the reference is described: what a distributed engine hands from the task that builds an
+    /// engine's reference to the tasks that score its runs ([`Self::of_model_file`] rebuilds it).
+    pub fn model_file(source: &ReferenceSource) -> Result<(ModelFile, String)> {
         match source {
-            ReferenceSource::Model(path) => {
-                let file = read_model(path)?;
-                Self::of_model_file(&file, format!("model.json {}", path.display()))
-            }
+            ReferenceSource::Model(path) => Ok((read_model(path)?, format!("model.json {}", path.display()))),
             ReferenceSource::Project(path) => {
                 let (file, ident) = identify_project(path)?;
-                Self::of_model_file(&file, format!("project {} (identified on {ident})", path.display()))
+                Ok((file, format!("project {} (identified on {ident})", path.display())))
             }
         }
     }
@@ -81,18 +87,7 @@ impl Reference {
 pub fn identify_project(path: &Path) -> Result<(ModelFile, String)> {
     let mut project = load_project(path)?;
     let runs = load_runs(&project)?;
-    let outputs = runs::outputs_to_model(&project, &runs.ident)?;
-    take_saved_clusters(&mut project, runs.ident.dt_secs, &outputs)?;
-    let mut file = new_model_file(&runs.ident);
-    for output in &outputs {
-        let plan = OutputPlan::of_project(&project, output).with_steps_from(&runs.steps_from);
-        let identified = model::identify(&runs.ident, &runs.ident_junctions, &plan)
-            .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
-        let effects = model::add_project_effects(&plan, &runs, &identified, &mut |_| true);
-        effects.check(output)?;
-        let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
-        file.outputs.push(output_entry(&identified.model, effects.model(), &unit));
-    }
+    let (file, _, _) = build_project(&mut project, &runs, Covariance::Skip)?;
     Ok((file, runs.ident.name.clone()))
 }
 

@@ -2,6 +2,7 @@
 //! RMSPE), its health deltas fitted with their intervals, and the stretches where its input sits at
 //! its limit measured against what the reference gives there.
 use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
 
 use crate::core::health::{self, Deltas, Estimate, HealthFit};
 use crate::core::identification::initial_state::InitialState;
@@ -21,7 +22,7 @@ const INITIAL: InitialState = InitialState::Estimated;
 const SETTLE_TIME_CONSTANTS: f64 = 3.0;
 
 /// One output of a run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct OutputScore {
     pub output: String,
     pub unit: String,
@@ -33,7 +34,7 @@ pub struct OutputScore {
 }
 
 /// The input at its limit over a stretch, and the output there against the reference.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Starved {
     pub output: String,
     pub unit: String,
@@ -51,8 +52,9 @@ pub struct Starved {
     pub shortfall: f64,
 }
 
-/// Everything the fleet reports of one run.
-#[derive(Clone, Debug)]
+/// Everything the fleet reports of one run (serialisable, so that a distributed engine's workers
+/// can hand it back).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunScore {
     pub outputs: Vec<OutputScore>,
     pub input_gain: Option<Estimate>,

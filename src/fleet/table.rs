@@ -12,7 +12,7 @@ use crate::core::health::Estimate;
 use crate::io::atomic::write_atomic;
 
 /// One row of the table.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Row {
     pub engine: String,
     pub run: String,
@@ -45,8 +45,8 @@ pub fn columns() -> Vec<String> {
 }
 
 impl Row {
-    /// The numeric cells from `rmse` on, `None` where empty.
-    fn numbers(&self) -> Vec<Option<f64>> {
+    /// The numeric cells from `rmse` on, `None` where empty (the CSV's empty cells).
+    pub fn numbers(&self) -> Vec<Option<f64>> {
         let mut cells = vec![Some(self.rmse), Some(self.rmspe_pct)];
         for e in [self.input_gain, self.input_offset, self.tau_scale, self.map_shift, self.map_shift_pct] {
             let ci = e.and_then(|e| e.ci95);

@@ -226,6 +226,14 @@ pub fn write_run(path: &Path, run: &Run) -> Result<(), RunFileError> {
     write::write_atomically(path, text.as_bytes())
 }
 
+/// Named columns held in memory (a data frame's) as the text of a run file, so that they are read
+/// exactly as that file would be ([`parse_run_with_notes`]): the same column roles, load options,
+/// repairs and checks. Numbers round-trip exactly; a NaN or infinite value becomes an empty cell,
+/// which the reader treats as a missing value. `name` stands for the file in errors.
+pub fn table_to_csv(name: &str, columns: &[(&str, &[f64])]) -> Result<String, RunFileError> {
+    write::table_text(Path::new(name), columns)
+}
+
 /// The CSV text [`write_run`] would write. Errors name the run instead of a file.
 pub fn run_to_csv_string(run: &Run) -> Result<String, RunFileError> {
     write::csv_text(Path::new(&run.name), run)

@@ -118,7 +118,13 @@ pub fn write_model(path: &Path, model: &ModelFile) -> Result<()> {
 pub fn read_model(path: &Path) -> Result<ModelFile> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read model file {}", path.display()))?;
-    let model: ModelFile = serde_json::from_str(&text)
+    parse_model(&text, path)
+}
+
+/// A model file from its JSON text, checked as [`read_model`] checks a file; `path` names it in
+/// errors.
+pub fn parse_model(text: &str, path: &Path) -> Result<ModelFile> {
+    let model: ModelFile = serde_json::from_str(text)
         .with_context(|| format!("{} is not a jetid model file", path.display()))?;
     if model.format_version != MODEL_FORMAT_VERSION {
         bail!(

@@ -294,6 +294,12 @@ fn output_settings(name: &str, spec: &OutputSpec) -> Result<OutputSettings> {
 /// Parse a project from TOML text; `base` is the folder relative paths start from.
 pub fn parse_project(text: &str, base: &Path, origin: &str) -> Result<Project> {
     let file: ProjectFile = toml::from_str(text).with_context(|| format!("project file {origin}"))?;
+    project_of(&file, base, origin)
+}
+
+/// The project a [`ProjectFile`] describes (however it was written: TOML, or the Python package's
+/// keyword arguments), its paths resolved against `base` and its settings checked.
+pub fn project_of(file: &ProjectFile, base: &Path, origin: &str) -> Result<Project> {
     let defaults = &file.load;
     defaults.to_options().with_context(|| format!("[load] of project file {origin}"))?;
     let mut settings = BTreeMap::new();

@@ -34,9 +34,22 @@ static LIVE: Mutex<Live> = Mutex::new(Live { folders: Vec::new(), committing: fa
 /// Exit status of a process stopped by SIGINT, as shells report it (128 + 2).
 const INTERRUPTED: i32 = 130;
 
+/// Whether [`stop_on_interrupt`] may take over SIGINT and SIGTERM: the command line's process may,
+/// a host that loaded jetid as a library (the Python package) keeps its own handling.
+static OWN_SIGNALS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
+/// Leave SIGINT and SIGTERM to the host process: [`stop_on_interrupt`] does nothing from now on.
+/// A staging folder is still removed when its work fails or is dropped uncommitted.
+pub fn leave_signals_to_host() {
+    OWN_SIGNALS.store(false, std::sync::atomic::Ordering::SeqCst);
+}
+
 /// Install the handler that makes Ctrl+C leave nothing half-written (see the module doc). Installing
-/// it again is harmless.
+/// it again is harmless; after [`leave_signals_to_host`] nothing is installed.
 pub fn stop_on_interrupt() {
+    if !OWN_SIGNALS.load(std::sync::atomic::Ordering::SeqCst) {
+        return;
+    }
     let _ = ctrlc::set_handler(|| {
         loop {
             let Ok(mut live) = LIVE.lock() else { std::process::exit(INTERRUPTED) };

@@ -21,6 +21,7 @@ pub mod model_file;
 pub mod overrides;
 pub mod preparation;
 pub mod products;
+pub mod project_model;
 pub mod runs;
 pub mod uncertainty;
 

@@ -13,7 +13,7 @@ use crate::core::identification::segment::{Segment, SegmentSettings, auto_segmen
 use crate::core::identification::set_point::{SetPoint, find_set_point};
 use crate::core::numerics::stats::significant;
 use crate::core::run::{Run, RunError, RunRole, join_runs};
-use crate::io::csv_run::load_run_with_notes;
+use crate::io::csv_run::{LoadNotes, LoadOptions, RunFileError, load_run_with_notes};
 use crate::io::project::{Project, RunSource};
 use crate::workflow::long_runs::{FIT_SAMPLES, FitWindow};
 
@@ -23,6 +23,7 @@ use crate::workflow::long_runs::{FIT_SAMPLES, FitWindow};
 pub const DT_TOLERANCE: f64 = 0.02;
 
 /// The loaded runs of a project, by role.
+#[derive(Clone)]
 pub struct Runs {
     pub ident: Run,
     /// Where each further identification run starts when several were joined.
@@ -74,10 +75,21 @@ impl Runs {
     }
 }
 
+/// How a run's table is read: from the file at its path ([`load_run_with_notes`]), or, for a host
+/// that holds its runs in memory (the Python package's data frames), from the table it keeps
+/// under that path. Either way the load options apply as to a file.
+pub type ReadRun<'a> =
+    dyn Fn(&std::path::Path, &LoadOptions) -> Result<(Run, LoadNotes), RunFileError> + Sync + 'a;
+
 /// Read one run with its load options; what reading it changed goes to `notes`, in words.
 pub fn load_source(source: &RunSource, notes: &mut Vec<String>) -> Result<Run> {
+    load_source_with(source, notes, &load_run_with_notes)
+}
+
+/// [`load_source`] with the run's table read by `read`.
+pub fn load_source_with(source: &RunSource, notes: &mut Vec<String>, read: &ReadRun<'_>) -> Result<Run> {
     let opts = source.load.to_options()?;
-    let (run, read) = load_run_with_notes(&source.path, &opts)?;
+    let (run, read) = read(&source.path, &opts)?;
     if read.resampled || read.merged_repeats > 0 {
         notes.push(format!(
             "run '{}': time axis resampled onto a uniform {} s grid ({} rows sharing a time stamp merged into their mean)",
@@ -259,11 +271,49 @@ pub fn resample_note(run: &Run, ident_dt_secs: f64) -> String {
 /// Load every run of the project; runs sampled differently from the identification run are put on
 /// its grid when they were resampled, else refused (the models are discrete-time).
 pub fn load_runs(project: &Project) -> Result<Runs> {
+    load_runs_with(project, &load_run_with_notes)
+}
+
+/// A run that is scored on a model identified at `dt_secs`: put on that grid when its source says
+/// to resample, else refused when sampled differently (the models are discrete-time).
+fn put_on_grid(run: &mut Run, source: &RunSource, dt_secs: f64, notes: &mut Vec<String>) -> Result<()> {
+    match grid_of(run, dt_secs, source.load.resample) {
+        Grid::On => {}
+        Grid::Resample => {
+            let (on_grid, note) = resampled_onto(run, dt_secs);
+            notes.push(note);
+            *run = on_grid;
+        }
+        Grid::Off(off) => return Err(off.into()),
+    }
+    Ok(())
+}
+
+/// Runs to score on a model identified at `dt_secs` (validation runs given after the
+/// identification), each read by `read` and put on its grid as [`load_runs`] puts a project's.
+pub fn load_scored_runs(
+    sources: &[RunSource],
+    dt_secs: f64,
+    read: &ReadRun<'_>,
+    notes: &mut Vec<String>,
+) -> Result<Vec<Run>> {
+    sources
+        .iter()
+        .map(|source| {
+            let mut run = load_source_with(source, notes, read)?;
+            put_on_grid(&mut run, source, dt_secs, notes)?;
+            Ok(run)
+        })
+        .collect()
+}
+
+/// [`load_runs`] with every run's table read by `read`.
+pub fn load_runs_with(project: &Project, read: &ReadRun<'_>) -> Result<Runs> {
     if project.ident.is_empty() {
         bail!("the project names no identification run (give one with --ident FILE)");
     }
     let mut notes = Vec::new();
-    let mut load = |source: &RunSource| load_source(source, &mut notes);
+    let mut load = |source: &RunSource| load_source_with(source, &mut notes, read);
     let parts = project.ident.iter().map(&mut load).collect::<Result<Vec<_>>>()?;
     let (ident, ident_junctions) = join_identification(&parts).context("joining the identification runs")?;
     step_signal(&ident, project.steps_from.as_deref())?;
@@ -278,15 +328,7 @@ pub fn load_runs(project: &Project) -> Result<Runs> {
         project.validate.iter().chain(&project.held_out).chain(&project.chirp).chain(&project.steady);
     let runs = validate.iter_mut().chain(&mut held_out).chain(&mut chirp).chain(&mut steady);
     for (run, source) in runs.zip(sources) {
-        match grid_of(run, ident.dt_secs, source.load.resample) {
-            Grid::On => {}
-            Grid::Resample => {
-                let (on_grid, note) = resampled_onto(run, ident.dt_secs);
-                notes.push(note);
-                *run = on_grid;
-            }
-            Grid::Off(off) => return Err(off.into()),
-        }
+        put_on_grid(run, source, ident.dt_secs, &mut notes)?;
     }
     let steps_from = steps_from(&ident, &ident_junctions, project.steps_from.as_deref());
     notes.extend(window_note.map(|(_, note)| note));

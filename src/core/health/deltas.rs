@@ -62,7 +62,7 @@ impl Deltas {
 }
 
 /// A fitted delta and its 95 % interval (`None` when the data do not fix it).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Estimate {
     pub value: f64,
     pub ci95: Option<[f64; 2]>,

@@ -271,6 +271,7 @@ impl ModelSource {
 }
 
 /// Segments → fits → clusters (given or automatic) → model, for one output.
+#[derive(Clone)]
 pub struct Identified {
     pub fits: SegmentFits,
     pub model: GrayBoxModel,

@@ -47,19 +47,39 @@ pub(super) fn csv_text(file: &Path, run: &Run) -> Result<String, RunFileError> {
         }
     }
 
-    // The header through the csv writer, so that a name holding a comma or quote is quoted.
+    let named: Vec<(&str, &[f64])> = columns.iter().map(|c| (c.name.as_str(), c.values.as_slice())).collect();
+    table_text(file, &named)
+}
+
+/// Named columns of equal length as CSV text: the header through the csv writer (so that a name
+/// holding a comma or quote is quoted), then each row, numbers as `{:?}` (an exact round trip) and
+/// a non-finite value as an empty cell, which the reader takes for a missing one.
+pub(super) fn table_text(file: &Path, columns: &[(&str, &[f64])]) -> Result<String, RunFileError> {
+    let rows = columns.first().map_or(0, |(_, values)| values.len());
+    if let Some((name, values)) = columns.iter().find(|(_, values)| values.len() != rows) {
+        return Err(RunFileError::ChannelLength {
+            file: file.to_owned(),
+            channel: (*name).to_owned(),
+            found: values.len(),
+            expected: rows,
+        });
+    }
     let mut header = csv::Writer::from_writer(Vec::new());
     let write_error = |err: std::io::Error| RunFileError::Write { file: file.to_owned(), io: err };
-    header.write_record(columns.iter().map(|c| c.name.as_str())).map_err(|e| write_error(e.into()))?;
+    header.write_record(columns.iter().map(|(name, _)| *name)).map_err(|e| write_error(e.into()))?;
     let header = header.into_inner().map_err(|e| write_error(e.into_error()))?;
     let mut text = String::from_utf8_lossy(&header).into_owned();
-    text.reserve(run.t_secs.len() * columns.len() * 12);
-    for k in 0..run.t_secs.len() {
-        for (i, column) in columns.iter().enumerate() {
-            let separator = if i == 0 { "" } else { "," };
-            let value = column.values.get(k).copied().unwrap_or(f64::NAN);
-            // Writing into a String cannot fail.
-            let _ = write!(text, "{separator}{value:?}");
+    text.reserve(rows * columns.len() * 12);
+    for k in 0..rows {
+        for (i, (_, values)) in columns.iter().enumerate() {
+            if i > 0 {
+                text.push(',');
+            }
+            let value = values[k];
+            if value.is_finite() {
+                // Writing into a String cannot fail.
+                let _ = write!(text, "{value:?}");
+            }
         }
         text.push('\n');
     }

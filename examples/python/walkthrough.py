@@ -76,5 +76,10 @@ with tempfile.TemporaryDirectory() as folder:
     jetid.cli("simulate-fleet", "--engines", 3, "--runs", 4, "--seed", 5, "--run-secs", 120,
               "--fault-rate", 0.2, "--out", folder)
     table = jetid.fleet(Path(folder) / "manifest.toml")
-print(f"\nFleet: {table.run.nunique()} runs of {table.engine.nunique()} engines")
-print(table[["engine", "run", "output", "rmspe_pct", "input_gain", "tau_scale", "flag"]].to_string(index=False))
+runs_scored = table[["engine", "run"]].drop_duplicates()
+print(f"\nFleet: {len(runs_scored)} runs of {table.engine.nunique()} engines")
+print(table[["engine", "run", "output", "rmspe_pct", "input_gain", "tau_scale"]].to_string(index=False))
+flagged = table[table.flag != ""][["engine", "run", "flag"]].drop_duplicates(["engine", "run"])
+print(f"{len(flagged)} runs flagged:" if len(flagged) else "no run flagged")
+for row in flagged.itertuples():
+    print(f"  {row.engine} {row.run}: {row.flag}")

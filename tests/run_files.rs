@@ -560,3 +560,33 @@ fn a_corrupt_cell_is_an_outlier_at_its_row_and_a_rare_flag_is_not() {
     assert!(run.aux("flag").unwrap().values[40].abs() < 1e-12, "the flag's real event stays");
     assert!(notes.reading_notes().iter().any(|n| n.contains("data row 25") && n.contains("shaft_speed_rpm")));
 }
+
+/// Columns held in memory (the Python package's data frames) read as the run file they would be:
+/// every number back bit for bit; a NaN is an empty cell, refused with its row and column as a
+/// file's empty cell is (a quality column marks rows to repair); columns of different lengths are
+/// refused with the column named.
+#[test]
+fn columns_in_memory_read_as_their_file() {
+    let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.1).collect();
+    let u: Vec<f64> = (0..200).map(|k| 1.0 + (k as f64 * 0.37).sin() / 3.0).collect();
+    let mut y: Vec<f64> = (0..200).map(|k| 50_000.0 + 1e-7 * k as f64 + 1.0 / 3.0).collect();
+    let columns =
+        [("time_s", t.as_slice()), ("fuel_flow_gph", u.as_slice()), ("shaft_speed_rpm", y.as_slice())];
+    let text = jetid::io::csv_run::table_to_csv(NAME, &columns).unwrap();
+    let run = parse_run(NAME, text.as_bytes(), &LoadOptions::default()).unwrap();
+    assert_eq!(run.t_secs, t);
+    assert_eq!(run.input.values, u);
+    assert_eq!(run.output("shaft_speed_rpm").unwrap().values, y);
+
+    y[50] = f64::NAN;
+    let columns =
+        [("time_s", t.as_slice()), ("fuel_flow_gph", u.as_slice()), ("shaft_speed_rpm", y.as_slice())];
+    let text = jetid::io::csv_run::table_to_csv(NAME, &columns).unwrap();
+    let err = parse_run(NAME, text.as_bytes(), &LoadOptions::default()).unwrap_err();
+    assert!(matches!(err, RunFileError::MissingValue { row: 51, .. }), "{err}");
+    assert_mentions(&err, &["shaft_speed_rpm"]);
+
+    let short = [("time_s", t.as_slice()), ("fuel_flow_gph", &u[..10])];
+    let err = jetid::io::csv_run::table_to_csv(NAME, &short).unwrap_err();
+    assert_mentions(&err, &["fuel_flow_gph"]);
+}

@@ -127,7 +127,12 @@ struct SessionData {
 /// The project the Python settings describe: a project file's keys as JSON, its runs named by the
 /// tables held in memory or by paths.
 fn project_from_json(settings: &str) -> anyhow::Result<Project> {
-    let file: ProjectFile = serde_json::from_str(settings).context("the settings of jetid.identify")?;
+    // The JSON is made from keyword arguments: where in it an error sits means nothing to the user.
+    let file: ProjectFile = serde_json::from_str(settings).map_err(|e| {
+        let message = e.to_string();
+        let message = message.split(" at line ").next().unwrap_or_default().to_owned();
+        anyhow!("the settings of jetid.identify: {message}")
+    })?;
     project_of(&file, Path::new(""), "jetid.identify")
 }
 

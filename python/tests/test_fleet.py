@@ -41,7 +41,7 @@ def assert_same_table(got: pd.DataFrame, expected: pd.DataFrame):
 def simulated_fleet(tmp_path_factory):
     """A simulated fleet of 200 runs: 20 engines of 10 runs, some of them faulty."""
     folder = tmp_path_factory.mktemp("fleet200")
-    jetid.cli("simulate-fleet", "--engines", 20, "--runs", 10, "--seed", 3, "--run-secs", 150, "--out", folder)
+    jetid.cli("simulate-fleet", "--engines", 20, "--runs", 10, "--seed", 3, "--run-secs", 100, "--out", folder)
     return folder / "manifest.toml"
 
 

@@ -115,6 +115,10 @@ def test_bad_input_is_refused_with_its_reason(sr30_model):
         sr30_model.add_effect("nonsense")
     with pytest.raises(jetid.JetidError, match="two runs are called 'x'"):
         jetid.identify({"ident": ("x", ident), "validate": [("x", ident)]})
+    gap = ident.copy()
+    gap.loc[10, "shaft_speed_rpm"] = np.nan
+    with pytest.raises(jetid.JetidError, match=r"ident: .*row 11.*shaft_speed_rpm|shaft_speed_rpm.*row 11"):
+        jetid.identify({"ident": gap})
     no_input = ident.drop(columns=["fuel_flow_gph"])
     with pytest.raises(jetid.JetidError, match="fuel_flow_gph"):
         sr30_model.predict(no_input)

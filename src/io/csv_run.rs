@@ -229,7 +229,9 @@ pub fn write_run(path: &Path, run: &Run) -> Result<(), RunFileError> {
 /// Named columns held in memory (a data frame's) as the text of a run file, so that they are read
 /// exactly as that file would be ([`parse_run_with_notes`]): the same column roles, load options,
 /// repairs and checks. Numbers round-trip exactly; a NaN or infinite value becomes an empty cell,
-/// which the reader treats as a missing value. `name` stands for the file in errors.
+/// which the reader treats as a file's: refused with its row and column, unless a quality column
+/// marks the row for repair or the column is auxiliary (then left out). `name` stands for the file
+/// in errors.
 pub fn table_to_csv(name: &str, columns: &[(&str, &[f64])]) -> Result<String, RunFileError> {
     write::table_text(Path::new(name), columns)
 }

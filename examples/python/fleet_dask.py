@@ -43,7 +43,8 @@ def main() -> None:
         elapsed = time.perf_counter() - started
         workers = len(client.scheduler_info()["workers"])
         flagged = table[table.flag != ""][["engine", "run"]].drop_duplicates()
-        print(f"{table.run.nunique()} runs of {table.engine.nunique()} engines on {workers} workers in {elapsed:.1f} s; "
+        runs = len(table[["engine", "run"]].drop_duplicates())
+        print(f"{runs} runs of {table.engine.nunique()} engines on {workers} workers in {elapsed:.1f} s; "
               f"{len(flagged)} runs flagged")
         print(table[table.flag != ""][["engine", "run", "output", "flag"]].to_string(index=False))
         if args.out:

@@ -30,6 +30,7 @@ use jetid::core::numerics::metrics::metrics;
 use jetid::core::parallel::on_two_threads;
 use jetid::core::run::Run;
 use jetid::sim::{DrawnEngine, Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};
+use std::sync::OnceLock;
 
 const SPEED: &str = "shaft_speed_rpm";
 const THRUST: &str = "thrust_n";
@@ -78,12 +79,32 @@ fn identify(b: &Bench, output: &str) -> (Identified, OutputSettings) {
     (identified, settings)
 }
 
+/// An effect-free bench session of one engine, with the automatic speed model identified on it.
+struct EffectFree {
+    bench: Bench,
+    speed: Identified,
+    settings: OutputSettings,
+}
+
+/// The effect-free sessions of engines 1..=[`ENGINES`], made once (on two threads) for the two tests
+/// that use them.
+fn effect_free() -> &'static [EffectFree] {
+    static SESSIONS: OnceLock<Vec<EffectFree>> = OnceLock::new();
+    SESSIONS.get_or_init(|| {
+        let seeds: Vec<u64> = (1..=ENGINES).collect();
+        on_two_threads(&seeds, |&seed| {
+            let bench = bench(seed, &[]);
+            let (speed, settings) = identify(&bench, SPEED);
+            EffectFree { bench, speed, settings }
+        })
+    })
+}
+
 #[test]
 fn the_automatic_speed_model_is_within_1_3_times_a_direct_fit_on_20_engines() {
-    let seeds: Vec<u64> = (1..=ENGINES).collect();
-    let rows = on_two_threads(&seeds, |&seed| {
-        let b = bench(seed, &[]);
-        let (identified, settings) = identify(&b, SPEED);
+    let rows = on_two_threads(effect_free(), |session| {
+        let (b, identified, settings) = (&session.bench, &session.speed, &session.settings);
+        let seed = b.engine.seed;
         let truth = &b.validation.truth.output(SPEED).unwrap().values;
         let score = |w: &jetid::core::identification::wiener::WienerModel| {
             metrics(truth, &predict_wiener(w, &b.validation.measured, SPEED).unwrap().y_hat)
@@ -94,7 +115,7 @@ fn the_automatic_speed_model_is_within_1_3_times_a_direct_fit_on_20_engines() {
         let groups = &identified.model.roots;
         let poles = count_of(groups, RootKind::Pole);
         let dead_time = identified.proposal.as_ref().map_or(0, |p| p.dead_time.in_model());
-        let data = IdentData::new(&identified.fits, &b.ident, &settings).unwrap().with_delay(dead_time);
+        let data = IdentData::new(&identified.fits, &b.ident, settings).unwrap().with_delay(dead_time);
         let direct = direct_fit_of_order(&data, poles, std::slice::from_ref(groups)).unwrap();
         let direct_pct = score(&direct.assembled.wiener);
         (seed, b.engine.describe(), poles, dead_time, auto, direct_pct)
@@ -121,11 +142,21 @@ fn the_automatic_speed_model_is_within_1_3_times_a_direct_fit_on_20_engines() {
 /// structure, take it and diagnose again. The last report.
 fn structure_first(b: &Bench, output: &str) -> DiagnosisReport {
     let (identified, settings) = identify(b, output);
+    structure_first_from(b, output, &identified, &settings)
+}
+
+/// [`structure_first`] from the model `identified` on `b`'s identification run.
+fn structure_first_from(
+    b: &Bench,
+    output: &str,
+    identified: &Identified,
+    settings: &OutputSettings,
+) -> DiagnosisReport {
     let mut model = ExtendedModel::from_gray_box(&identified.model);
     let runs = [&b.validation.measured, &b.chirp];
     let mut report = None;
     for _ in 0..4 {
-        let r = diagnose(&model, &b.ident, &identified.fits, &runs, &settings)
+        let r = diagnose(&model, &b.ident, &identified.fits, &runs, settings)
             .unwrap_or_else(|e| panic!("{}: the diagnosis of {output} stops dead: {e}", b.engine.describe()));
         match r.entries.iter().find(|d| d.significant).filter(|d| d.kind == DiagnosisKind::Structure) {
             Some(step) => model = step.model.clone(),
@@ -157,13 +188,16 @@ fn summary(report: &DiagnosisReport) -> String {
 
 #[test]
 fn no_effect_free_engine_gets_a_significant_effect() {
-    let seeds: Vec<u64> = (1..=ENGINES).collect();
-    let failures: Vec<String> = on_two_threads(&seeds, |&seed| {
-        let b = bench(seed, &[]);
+    let failures: Vec<String> = on_two_threads(effect_free(), |session| {
+        let b = &session.bench;
         [SPEED, THRUST]
             .into_iter()
             .filter_map(|output| {
-                let report = structure_first(&b, output);
+                let report = if output == SPEED {
+                    structure_first_from(b, SPEED, &session.speed, &session.settings)
+                } else {
+                    structure_first(b, output)
+                };
                 report
                     .entries
                     .iter()

@@ -6,7 +6,7 @@
 //! the comparisons are skipped with a message, unless `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), where a
 //! missing tool fails the test.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use crate::common::{have_cc, have_python, jetid};
+use crate::common::{build_model, have_cc, have_python, jetid};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -66,8 +66,38 @@ fn agree(expected: &Path, actual: &Path) -> f64 {
 }
 
 /// A model fitted on a simulated identification run (with `effect` in the engine when the
-/// simulator has it, and added to the model), and a run of another seed it was not fitted on.
+/// simulator has it, and added to the model), and a run of another seed it was not fitted on. The
+/// model is the one `jetid --batch` writes, built here by the batch's steps ([`build_model`]): the
+/// exports need the model alone, not the batch's baselines and figures.
 fn fit(dir: &Path, effect: Option<&str>, output: Option<&str>) -> (PathBuf, PathBuf) {
+    let (ident, val, other) = simulated_runs(dir, effect);
+    let fitted = dir.join("fit");
+    std::fs::create_dir_all(&fitted).unwrap();
+    let mut text = format!("ident = {:?}\nvalidate = [{:?}]\n", s(&ident), s(&val));
+    text += &output.map(|o| format!("outputs = [{o:?}]\n")).unwrap_or_default();
+    text += &effect.map(|e| format!("add_effects = [{e:?}]\n")).unwrap_or_default();
+    let model = build_model(&text, &fitted);
+    check_effects(&model, effect);
+    (model, other)
+}
+
+/// [`fit`] through `jetid --batch` itself, for the tests that read its report (`fit/report.json`).
+fn fit_with_report(dir: &Path, effect: Option<&str>, output: Option<&str>) -> (PathBuf, PathBuf) {
+    let (ident, val, other) = simulated_runs(dir, effect);
+    let fitted = dir.join("fit");
+    let mut args =
+        vec!["--batch", "--ident", s(&ident), "--validate", s(&val), "--out", s(&fitted), "--quiet"];
+    args.extend(output.map(|o| ["--output", o]).iter().flatten());
+    args.extend(effect.map(|e| ["--add-effect", e]).iter().flatten());
+    ok(&jetid(&args), "jetid --batch");
+    let model = fitted.join("model.json");
+    check_effects(&model, effect);
+    (model, other)
+}
+
+/// Simulated identification, validation and other-seed runs (with `effect` in the engine when the
+/// simulator has it), written to `dir`.
+fn simulated_runs(dir: &Path, effect: Option<&str>) -> (PathBuf, PathBuf, PathBuf) {
     let sim_effect: Vec<&str> = effect
         .filter(|e| jetid::sim::effects::EFFECT_IDS.iter().any(|id| id.name() == *e))
         .map(|e| vec!["--effect", e])
@@ -81,18 +111,15 @@ fn fit(dir: &Path, effect: Option<&str>, output: Option<&str>) -> (PathBuf, Path
     simulate("ident", "3", &ident);
     simulate("validation", "4", &val);
     simulate("validation", "11", &other);
-    let fitted = dir.join("fit");
-    let mut args =
-        vec!["--batch", "--ident", s(&ident), "--validate", s(&val), "--out", s(&fitted), "--quiet"];
-    args.extend(output.map(|o| ["--output", o]).iter().flatten());
-    args.extend(effect.map(|e| ["--add-effect", e]).iter().flatten());
-    ok(&jetid(&args), "jetid --batch");
-    let model = fitted.join("model.json");
-    for out in &read_model(&model).unwrap().outputs {
+    (ident, val, other)
+}
+
+/// Every output of the model file `model` holds `effect` and nothing else.
+fn check_effects(model: &Path, effect: Option<&str>) {
+    for out in &read_model(model).unwrap().outputs {
         let applied: Vec<&str> = out.effects.iter().map(|e| e.id.name()).collect();
         assert_eq!(applied, effect.into_iter().collect::<Vec<_>>(), "{}: {}", model.display(), out.name);
     }
-    (model, other)
 }
 
 /// Export `model` to Python and C, run both on `run` (with `extra` arguments) and compare with
@@ -435,7 +462,7 @@ fn the_python_sample_models_follow_the_covariance() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let (model, _) = fit(dir.path(), None, Some("shaft_speed_rpm"));
+    let (model, _) = fit_with_report(dir.path(), None, Some("shaft_speed_rpm"));
     let stated =
         read_model(&model).unwrap().outputs[0].covariance.clone().expect("the batch stores a covariance");
     let report: serde_json::Value =
@@ -497,7 +524,7 @@ fn the_python_operating_points_are_the_reports() {
     }
     for effect in ["scheduled_time_constant", "sensor_dynamics"] {
         let dir = tempfile::tempdir().unwrap();
-        let (model, _) = fit(dir.path(), Some(effect), Some("shaft_speed_rpm"));
+        let (model, _) = fit_with_report(dir.path(), Some(effect), Some("shaft_speed_rpm"));
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit/report.json")).unwrap())
                 .unwrap();

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use std::path::Path;
 
-use crate::common::{jetcat_batch, realdata};
+use crate::common::{build_project_at, jetcat_batch, realdata};
 use std::process::Command;
 
 #[test]
@@ -66,9 +66,7 @@ fn jetcat_project_identifies_and_scores_runs_a_and_f() {
 #[test]
 #[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
 fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
-    use jetid::io::project::load_project;
-    use jetid::workflow::project_model::{Covariance, build_project};
-    use jetid::workflow::runs::load_runs;
+    use jetid::workflow::project_model::Covariance;
     let data = realdata("jetcat_p300pro_ecu");
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str| data.join(name).to_str().unwrap().replace('\\', "/");
@@ -82,10 +80,7 @@ fn jetcat_runs_b_and_d_with_only_the_column_mapping_yield_a_model() {
         ),
     )
     .unwrap();
-    let mut project = load_project(&project).unwrap();
-    let runs = load_runs(&project).unwrap();
-    let (file, built, _) =
-        build_project(&mut project, &runs, Covariance::Skip).unwrap_or_else(|e| panic!("{e:#}"));
+    let (file, built) = build_project_at(&project, Covariance::Skip);
     let rpm = file.outputs.iter().find(|o| o.name == "rpm").unwrap();
     assert!(!rpm.poles.is_empty(), "{:?}", rpm.poles);
     let identified = &built.iter().find(|b| b.plan.output == "rpm").unwrap().identified;

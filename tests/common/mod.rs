@@ -78,23 +78,36 @@ pub fn jetcat_batch() -> &'static Path {
 }
 
 /// The model `jetid --batch` writes for the project `text` (a project file's TOML), built in this
-/// process by the batch's own steps (`workflow::project_model::build_project`; the Python package's
-/// tests hold it to the batch's model.json to 1e-12) without the baselines, figures and Monte Carlo
-/// study the batch adds around it. Written as `dir/model.json`, whose path is returned.
+/// process by [`build_project_at`] with the parameter covariance, as the batch stores it. Written as
+/// `dir/model.json` (beside `dir/project.toml`), whose path is returned.
 pub fn build_model(text: &str, dir: &Path) -> PathBuf {
     use jetid::io::model_file::write_model;
-    use jetid::io::project::load_project;
-    use jetid::workflow::project_model::{Covariance, build_project};
-    use jetid::workflow::runs::load_runs;
+    use jetid::workflow::project_model::Covariance;
     let project_path = dir.join("project.toml");
     std::fs::write(&project_path, text).unwrap_or_else(|e| panic!("{}: {e}", project_path.display()));
-    let mut project = load_project(&project_path).unwrap_or_else(|e| panic!("{text}: {e:#}"));
-    let runs = load_runs(&project).unwrap_or_else(|e| panic!("{text}: {e:#}"));
-    let (file, _, _) =
-        build_project(&mut project, &runs, Covariance::Estimate).unwrap_or_else(|e| panic!("{text}: {e:#}"));
+    let (file, _) = build_project_at(&project_path, Covariance::Estimate);
     let model = dir.join("model.json");
     write_model(&model, &file).unwrap_or_else(|e| panic!("{}: {e:#}", model.display()));
     model
+}
+
+/// Every output of the project file at `path`, built in this process by the batch's own steps
+/// (`workflow::project_model::build_project`; the Python package's tests hold it to the batch's
+/// model.json to 1e-12) without the baselines, figures and Monte Carlo study the batch adds around
+/// them: the model file and each output as built.
+pub fn build_project_at(
+    path: &Path,
+    covariance: jetid::workflow::project_model::Covariance,
+) -> (jetid::io::model_file::ModelFile, Vec<jetid::workflow::project_model::BuiltOutput>) {
+    use jetid::io::project::load_project;
+    use jetid::workflow::project_model::build_project;
+    use jetid::workflow::runs::load_runs;
+    let at = path.display();
+    let mut project = load_project(path).unwrap_or_else(|e| panic!("{at}: {e:#}"));
+    let runs = load_runs(&project).unwrap_or_else(|e| panic!("{at}: {e:#}"));
+    let (file, built, _) =
+        build_project(&mut project, &runs, covariance).unwrap_or_else(|e| panic!("{at}: {e:#}"));
+    (file, built)
 }
 
 /// A path as the `&str` a command line takes.

@@ -27,6 +27,18 @@
 //! delta by several times its normal scatter is not missed. Beyond the band a deviation must also
 //! exceed its own uncertainty: the run's 95 % interval must exclude the centre, so a short or
 //! poorly excited run whose delta is merely unknown is not called faulty.
+//!
+//! **A run noisier than the engine's usual.** The spread holds the scatter of typical runs, their
+//! estimation noise included (its floor is their median standard error). A run whose own standard
+//! error σᵣ is larger than that typical σₜ scatters more for that reason alone, so its distance from
+//! the centre is measured against `√(σ² + max(0, σᵣ² − σₜ²))`: the band's spread with the run's
+//! extra estimation noise added in quadrature, as for the difference of two independent errors.
+//! Without it, one poorly fitted run on the reference day was flagged or not according to the last
+//! digits of its neighbours' fits: the T07's 2023-02-10 run 02, speed-map shift +3.11 krpm with a
+//! standard error of 1.45, 4.06 from a centre whose band has σ = 1.12 and whose typical run a
+//! standard error of 0.65 (3.6 σ, against 2.4 with its own extra noise counted).
+use super::deltas::Z95;
+
 /// The band's half width in robust standard deviations (see the module documentation).
 pub const BAND_SIGMAS: f64 = 3.5;
 /// The MAD of a normal sample over its standard deviation is 1/1.4826.
@@ -38,6 +50,8 @@ pub struct Band {
     pub centre: f64,
     /// The robust standard deviation (with its floor).
     pub sigma: f64,
+    /// A typical run's own standard error (the median of the runs'; 0 where none is known).
+    pub typical_error: f64,
 }
 
 impl Band {
@@ -50,7 +64,7 @@ impl Band {
         let mad = median(&deviations).unwrap_or(0.0) * MAD_TO_SIGMA;
         let errors: Vec<f64> = std_errors.iter().copied().filter(|v| v.is_finite() && *v > 0.0).collect();
         let floor = median(&errors).unwrap_or(0.0);
-        Some(Band { centre, sigma: mad.max(floor) })
+        Some(Band { centre, sigma: mad.max(floor), typical_error: floor })
     }
 
     pub fn low(&self) -> f64 {
@@ -65,9 +79,14 @@ impl Band {
     /// centre, by more than `smallest` (the smallest change that matters physically, see the fleet's
     /// flags), and its interval excluding the centre (a delta without an interval counts as unknown,
     /// never outside).
+    /// The run's own standard error beyond a typical run's is added to the spread (see the module
+    /// documentation).
     pub fn outside(&self, value: f64, ci95: Option<[f64; 2]>, smallest: f64) -> bool {
         let Some([lo, hi]) = ci95 else { return false };
-        let beyond = value < self.low() || value > self.high();
+        let own = (hi - lo).abs() / (2.0 * Z95);
+        let extra = (own * own - self.typical_error * self.typical_error).max(0.0);
+        let spread = (self.sigma * self.sigma + extra).sqrt();
+        let beyond = (value - self.centre).abs() > BAND_SIGMAS * spread;
         beyond && (value - self.centre).abs() > smallest && !(lo..=hi).contains(&self.centre)
     }
 }
@@ -94,8 +113,11 @@ pub fn local_bands(values: &[f64], std_errors: &[f64]) -> Vec<Option<Band>> {
     let centre = |i: usize| intercept + slope * i as f64;
     let deviations: Vec<f64> = with_value.iter().map(|&i| (values[i] - centre(i)).abs()).collect();
     let errors: Vec<f64> = std_errors.iter().copied().filter(|v| v.is_finite() && *v > 0.0).collect();
-    let sigma = (median(&deviations).unwrap_or(0.0) * MAD_TO_SIGMA).max(median(&errors).unwrap_or(0.0));
-    (0..values.len()).map(|i| values[i].is_finite().then_some(Band { centre: centre(i), sigma })).collect()
+    let typical_error = median(&errors).unwrap_or(0.0);
+    let sigma = (median(&deviations).unwrap_or(0.0) * MAD_TO_SIGMA).max(typical_error);
+    (0..values.len())
+        .map(|i| values[i].is_finite().then_some(Band { centre: centre(i), sigma, typical_error }))
+        .collect()
 }
 
 /// The median of `values` (`None` when empty); the mean of the middle two for an even count.
@@ -126,6 +148,18 @@ mod tests {
         assert!(!b.outside(1.3, Some([0.9, 1.7]), 0.0), "its own interval holds the centre");
         assert!(!b.outside(1.3, None, 0.0));
         assert!(!b.outside(1.004, Some([1.003, 1.005]), 0.0));
+    }
+
+    #[test]
+    fn a_run_noisier_than_the_usual_needs_a_larger_deviation() {
+        // Five runs with standard errors 0.5–0.65, one at 1.45: the same value is outside the band
+        // with a typical interval and inside it with its own wide one.
+        let band = Band { centre: 0.0, sigma: 1.0, typical_error: 0.6 };
+        let typical = 0.6 * Z95;
+        assert!(band.outside(4.0, Some([4.0 - typical, 4.0 + typical]), 0.0));
+        let wide = 1.45 * Z95;
+        assert!(!band.outside(4.0, Some([4.0 - wide, 4.0 + wide]), 0.0), "3.5 σ of √(1 + 1.45² − 0.6²)");
+        assert!(band.outside(6.5, Some([6.5 - wide, 6.5 + wide]), 0.0), "beyond 3.5 × 1.66");
     }
 
     #[test]

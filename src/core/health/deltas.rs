@@ -35,7 +35,7 @@ use crate::core::numerics::tf::DiscreteTf;
 use crate::core::run::Run;
 
 /// Two-sided 95 % normal quantile.
-const Z95: f64 = 1.959_963_984_540_054;
+pub(crate) const Z95: f64 = 1.959_963_984_540_054;
 /// Central-difference step of the covariance's Jacobian, in the parameters' own scale (the gain,
 /// ln s and the map shifts over the output's range are all of order one): small against any
 /// change the data can resolve, large against the simulation's rounding (≈1e-12 relative).

@@ -75,12 +75,11 @@ impl Band {
         self.centre + BAND_SIGMAS * self.sigma
     }
 
-    /// Whether `value`, with its 95 % interval `ci95`, lies outside the band: beyond 3.5 σ of the
-    /// centre, by more than `smallest` (the smallest change that matters physically, see the fleet's
-    /// flags), and its interval excluding the centre (a delta without an interval counts as unknown,
-    /// never outside).
-    /// The run's own standard error beyond a typical run's is added to the spread (see the module
-    /// documentation).
+    /// Whether `value`, with its 95 % interval `ci95`, lies outside the band: beyond 3.5 times the
+    /// spread from the centre (the band's σ with the run's own standard error beyond a typical run's
+    /// added, see the module documentation), by more than `smallest` (the smallest change that
+    /// matters physically, see the fleet's flags), and its interval excluding the centre (a delta
+    /// without an interval counts as unknown, never outside).
     pub fn outside(&self, value: f64, ci95: Option<[f64; 2]>, smallest: f64) -> bool {
         let Some([lo, hi]) = ci95 else { return false };
         let own = (hi - lo).abs() / (2.0 * Z95);
@@ -112,8 +111,7 @@ pub fn local_bands(values: &[f64], std_errors: &[f64]) -> Vec<Option<Band>> {
     let intercept = median(&offsets).unwrap_or(global.centre);
     let centre = |i: usize| intercept + slope * i as f64;
     let deviations: Vec<f64> = with_value.iter().map(|&i| (values[i] - centre(i)).abs()).collect();
-    let errors: Vec<f64> = std_errors.iter().copied().filter(|v| v.is_finite() && *v > 0.0).collect();
-    let typical_error = median(&errors).unwrap_or(0.0);
+    let typical_error = global.typical_error;
     let sigma = (median(&deviations).unwrap_or(0.0) * MAD_TO_SIGMA).max(typical_error);
     (0..values.len())
         .map(|i| values[i].is_finite().then_some(Band { centre: centre(i), sigma, typical_error }))

@@ -99,13 +99,17 @@ pub(super) fn respond(
             if prev < x {
                 factor *= decel;
             }
-            let root = (ln_root / factor.max(f64::MIN_POSITIVE)).exp();
+            let factor = factor.max(f64::MIN_POSITIVE);
             let next = if pair {
+                let root = (ln_root / factor).exp();
                 // Unit-gain pair (1 − a₁ + a₂) z⁻² / (1 − a₁ z⁻¹ + a₂ z⁻²), as `unit_gain_tf` builds it.
                 let (a1, a2) = (2.0 * root.re, root.norm_sqr());
                 a1 * x - a2 * x_old + (1.0 - a1 + a2) * prev_old
             } else {
-                root.re * x + (1.0 - root.re) * prev
+                // A real root's rate has no imaginary part: its exponential is real (the complex
+                // one's cosine of zero, sine of zero and their products are skipped, the same number).
+                let root = (ln_root.re / factor).exp();
+                root * x + (1.0 - root) * prev
             };
             (x_old, x) = (x, next);
             (prev_old, prev) = (prev, *rk);

@@ -66,6 +66,7 @@ use crate::core::effects::{
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::settings::OutputSettings;
+use crate::core::parallel;
 use crate::core::run::Run;
 
 mod decision;
@@ -231,13 +232,9 @@ pub fn diagnose_with_progress(
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<DiagnosisReport, DiagnoseError> {
     let steps = (EffectId::CATALOG.len() + StructuralChange::ALL.len()) as f64 + 1.0;
-    let mut done = 0.0;
-    let mut tick = |progress: &mut dyn FnMut(f64) -> bool| {
-        let go_on = progress(done / steps);
-        done += 1.0;
-        if go_on { Ok(()) } else { Err(DiagnoseError::Cancelled) }
-    };
-    tick(progress)?;
+    if !progress(0.0) {
+        return Err(DiagnoseError::Cancelled);
+    }
     if validation.is_empty() {
         return Err(DiagnoseError::NoValidationRuns);
     }
@@ -262,15 +259,26 @@ pub fn diagnose_with_progress(
             &std::iter::once(&data.run).chain(validation.iter().copied()).collect::<Vec<_>>(),
         )?,
     };
+    // Structure first: what the model's own linear block and map can still do. The trials are
+    // independent of each other; they are fitted on two threads and gathered in this order.
+    let order: Vec<TrialId> = (StructuralChange::ALL.into_iter().map(TrialId::Structure))
+        .chain(EffectId::CATALOG.into_iter().map(TrialId::Effect))
+        .collect();
+    let one = |id: &TrialId| {
+        let mut trial = Trials::default();
+        match *id {
+            TrialId::Structure(change) => bench.try_structure(change, &mut trial),
+            TrialId::Effect(id) => bench.try_effect(id, &mut trial),
+        }
+        trial
+    };
+    let mut go_on = |finished: usize| progress((1.0 + finished as f64) / steps);
+    let each =
+        parallel::taking_turns_on_two_threads(&order, one, &mut go_on).ok_or(DiagnoseError::Cancelled)?;
     let mut trials = Trials::default();
-    // Structure first: what the model's own linear block and map can still do.
-    for change in StructuralChange::ALL {
-        tick(progress)?;
-        bench.try_structure(change, &mut trials);
-    }
-    for id in EffectId::CATALOG {
-        tick(progress)?;
-        bench.try_effect(id, &mut trials);
+    for trial in each {
+        trials.entries.extend(trial.entries);
+        trials.skipped.extend(trial.skipped);
     }
     progress(1.0);
     Ok(trials.into_report(&bench))

@@ -2,6 +2,8 @@
 //! answer. Rank deficiency gives the minimum-norm solution and is reported, never a crash.
 use faer::Mat;
 
+use super::qr::qr_reduce;
+
 /// A least-squares answer `x` minimising `‖A x − b‖₂`, with what the caller needs to trust it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LstsqSolution {
@@ -69,8 +71,18 @@ pub fn solve_lstsq(a: &Mat<f64>, b: &[f64]) -> Result<LstsqSolution, LstsqError>
             if norm > 0.0 { norm } else { 1.0 }
         })
         .collect();
-    let scaled = Mat::from_fn(rows, cols, |row, col| a[(row, col)] / scales[col]);
-    let svd = scaled.thin_svd().map_err(|_| LstsqError::SvdFailed)?;
+    // The scaled matrix is Q·R with R square (Householder, applied to b on the way): it has R's
+    // singular values, and its SVD is Q·U_R Σ Vᵀ. So only the cols × cols factor is decomposed, and
+    // Uᵀb is U_Rᵀ(Qᵀb): a tall regressor (thousands of samples, a handful of columns) costs one
+    // pass of reflections instead of a blocked SVD that forms its rows × cols U.
+    let scaled: Vec<Vec<f64>> =
+        (0..cols).map(|col| (0..rows).map(|row| a[(row, col)] / scales[col]).collect()).collect();
+    let (r, qtb) = qr_reduce(scaled, b.to_vec());
+    let r = Mat::from_fn(cols, cols, |row, col| match row <= col {
+        true => r.get(col).and_then(|c| c.get(row)).copied().unwrap_or(0.0),
+        false => 0.0,
+    });
+    let svd = r.thin_svd().map_err(|_| LstsqError::SvdFailed)?;
     let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
     let sigma_max = s[0];
     if sigma_max <= 0.0 {
@@ -80,7 +92,7 @@ pub fn solve_lstsq(a: &Mat<f64>, b: &[f64]) -> Result<LstsqSolution, LstsqError>
     let rank = (0..cols).filter(|&i| s[i] > tol).count();
     let mut x_scaled = vec![0.0; cols];
     for i in 0..rank {
-        let ub: f64 = (0..rows).map(|row| u[(row, i)] * b[row]).sum();
+        let ub: f64 = (0..cols).map(|row| u[(row, i)] * qtb[row]).sum();
         let coeff = ub / s[i];
         for (j, xj) in x_scaled.iter_mut().enumerate() {
             *xj += v[(j, i)] * coeff;

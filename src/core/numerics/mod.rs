@@ -12,6 +12,7 @@ pub mod lstsq;
 pub mod metrics;
 pub mod noise_fit;
 pub mod poly;
+pub mod qr;
 pub mod special;
 pub mod spectral;
 pub mod spectral_error;

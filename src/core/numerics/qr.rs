@@ -1,10 +1,12 @@
-//! Householder QR for the least-squares steps of [`super::StepSolver::QrOnce`]: the Jacobian is
-//! reduced to its p × p triangular factor once per iteration, and each damped step is a small
-//! 2p × p problem. No normal equations are formed.
+//! Householder QR of a tall matrix given by its columns, applied to a right-hand side as it goes:
+//! for the least-squares steps of [`super::lm::StepSolver::QrOnce`] (the Jacobian is reduced to its
+//! p × p triangular factor once per iteration, and each damped step is a small 2p × p problem) and
+//! for [`super::lstsq::solve_lstsq`] (the SVD then only of the p × p factor). No normal equations
+//! are formed.
 
 /// Householder QR of the columns `cols` (each of length m ≥ p), applied to `rhs` as well.
 /// Returns the p × p upper factor (by columns) and the first p entries of `Qᵀ rhs`.
-pub(super) fn qr_reduce(mut cols: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> (Vec<Vec<f64>>, Vec<f64>) {
+pub fn qr_reduce(mut cols: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> (Vec<Vec<f64>>, Vec<f64>) {
     let p = cols.len();
     for k in 0..p {
         let Some(col) = cols.get(k) else { break };
@@ -44,7 +46,7 @@ pub(super) fn qr_reduce(mut cols: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> (Vec<Vec<
 }
 
 /// Solve the upper-triangular `R x = c`; components whose pivot is negligible are set to zero.
-pub(super) fn back_substitute(r: &[Vec<f64>], c: &[f64]) -> Vec<f64> {
+pub fn back_substitute(r: &[Vec<f64>], c: &[f64]) -> Vec<f64> {
     let p = r.len();
     let at = |i: usize, j: usize| r.get(j).and_then(|col| col.get(i)).copied().unwrap_or(0.0);
     let big = (0..p).map(|i| at(i, i).abs()).fold(0.0, f64::max);

@@ -1,9 +1,9 @@
 //! Least squares `min ‖r(θ)‖²` as an [`LmProblem`], with a finite-difference Jacobian.
 use faer::Mat;
 
-use super::qr::{back_substitute, qr_reduce};
 use super::{LmError, LmProblem};
 use crate::core::numerics::lstsq::solve_lstsq;
+use crate::core::numerics::qr::{back_substitute, qr_reduce};
 use crate::core::numerics::stats::sum_of_squares;
 
 /// The finite-difference Jacobian: column j steps θⱼ by `rel_step · max(|θⱼ|, floor)`. Where the

@@ -11,7 +11,6 @@
 use crate::core::numerics::lstsq::LstsqError;
 
 mod least_squares;
-mod qr;
 
 pub use least_squares::{Jacobian, LeastSquares, StepSolver};
 

@@ -10,7 +10,8 @@
 //! Cholesky: that gives `tr(A⁻¹)`, `ln det A` and each trial step cheaply. `αI` keeps `A` far better
 //! conditioned than a plain least-squares normal matrix, so squaring the condition number of `J`
 //! costs no accuracy that matters here.
-use faer::Mat;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+use faer::{Accum, Mat, Par};
 
 use super::BaselineError;
 use super::mlp::MlpShape;
@@ -130,9 +131,22 @@ fn linearise(shape: MlpShape, w: &[f64], h: &[f64], data: &TrainData) -> Lineari
             *e = y - t;
         }
     }
-    let gram = &m * m.transpose();
-    let jtj = (0..p * p).map(|k| gram[(k / p, k % p)]).collect();
-    let jte = (0..p).map(|j| gram[(j, p)]).collect();
+    // The product is symmetric: only its lower triangle is computed (half the multiplications),
+    // and the upper read from it.
+    let mut gram = Mat::<f64>::zeros(p + 1, p + 1);
+    triangular::matmul(
+        gram.as_mut(),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        &m,
+        BlockStructure::Rectangular,
+        m.transpose(),
+        BlockStructure::Rectangular,
+        1.0,
+        Par::Seq,
+    );
+    let jtj = (0..p * p).map(|k| (k / p, k % p)).map(|(i, j)| gram[(i.max(j), i.min(j))]).collect();
+    let jte = (0..p).map(|j| gram[(p, j)]).collect();
     Linearisation { e_d: 0.5 * gram[(p, p)], e_w: sum_sq_half(w), jtj, jte }
 }
 

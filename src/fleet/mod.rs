@@ -227,7 +227,10 @@ fn panels(result: &EngineResult<'_>, rows: &[Row]) -> Vec<TrendPanel> {
                 .enumerate()
                 .filter_map(|(i, e)| {
                     let e = (*e)?;
-                    let band = bands.get(i).copied().flatten().map(|b| [b.low(), b.centre, b.high()]);
+                    let band = bands.get(i).copied().flatten().map(|b| {
+                        let [low, high] = b.limits_for(e.ci95);
+                        [low, b.centre, high]
+                    });
                     Some(TrendPoint {
                         x: i as f64,
                         value: e.value,

@@ -82,11 +82,25 @@ impl Band {
     /// without an interval counts as unknown, never outside).
     pub fn outside(&self, value: f64, ci95: Option<[f64; 2]>, smallest: f64) -> bool {
         let Some([lo, hi]) = ci95 else { return false };
-        let own = (hi - lo).abs() / (2.0 * Z95);
-        let extra = (own * own - self.typical_error * self.typical_error).max(0.0);
-        let spread = (self.sigma * self.sigma + extra).sqrt();
-        let beyond = (value - self.centre).abs() > BAND_SIGMAS * spread;
+        let beyond = (value - self.centre).abs() > BAND_SIGMAS * self.spread_for(ci95);
         beyond && (value - self.centre).abs() > smallest && !(lo..=hi).contains(&self.centre)
+    }
+
+    /// The spread a run with the 95 % interval `ci95` is judged against: the band's σ with the
+    /// run's own standard error beyond a typical run's added in quadrature (see the module
+    /// documentation); σ itself for a run no noisier than the typical one, or without an interval.
+    pub fn spread_for(&self, ci95: Option<[f64; 2]>) -> f64 {
+        let own = ci95.map_or(0.0, |[lo, hi]| (hi - lo).abs() / (2.0 * Z95));
+        let extra = (own * own - self.typical_error * self.typical_error).max(0.0);
+        (self.sigma * self.sigma + extra).sqrt()
+    }
+
+    /// The band a run with the 95 % interval `ci95` is judged against, `[low, high]`: the centre ±
+    /// [`BAND_SIGMAS`] times [`Band::spread_for`] (wider than [`Band::low`]..[`Band::high`] for a
+    /// run noisier than the typical one). What the trend figure and the app draw for each run.
+    pub fn limits_for(&self, ci95: Option<[f64; 2]>) -> [f64; 2] {
+        let half = BAND_SIGMAS * self.spread_for(ci95);
+        [self.centre - half, self.centre + half]
     }
 }
 
@@ -176,6 +190,22 @@ mod tests {
                 "run {i}: {v} against {band:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_drawn_limits_are_what_a_run_is_judged_against() {
+        let band = Band { centre: 10.0, sigma: 1.0, typical_error: 0.5 };
+        let typical = Some([9.0, 9.0 + 2.0 * Z95 * 0.5]);
+        let noisy = Some([8.0, 8.0 + 2.0 * Z95 * 2.0]);
+        assert_eq!(band.limits_for(typical), [band.low(), band.high()]);
+        assert_eq!(band.limits_for(None), [band.low(), band.high()]);
+        let [lo, hi] = band.limits_for(noisy);
+        assert!(lo < band.low() && hi > band.high(), "a noisier run's band is wider: {lo}..{hi}");
+        // A run as noisy, its interval clear of the centre: flagged exactly beyond the drawn limit.
+        let clear = Some([10.5, 10.5 + 2.0 * Z95 * 2.0]);
+        assert_eq!(band.limits_for(clear), [lo, hi]);
+        assert!(!band.outside(hi - 1e-6, clear, 0.0));
+        assert!(band.outside(hi + 1e-6, clear, 0.0));
     }
 
     #[test]

@@ -116,10 +116,13 @@ fn trend_ui(
         .allow_boxed_zoom(false)
         .allow_double_click_reset(false)
         .show(ui, |plot_ui| {
-            // Each run's band, a run wide: the band follows the engine's trend.
+            // Each run's band, a run wide: the band follows the engine's trend, and is wider for a
+            // run whose own estimate is noisier than the typical run's (what it was judged against).
             for (i, band) in panel.bands.iter().enumerate() {
                 let Some(band) = band else { continue };
-                let (x0, x1, lo, hi) = (i as f64 - 0.45, i as f64 + 0.45, band.low(), band.high());
+                let ci95 = panel.points.get(i).copied().flatten().and_then(|e| e.ci95);
+                let [lo, hi] = band.limits_for(ci95);
+                let (x0, x1) = (i as f64 - 0.45, i as f64 + 0.45);
                 plot_ui.polygon(
                     Polygon::new(
                         "normal band",

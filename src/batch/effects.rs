@@ -1,18 +1,22 @@
 //! Stage 2 of the batch: the project's effects (`add_effects`, then the `auto_effects` loop) added
-//! by the workflow, and the diagnosis of the final model.
+//! by the workflow, the output built from them as every project's model is
+//! ([`project_model::with_effects`]: checked, its model.json entry and covariance), and the
+//! diagnosis of the final model.
 use anyhow::Result;
 
 use crate::core::identification::pipeline::Identified;
 use crate::io::report::DiagnosisEntry;
-use crate::workflow::model::{self, Effects, OutputPlan};
+use crate::workflow::model::{self, OutputPlan};
+use crate::workflow::project_model::{self, BuiltOutput, Covariance};
 use crate::workflow::runs::Runs;
 
 use super::Timings;
 use super::diagnose::diagnose_output;
 
-/// The final model's effects and what the diagnosis says of it.
+/// The output built with its final effects and what the diagnosis says of it.
 pub struct Built {
-    pub effects: Effects,
+    /// The identified model with its effects, its model.json entry and the steps' notes.
+    pub output: BuiltOutput,
     /// report.json `diagnosis`, best first.
     pub diagnosis: Vec<DiagnosisEntry>,
     /// The candidates not tried and what the trials were judged on, or why there is no diagnosis.
@@ -22,30 +26,31 @@ pub struct Built {
 }
 
 /// The gray-box model of the plan's output with its effects, each refitted on the identification
-/// data, the validation error after each step, and the diagnosis of the result. An effect that
-/// cannot be added, or a loop that fails, fails the batch; a step without a validation error is a
-/// note (in `notes`, as the loop's rounds are).
+/// data, the validation error after each step, the output built from it (its parameter covariance
+/// timed as the uncertainty stage) and the diagnosis of the result. An effect that cannot be
+/// added, or a loop that fails, fails the batch; a step without a validation error is a note (in
+/// the output's notes, as the loop's rounds are).
 pub fn effects_and_diagnosis(
     plan: &OutputPlan,
     runs: &Runs,
     identified: &Identified,
-    notes: &mut Vec<String>,
     timings: &mut Timings,
 ) -> Result<Built> {
     let output = plan.output.as_str();
     let mut effects = timings.time_with_fraction(&format!("effects_{output}"), |progress| {
         model::add_project_effects(plan, runs, identified, progress)
     });
-    effects.check(output)?;
-    notes.extend(effects.notes(output, &plan.effects));
     // The loop's last diagnosis is of the final model: it is not computed again.
     let done = effects.sequence.final_diagnosis.take();
+    let built = timings.time(&format!("uncertainty_{output}"), || {
+        project_model::with_effects(plan.clone(), runs, identified.clone(), effects, Covariance::Estimate)
+    })?;
     let diagnosis = timings.time_with_fraction(&format!("diagnosis_{output}"), |progress| {
-        diagnose_output(plan, runs, identified, effects.model(), done, progress)
+        diagnose_output(plan, runs, identified, built.effects.model(), done, progress)
     });
     let (diagnosis, diagnosis_notes) = match diagnosis {
         Ok((entries, skipped)) => (entries, skipped),
         Err(e) => (Vec::new(), vec![format!("diagnosis of '{output}': {e}")]),
     };
-    Ok(Built { effects, diagnosis, diagnosis_notes, preparation: None })
+    Ok(Built { output: built, diagnosis, diagnosis_notes, preparation: None })
 }

@@ -20,10 +20,9 @@ use crate::io::project::Project;
 use crate::io::report::OutputReport;
 use crate::io::staging::Staging;
 use crate::workflow::model::{self, OutputPlan};
-use crate::workflow::model_file::{new_model_file, output_entry, take_saved_clusters};
+use crate::workflow::model_file::{new_model_file, take_saved_clusters};
 use crate::workflow::preparation::segmentation_choice;
 use crate::workflow::runs::{self, Runs};
-use crate::workflow::uncertainty::parameter_covariance;
 
 mod compare;
 pub mod control;
@@ -146,31 +145,27 @@ impl Batch<'_> {
                 model::identify(&runs.ident, &runs.ident_junctions, &plan)
             })
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
-        let unit = runs.ident.output(output).map(|c| c.unit.clone()).unwrap_or_default();
-        let mut notes: Vec<String> = model::few_segments_note(&identified.fits).into_iter().collect();
-        let (built, mut models) = self.effects_beside_baselines(&plan, &identified, &mut notes, timings)?;
-        let extended = built.effects.model();
+        let (built, mut models, baseline_notes) =
+            self.effects_beside_baselines(&plan, &identified, timings)?;
+        let effects::Built { output: built_output, diagnosis, diagnosis_notes, preparation } = built;
+        let extended = built_output.effects.model();
+        let mut notes = built_output.notes.clone();
+        notes.extend(baseline_notes);
+        notes.extend(diagnosis_notes);
         models.initial_state = plan.settings.initial_state;
-        let mut out = report::output_report(&identified, &models, unit.clone());
+        let unit = built_output.entry.unit.clone();
+        let mut out = report::output_report(&identified, &models, unit);
         out.effects_applied = extended.effect_ids();
-        out.error_history = built.effects.sequence.history.clone();
+        out.error_history = built_output.effects.sequence.history.clone();
         if !extended.effects.is_empty() {
             models.extended = Some(extended.clone());
         }
-        out.diagnosis = built.diagnosis;
-        out.preparation = built.preparation;
+        out.diagnosis = diagnosis;
+        out.preparation = preparation;
         self.describe_steady_states(&plan, extended, &mut out, &mut notes);
-        let covariance = timings
-            .time(&format!("uncertainty_{output}"), || {
-                parameter_covariance(&identified.fits, extended, &runs.ident, &plan.settings)
-            })
-            .map_err(|e| notes.push(format!("parameter uncertainty of '{output}': {e}")))
-            .ok();
-        let mut entry = output_entry(&identified.model, extended, &unit);
-        entry.covariance = covariance;
         let mut part = OutputPart {
             output: output.to_owned(),
-            entry,
+            entry: built_output.entry.clone(),
             report: out,
             figures: Vec::new(),
             notes,
@@ -181,16 +176,15 @@ impl Batch<'_> {
         Ok(part)
     }
 
-    /// The effects (the workflow's loop) and the diagnosis of the final model, while the baselines
-    /// and the segmentation choice's second model, which need only the identified model, are fitted
-    /// on their own thread; the notes keep their order.
+    /// The effects (the workflow's loop), the output built from them and the diagnosis of the final
+    /// model, while the baselines and the segmentation choice's second model, which need only the
+    /// identified model, are fitted on their own thread; with the baselines' notes.
     fn effects_beside_baselines(
         &self,
         plan: &OutputPlan,
         identified: &Identified,
-        notes: &mut Vec<String>,
         timings: &mut Timings,
-    ) -> Result<(effects::Built, OutputModels)> {
+    ) -> Result<(effects::Built, OutputModels, Vec<String>)> {
         let (runs, output) = (self.runs, plan.output.as_str());
         let (built, baselines) = std::thread::scope(|scope| {
             let mut baseline_timings = timings.sibling();
@@ -204,16 +198,14 @@ impl Batch<'_> {
                     .time(&format!("preparation_{output}"), || segmentation_choice(runs, plan, identified));
                 (models, preparation, notes, baseline_timings)
             });
-            let built = effects::effects_and_diagnosis(plan, runs, identified, notes, timings);
+            let built = effects::effects_and_diagnosis(plan, runs, identified, timings);
             (built, baselines.join())
         });
         let (models, preparation, baseline_notes, baseline_timings) = baselines
             .map_err(|_| anyhow::anyhow!("fitting the baselines of '{output}' stopped unexpectedly"))?;
         timings.0.extend(baseline_timings.0);
         let built = built?;
-        notes.extend(baseline_notes);
-        notes.extend(built.diagnosis_notes.iter().cloned());
-        Ok((effects::Built { preparation, ..built }, models))
+        Ok((effects::Built { preparation, ..built }, models, baseline_notes))
     }
 
     /// Whether the runs agree on the steady state under the final model (report.json

@@ -1,8 +1,9 @@
 //! A project's model file, every output built as the batch builds it: the segment fits, the given
 //! clusters or the proposal, the polish, the project's effects and the missing-physics loop, and
 //! (when asked) the finished model's parameter covariance. A fleet's reference project and the
-//! Python package's `identify` build a project's model here; the batch runs the same steps with its
-//! baselines beside the effects (`batch::model_output`).
+//! Python package's `identify` build a project's model here; the batch identifies and adds the
+//! effects with its baselines beside them, then builds the output through [`with_effects`] too
+//! (`batch::effects`).
 use anyhow::{Context, Result};
 
 use crate::core::identification::pipeline::Identified;

@@ -54,7 +54,9 @@ pub fn trend_png(
             LegendEntry::line("run, 95 % interval", palette::series(0), 2),
             LegendEntry::line("flagged run", palette::FIT, 2),
             LegendEntry::new("normal band (3.5σ)", Swatch::Bar(palette::GRID_BOLD)),
-            LegendEntry::text("  (the engine's trend)"),
+            LegendEntry::text("  (the engine's trend;"),
+            LegendEntry::text("  wider for a run"),
+            LegendEntry::text("  noisier than usual)"),
             LegendEntry::line("band centre", palette::REFERENCE, 1),
         ];
         draw_legend(&legend_area, &entries)

@@ -22,6 +22,7 @@ use crate::io::staging::Staging;
 use crate::workflow::model::{self, OutputPlan};
 use crate::workflow::model_file::{new_model_file, take_saved_clusters};
 use crate::workflow::preparation::segmentation_choice;
+use crate::workflow::project_model::BuiltOutput;
 use crate::workflow::runs::{self, Runs};
 
 mod compare;
@@ -148,15 +149,14 @@ impl Batch<'_> {
         let (built, mut models, baseline_notes) =
             self.effects_beside_baselines(&plan, &identified, timings)?;
         let effects::Built { output: built_output, diagnosis, diagnosis_notes, preparation } = built;
-        let extended = built_output.effects.model();
-        let mut notes = built_output.notes.clone();
+        let BuiltOutput { effects, entry, mut notes, .. } = built_output;
+        let extended = effects.model();
         notes.extend(baseline_notes);
         notes.extend(diagnosis_notes);
         models.initial_state = plan.settings.initial_state;
-        let unit = built_output.entry.unit.clone();
-        let mut out = report::output_report(&identified, &models, unit);
+        let mut out = report::output_report(&identified, &models, entry.unit.clone());
         out.effects_applied = extended.effect_ids();
-        out.error_history = built_output.effects.sequence.history.clone();
+        out.error_history = effects.sequence.history.clone();
         if !extended.effects.is_empty() {
             models.extended = Some(extended.clone());
         }
@@ -165,7 +165,7 @@ impl Batch<'_> {
         self.describe_steady_states(&plan, extended, &mut out, &mut notes);
         let mut part = OutputPart {
             output: output.to_owned(),
-            entry: built_output.entry.clone(),
+            entry,
             report: out,
             figures: Vec::new(),
             notes,

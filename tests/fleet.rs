@@ -104,7 +104,7 @@ fn fleet_table_has_its_columns_in_csv_and_parquet() {
     for delta in ["input_gain", "input_offset", "tau_scale", "map_shift", "map_shift_pct"] {
         expected.extend([delta.to_owned(), format!("{delta}_ci95_low"), format!("{delta}_ci95_high")]);
     }
-    expected.push("flag".into());
+    expected.extend(["diagnosed", "effects", "flag"].map(String::from));
     let mut reader = csv::Reader::from_path(out.join("fleet.csv")).unwrap();
     let header: Vec<String> = reader.headers().unwrap().iter().map(str::to_owned).collect();
     assert_eq!(header, expected);
@@ -296,4 +296,44 @@ fn a_run_on_another_input_or_a_bad_fleet_size_is_refused() {
         assert!(o.status.code() == Some(1) && stderr.contains(needle), "{stderr}");
         assert!(!out.exists());
     }
+}
+
+/// The diagnosis `jetid fleet` runs on a screened run, on engines of the family it has never seen:
+/// each engine commissioned on the identification design (its reference), then a run of the
+/// validation design (steps of several sizes, the experiment that tells a rate limit from a slow
+/// spool) with the spool's acceleration and deceleration limited (the simulator's rate limit at its
+/// defaults), and the same run without it. The test only reads what the diagnosis found.
+#[test]
+fn a_run_diagnosis_finds_a_rate_limit_and_nothing_on_the_healthy_run() {
+    use jetid::core::effects::EffectId;
+    use jetid::fleet::diagnosis::diagnose_samples;
+    use jetid::fleet::reference::{Reference, identify_run};
+    use jetid::sim::effects::Effect;
+    use jetid::sim::{EngineFamily, SimConfig, TestKind, simulate};
+    let mut found = Vec::new();
+    for seed in [21_u64, 22, 23] {
+        let drawn = EngineFamily::small_turbojets().draw(seed);
+        let commissioning =
+            simulate(&SimConfig::for_test("commissioning", TestKind::Ident, seed).unwrap().on_engine(&drawn))
+                .unwrap()
+                .measured;
+        let reference =
+            Reference::of_model_file(&identify_run(&commissioning).unwrap(), "test".into()).unwrap();
+        let run = |effects: Vec<Effect>| {
+            let cfg = SimConfig::for_test("run", TestKind::Validation, seed + 100).unwrap();
+            simulate(&cfg.on_engine(&drawn).with_effects(effects)).unwrap().measured
+        };
+        let healthy = diagnose_samples(&run(Vec::new()), usize::MAX, &reference);
+        assert_eq!(healthy.diagnosed.len(), 2, "engine {seed}: both outputs diagnosed: {:?}", healthy.notes);
+        assert!(healthy.findings.is_empty(), "engine {seed}, healthy run: {:?}", healthy.findings);
+        let limited = run(vec![Effect::with_defaults(EffectId::RateLimit).unwrap()]);
+        let diagnosis = diagnose_samples(&limited, usize::MAX, &reference);
+        assert!(
+            diagnosis.findings.iter().all(|f| f.effect == EffectId::RateLimit),
+            "engine {seed}: {:?}",
+            diagnosis.findings
+        );
+        found.push(diagnosis.findings.iter().any(|f| f.output.contains("speed")));
+    }
+    assert!(found.iter().filter(|f| **f).count() >= 2, "{found:?}");
 }

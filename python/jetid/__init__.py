@@ -402,11 +402,18 @@ def batch(
 # --- the fleet -------------------------------------------------------------------------------
 
 
+# The fleet table's text columns; `diagnosed` is a bool, the rest are numbers.
+_FLEET_TEXT = {"engine", "run", "date", "output", "effects", "flag"}
+
+
 def _table(result: str) -> pd.DataFrame:
     parsed = json.loads(result)
     frame = pd.DataFrame(parsed["rows"], columns=parsed["columns"])
-    for column in parsed["columns"][4:-1]:
-        frame[column] = frame[column].astype("float64")
+    for column in parsed["columns"]:
+        if column == "diagnosed":
+            frame[column] = frame[column].astype(bool)
+        elif column not in _FLEET_TEXT:
+            frame[column] = frame[column].astype("float64")
     return frame
 
 
@@ -467,7 +474,8 @@ def fleet_table(
     manifest: Union[str, "os.PathLike[str]"], references: Mapping[str, str], scores: Iterable[RunScore]
 ) -> pd.DataFrame:
     """The table of :func:`fleet` from every engine's reference and every run's score, in any
-    order: each engine's normal band is judged across its runs, then the rows and flags made as
-    ``jetid fleet`` makes them."""
+    order: each engine's normal band is judged across its runs, the runs it screens diagnosed
+    against the reference (here, one after another: a few per cent of the runs), then the rows and
+    flags made as ``jetid fleet`` makes them."""
     triples = [(s.engine, s.run, s.json) for s in scores]
     return _table(_jetid.fleet_rows(os.fspath(manifest), list(references.items()), triples))

@@ -11,6 +11,7 @@ use anyhow::{Context, anyhow};
 use pyo3::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use jetid::fleet::diagnosis::diagnose_screened;
 use jetid::fleet::manifest::{Engine, Manifest, load_manifest};
 use jetid::fleet::reference::Reference;
 use jetid::fleet::score::{RunScore, score_run};
@@ -40,7 +41,7 @@ fn table_json(rows: &[Row]) -> String {
                 row.output.clone().into(),
             ];
             cells.extend(row.numbers().into_iter().map(|c| c.map_or(serde_json::Value::Null, Into::into)));
-            cells.push(row.flag.clone().into());
+            cells.extend([row.diagnosed.into(), row.effects.clone().into(), row.flag.clone().into()]);
             cells
         })
         .collect();
@@ -160,7 +161,9 @@ fn fleet_rows(
                     .with_context(|| format!("the score of engine '{}', run '{}'", engine.name, run.name))?;
                 engine_scores.push(score);
             }
-            rows.extend(rows_of(&EngineResult::of(engine, reference_of(reference)?, engine_scores)));
+            let mut result = EngineResult::of(engine, reference_of(reference)?, engine_scores);
+            diagnose_screened(std::slice::from_mut(&mut result), &mut |_| true)?;
+            rows.extend(rows_of(&result));
         }
         if let Some((engine, run)) = scores.keys().next() {
             anyhow::bail!(

@@ -8,7 +8,7 @@ import pytest
 import jetid
 from conftest import SAMPLES, needs_realdata, read_csv_exact, run_program
 
-TEXT = ["engine", "run", "date", "output", "flag"]
+TEXT = ["engine", "run", "date", "output", "effects", "flag"]
 
 
 def normalized(frame: pd.DataFrame) -> pd.DataFrame:

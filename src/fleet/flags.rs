@@ -67,7 +67,7 @@ impl EngineBands {
         }
     }
 
-    fn rmse_of(&self, output: &str) -> Option<&Band> {
+    pub fn rmse_band(&self, output: &str) -> Option<&Band> {
         self.rmse.iter().find(|(name, _)| name == output).and_then(|(_, b)| b.as_ref())
     }
 
@@ -107,7 +107,7 @@ impl EngineBands {
         // One reason per stretch, on the first output that shows it (speed before thrust).
         let mut said: Vec<usize> = Vec::new();
         for starved in &run.starved {
-            let typical = self.rmse_of(&starved.output).map_or(0.0, |b| b.centre);
+            let typical = self.rmse_band(&starved.output).map_or(0.0, |b| b.centre);
             if starved.shortfall > BAND_SIGMAS * typical
                 && starved.shortfall > 0.0
                 && !said.contains(&starved.start)
@@ -116,8 +116,17 @@ impl EngineBands {
                 shared.push(starvation_words(starved));
             }
         }
-        let own: Vec<(String, Vec<String>)> =
-            run.outputs.iter().map(|o| (o.output.clone(), self.output_reasons(index, o))).collect();
+        // What the diagnosis found on the run (see `fleet::diagnosis`), on the output it acts on.
+        let findings = run.diagnosis.iter().flat_map(|d| &d.findings);
+        let own: Vec<(String, Vec<String>)> = run
+            .outputs
+            .iter()
+            .map(|o| {
+                let mut reasons = self.output_reasons(index, o);
+                reasons.extend(findings.clone().filter(|f| f.output == o.output).map(|f| f.words()));
+                (o.output.clone(), reasons)
+            })
+            .collect();
         let flagged = !shared.is_empty() || own.iter().any(|(_, r)| !r.is_empty());
         // A starved run's gain is fitted where the pump is pinned, beyond the reference's range: it
         // says nothing about the calibration, and the starvation is the direction.
@@ -157,7 +166,7 @@ impl EngineBands {
                 plain(band.centre, 3)
             ));
         }
-        if let Some(band) = self.rmse_of(&o.output)
+        if let Some(band) = self.rmse_band(&o.output)
             && o.rmse > band.high()
             && o.rmse > ERROR_RATIO * band.centre
         {

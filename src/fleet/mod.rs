@@ -16,6 +16,7 @@ use crate::core::parallel::on_two_threads;
 use crate::io::figures::{TrendPanel, TrendPoint, trend_png};
 use crate::io::staging::Staging;
 
+pub mod diagnosis;
 pub mod flags;
 pub mod manifest;
 pub mod reference;
@@ -54,10 +55,16 @@ pub struct EngineResult<'a> {
 /// enough that progress moves and a stop is heard within a second or two.
 const RUNS_PER_REPORT: usize = 32;
 
+/// The share of the progress bar the scoring takes; the diagnosis of the screened runs takes the
+/// rest. Only the bar's pace: a fleet's screened runs are a few per cent of its runs, and each
+/// diagnosis costs about as many scorings as there are per cent, so the two are of one order.
+const SCORING_SHARE: f64 = 0.5;
+
 /// Every engine of `manifest` against its reference: the references loaded (or identified) and the
-/// runs scored on two threads, then each engine's bands. `progress` hears the fraction done (the
-/// references and the runs count alike) and stops the work when it answers `false`: `Ok(None)`.
-/// `jetid fleet` and the app's History view both evaluate a fleet here.
+/// runs scored on two threads, then each engine's bands, then the screened runs diagnosed
+/// (`diagnosis`). `progress` hears the fraction done (the references and the runs count alike in
+/// the scoring's share) and stops the work when it answers `false`: `Ok(None)`. `jetid fleet` and
+/// the app's History view both evaluate a fleet here.
 pub fn evaluate<'a>(
     manifest: &'a Manifest,
     progress: &mut dyn FnMut(f64) -> bool,
@@ -68,7 +75,7 @@ pub fn evaluate<'a>(
         .enumerate()
         .flat_map(|(e, engine)| (0..engine.runs.len()).map(move |r| (e, r)))
         .collect();
-    let steps = (manifest.engines.len() + jobs.len()).max(1) as f64;
+    let steps = (manifest.engines.len() + jobs.len()).max(1) as f64 / SCORING_SHARE;
     let references = on_two_threads(&manifest.engines, |engine| {
         Reference::load(&engine.reference)
             .with_context(|| format!("the reference of engine '{}'", engine.name))
@@ -95,6 +102,10 @@ pub fn evaluate<'a>(
     for (engine, reference) in manifest.engines.iter().zip(references) {
         let scores = scored.by_ref().take(engine.runs.len()).collect::<Result<Vec<_>>>()?;
         results.push(EngineResult::of(engine, reference, scores));
+    }
+    let mut diagnosing = |f: f64| progress(SCORING_SHARE + (1.0 - SCORING_SHARE) * f);
+    if !diagnosis::diagnose_screened(&mut results, &mut diagnosing)? {
+        return Ok(None);
     }
     Ok(Some(results))
 }
@@ -208,6 +219,15 @@ pub fn rows_of(result: &EngineResult<'_>) -> Vec<Row> {
                 map_shift_pct: o
                     .map_shift
                     .map(|e| Estimate { value: pct(e.value), ci95: e.ci95.map(|[a, b]| [pct(a), pct(b)]) }),
+                diagnosed: score.diagnosis.as_ref().is_some_and(|d| d.diagnosed.contains(&o.output)),
+                effects: score
+                    .diagnosis
+                    .iter()
+                    .flat_map(|d| &d.findings)
+                    .filter(|f| f.output == o.output)
+                    .map(|f| f.effect.name())
+                    .collect::<Vec<_>>()
+                    .join("; "),
                 flag: reasons.join("; "),
             });
         }

@@ -32,7 +32,10 @@ pub(super) fn markdown(name: &str, results: &[EngineResult<'_>], rows: &[Row], f
          each output's map shift; the input offset is not fitted: it reads as a map shift of every output). \
          A run is flagged when a delta lies more than {BAND_SIGMAS} robust σ from its engine's trend over the \
          runs, by more than the smallest change that matters, and its own 95 % interval excludes the trend, when it fits much worse than the engine's usual error, \
-         or when its input sits at its limit while the output falls short of the reference.\n",
+         or when its input sits at its limit while the output falls short of the reference. The runs flagged \
+         or fitting worse than their engine's usual error are also diagnosed against the reference (the \
+         model-building diagnosis, fitted on the first part of the run and judged on the rest): an effect it \
+         finds significant is a reason of the flag, with its test and evidence.\n",
         results.len(),
         flagged.len()
     );
@@ -64,7 +67,11 @@ pub(super) fn markdown(name: &str, results: &[EngineResult<'_>], rows: &[Row], f
                 if row.flag.is_empty() { String::new() } else { format!("**{}**", row.flag) }
             );
         }
-        let notes: Vec<&String> = result.scores.iter().flat_map(|s| &s.notes).collect();
+        let notes: Vec<&String> = result
+            .scores
+            .iter()
+            .flat_map(|s| s.notes.iter().chain(s.diagnosis.iter().flat_map(|d| &d.notes)))
+            .collect();
         if !notes.is_empty() {
             let _ = writeln!(md, "\nNotes:\n");
             for note in notes {

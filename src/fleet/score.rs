@@ -11,12 +11,13 @@ use crate::core::numerics::stats::significant;
 use crate::core::run::Run;
 use crate::workflow::runs::{DT_TOLERANCE, load_source};
 
+use super::diagnosis::RunDiagnosis;
 use super::manifest::FleetRun;
 use super::reference::Reference;
 
 /// Scored runs start from the state that best fits their first seconds: a window cut from a log
 /// starts wherever the engine happens to be.
-const INITIAL: InitialState = InitialState::Estimated;
+pub(super) const INITIAL: InitialState = InitialState::Estimated;
 /// The input must sit at its limit for this many of the reference's slowest time constants before
 /// the output is judged: after 3 τ a first-order spool is within 5 % of where the input takes it.
 const SETTLE_TIME_CONSTANTS: f64 = 3.0;
@@ -63,12 +64,47 @@ pub struct RunScore {
     /// Why a delta is missing, what reading the file changed.
     pub notes: Vec<String>,
     pub input_name: String,
+    /// The diagnosis of the run against the reference, when the run was screened for one (see
+    /// `fleet::diagnosis`).
+    #[serde(default)]
+    pub diagnosis: Option<RunDiagnosis>,
 }
 
 /// Read `run` and score it against `reference`.
 pub fn score_run(run: &FleetRun, reference: &Reference) -> Result<RunScore> {
     let mut notes = Vec::new();
-    let mut data = load_source(&run.source, &mut notes)?;
+    let data = read_run(run, reference, &mut notes)?;
+    let present: Vec<usize> =
+        (0..reference.models.len()).filter(|&i| data.output(&reference.models[i].output).is_some()).collect();
+    if present.is_empty() {
+        let names: Vec<&str> = reference.models.iter().map(|m| m.output.as_str()).collect();
+        bail!("run '{}' holds none of the reference's outputs ({})", run.name, names.join(", "));
+    }
+    let models: Vec<_> = present.iter().map(|&i| reference.models[i].clone()).collect();
+    let fit = health::fit_deltas(&models, &data, INITIAL)
+        .map_err(|e| notes.push(format!("run '{}': no health deltas: {e}", run.name)))
+        .ok();
+    let mut outputs = Vec::with_capacity(present.len());
+    for (k, &i) in present.iter().enumerate() {
+        outputs.push(score_output(&data, reference, i, fit.as_ref().map(|f| f.map_shift[k]))?);
+    }
+    let starved =
+        starved_stretches(&data, reference, &present).with_context(|| format!("run '{}'", run.name))?;
+    Ok(RunScore {
+        outputs,
+        input_gain: fit.as_ref().map(|f: &HealthFit| f.input_gain),
+        tau_scale: fit.as_ref().map(|f| f.tau_scale),
+        starved,
+        notes,
+        input_name: data.input.name.clone(),
+        diagnosis: None,
+    })
+}
+
+/// Read `run` as the manifest says, named as it names it and on the reference's sample time; what
+/// reading changed goes into `notes`.
+pub fn read_run(run: &FleetRun, reference: &Reference, notes: &mut Vec<String>) -> Result<Run> {
+    let mut data = load_source(&run.source, notes)?;
     data.name = run.name.clone();
     if data.input.name != reference.input {
         bail!(
@@ -97,30 +133,7 @@ pub fn score_run(run: &FleetRun, reference: &Reference) -> Result<RunScore> {
             significant(reference.dt_secs, 5)
         ));
     }
-    let present: Vec<usize> =
-        (0..reference.models.len()).filter(|&i| data.output(&reference.models[i].output).is_some()).collect();
-    if present.is_empty() {
-        let names: Vec<&str> = reference.models.iter().map(|m| m.output.as_str()).collect();
-        bail!("run '{}' holds none of the reference's outputs ({})", run.name, names.join(", "));
-    }
-    let models: Vec<_> = present.iter().map(|&i| reference.models[i].clone()).collect();
-    let fit = health::fit_deltas(&models, &data, INITIAL)
-        .map_err(|e| notes.push(format!("run '{}': no health deltas: {e}", run.name)))
-        .ok();
-    let mut outputs = Vec::with_capacity(present.len());
-    for (k, &i) in present.iter().enumerate() {
-        outputs.push(score_output(&data, reference, i, fit.as_ref().map(|f| f.map_shift[k]))?);
-    }
-    let starved =
-        starved_stretches(&data, reference, &present).with_context(|| format!("run '{}'", run.name))?;
-    Ok(RunScore {
-        outputs,
-        input_gain: fit.as_ref().map(|f: &HealthFit| f.input_gain),
-        tau_scale: fit.as_ref().map(|f| f.tau_scale),
-        starved,
-        notes,
-        input_name: data.input.name.clone(),
-    })
+    Ok(data)
 }
 
 fn score_output(

@@ -4,7 +4,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use parquet::data_type::{ByteArray, ByteArrayType, DoubleType};
+use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType};
 use parquet::file::writer::SerializedFileWriter;
 use parquet::schema::parser::parse_message_type;
 
@@ -26,6 +26,12 @@ pub struct Row {
     pub tau_scale: Option<Estimate>,
     pub map_shift: Option<Estimate>,
     pub map_shift_pct: Option<Estimate>,
+    /// Whether the run was diagnosed against the reference (see `fleet::diagnosis`: the screened
+    /// runs are).
+    pub diagnosed: bool,
+    /// The effects the diagnosis finds significant on this output, by id, "; "-separated; empty when
+    /// none was found or the run was not diagnosed.
+    pub effects: String,
     /// Empty when the run is normal.
     pub flag: String,
 }
@@ -40,7 +46,7 @@ pub fn columns() -> Vec<String> {
     for delta in DELTAS {
         names.extend([delta.to_owned(), format!("{delta}_ci95_low"), format!("{delta}_ci95_high")]);
     }
-    names.push("flag".to_owned());
+    names.extend(["diagnosed", "effects", "flag"].map(String::from));
     names
 }
 
@@ -68,7 +74,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             row.output.clone(),
         ];
         record.extend(row.numbers().into_iter().map(|c| c.map(|v| v.to_string()).unwrap_or_default()));
-        record.push(row.flag.clone());
+        record.extend([row.diagnosed.to_string(), row.effects.clone(), row.flag.clone()]);
         out.write_record(&record)?;
     }
     let bytes = out.into_inner().context("fleet.csv")?;
@@ -81,7 +87,10 @@ pub fn write_parquet(path: &Path, rows: &[Row]) -> Result<()> {
     let mut schema = String::from("message fleet {\n");
     for name in &names {
         let line = match name.as_str() {
-            "engine" | "run" | "output" | "flag" => format!("  REQUIRED BYTE_ARRAY {name} (UTF8);\n"),
+            "engine" | "run" | "output" | "effects" | "flag" => {
+                format!("  REQUIRED BYTE_ARRAY {name} (UTF8);\n")
+            }
+            "diagnosed" => format!("  REQUIRED BOOLEAN {name};\n"),
             "date" => format!("  OPTIONAL BYTE_ARRAY {name} (UTF8);\n"),
             _ => format!("  OPTIONAL DOUBLE {name};\n"),
         };
@@ -108,6 +117,13 @@ pub fn write_parquet(path: &Path, rows: &[Row]) -> Result<()> {
                 "date" => write_text(column.typed::<ByteArrayType>(), &text(&|r| r.date.clone()), true)?,
                 "output" => {
                     write_text(column.typed::<ByteArrayType>(), &text(&|r| Some(r.output.clone())), false)?
+                }
+                "diagnosed" => {
+                    let cells: Vec<bool> = rows.iter().map(|r| r.diagnosed).collect();
+                    column.typed::<BoolType>().write_batch(&cells, None, None)?;
+                }
+                "effects" => {
+                    write_text(column.typed::<ByteArrayType>(), &text(&|r| Some(r.effects.clone())), false)?
                 }
                 "flag" => {
                     write_text(column.typed::<ByteArrayType>(), &text(&|r| Some(r.flag.clone())), false)?

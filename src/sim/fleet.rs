@@ -10,7 +10,10 @@
 //! - **faults** (each run with probability `fault_rate`, one of three): the meter's calibration
 //!   steps by 12 % (a meter replaced or miswired), the spool is 60 % slower (a bearing or rub), or the
 //!   fuel supply fails during the top hold (the delivered fuel sinks from the top to 5.5 gal/h while
-//!   the pump, read as the input, sits at its limit). At most a quarter of an engine's runs.
+//!   the pump, read as the input, sits at its limit), or the spool's acceleration and deceleration
+//!   are limited (a control unit's acceleration schedule set too low, or a fuel valve that sticks:
+//!   the simulator's rate limit with its default rates, an effect of the catalog that no health
+//!   delta stands for). At most a quarter of an engine's runs.
 //!
 //! Pure: the runs and their truth; the command line writes the files.
 use rand::{Rng, SeedableRng};
@@ -18,7 +21,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use super::designs::{MAX_FUEL_GPH, Segment, Shape};
+use super::effects::Effect;
 use super::{DrawnEngine, EngineFamily, FuelProfile, SimConfig, SimError, TestKind, simulate};
+use crate::core::effects::EffectId;
 use crate::core::run::Run;
 
 /// Stream of the generator that draws health states (the family uses 7, noise 0, buffeting 1).
@@ -58,6 +63,7 @@ pub enum Fault {
     CalibrationStep,
     SlowSpool,
     FuelStarvation,
+    RateLimit,
 }
 
 impl Fault {
@@ -66,6 +72,7 @@ impl Fault {
             Self::CalibrationStep => "calibration_step",
             Self::SlowSpool => "slow_spool",
             Self::FuelStarvation => "fuel_starvation",
+            Self::RateLimit => "rate_limit",
         }
     }
 }
@@ -127,10 +134,11 @@ pub fn simulate_engine(cfg: &FleetConfig, index: usize) -> Result<SimulatedEngin
         meter += walk.sample(&mut rng);
         let drawn_fault = rng.random_bool(cfg.fault_rate);
         let fault =
-            (drawn_fault && faults < cfg.runs / MAX_FAULT_SHARE).then(|| match rng.random_range(0..3) {
+            (drawn_fault && faults < cfg.runs / MAX_FAULT_SHARE).then(|| match rng.random_range(0..4) {
                 0 => Fault::CalibrationStep,
                 1 => Fault::SlowSpool,
-                _ => Fault::FuelStarvation,
+                2 => Fault::FuelStarvation,
+                _ => Fault::RateLimit,
             });
         faults += usize::from(fault.is_some());
         let meter_gain = if fault == Some(Fault::CalibrationStep) { meter * CALIBRATION_STEP } else { meter };
@@ -195,6 +203,9 @@ fn simulate_run(
     let mut cfg = SimConfig::for_test(name, TestKind::Validation, seed)?.on_engine(drawn);
     cfg.profile = FuelProfile::new(segments, super::DT_SECS)?;
     cfg.engine.spool_tau_ref_secs *= health.tau_scale;
+    if health.fault == Some(Fault::RateLimit) {
+        cfg.effects = vec![Effect::with_defaults(EffectId::RateLimit)?];
+    }
     let mut run = simulate(&cfg)?.measured;
     let top_from = ((cfg.profile.duration_secs() - HOLD_SECS) / super::DT_SECS).ceil() as usize;
     for (k, u) in run.input.values.iter_mut().enumerate() {

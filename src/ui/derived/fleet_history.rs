@@ -14,12 +14,8 @@ use crate::core::numerics::metrics::metrics;
 use crate::fleet::flags::EngineBands;
 use crate::fleet::manifest::{FleetRun, load_manifest};
 use crate::fleet::reference::Reference;
-use crate::fleet::score::RunScore;
+use crate::fleet::score::{RunScore, read_run};
 use crate::ui::derived::jobs::{JobError, JobResult};
-use crate::workflow::runs::load_source;
-
-/// Relative difference of sample times below which a run is on the reference's grid.
-const DT_TOLERANCE: f64 = 1e-6;
 
 /// A fleet manifest and every engine's results.
 pub struct FleetHistory {
@@ -112,12 +108,7 @@ pub struct RunComparison {
 /// Read `run` and simulate `reference` on it, each output from the initial state the fleet scores
 /// it from (fitted to the run's first seconds), so the plot shows the error the table gives.
 pub fn compare_run(run: &FleetRun, reference: &Reference) -> Result<RunComparison> {
-    let mut notes = Vec::new();
-    let mut data = load_source(&run.source, &mut notes)?;
-    data.name = run.name.clone();
-    if (data.dt_secs / reference.dt_secs - 1.0).abs() > DT_TOLERANCE {
-        data = data.resampled(reference.dt_secs);
-    }
+    let data = read_run(run, reference, &mut Vec::new())?;
     let mut outputs = Vec::new();
     for (i, model) in reference.models.iter().enumerate() {
         let Some(measured) = data.output(&model.output) else { continue };

@@ -286,6 +286,19 @@ fn run_view_ui(ui: &mut egui::Ui, state: &HistoryViewState, height: f32) {
     for note in &run.score.notes {
         ui.label(RichText::new(note).small().color(theme::HINT));
     }
+    if let Some(diagnosis) = &run.score.diagnosis {
+        let clean: Vec<&str> = (diagnosis.diagnosed.iter())
+            .filter(|o| !diagnosis.findings.iter().any(|f| f.output == **o))
+            .map(String::as_str)
+            .collect();
+        if !clean.is_empty() {
+            let text = format!("Diagnosed against the reference: no missing effect on {}.", clean.join(", "));
+            ui.label(RichText::new(text).small().color(theme::HINT));
+        }
+        for note in &diagnosis.notes {
+            ui.label(RichText::new(note).small().color(theme::HINT));
+        }
+    }
     if let Some((_, Comparison::Running(job))) = &state.comparison {
         ui.horizontal(|ui| {
             ui.spinner();

@@ -21,6 +21,7 @@ use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf
 use crate::core::numerics::tf::{DiscreteTf, alternates_sign};
 use crate::core::run::{Channel, Run};
 
+mod memo;
 mod refine;
 mod search;
 
@@ -202,6 +203,20 @@ impl Structure {
 
 /// Gain, offset and static map for a structure; its simulation error on the data.
 pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
+    assemble_from(s, data, &linear_part(s, data)?)
+}
+
+/// What a structure's simulation gives before its output stage: the unit-gain linear block (its
+/// roots and dead time), the ambient conditions, and `w`, the response of the blocks that act on
+/// the input and the spool ([`EffectBlock::shapes_linear_part`]) to the data's input. Two
+/// structures that differ only in their other blocks' parameters share it (see `fit::memo`).
+pub(super) struct LinearPart {
+    unit: DiscreteTf,
+    conditions: Option<super::ambient_correction::Conditions>,
+    w: Vec<f64>,
+}
+
+pub(super) fn linear_part(s: &Structure, data: &FitData) -> Option<LinearPart> {
     let dt = data.dt_secs;
     let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
     let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
@@ -211,7 +226,15 @@ pub(super) fn assemble(s: &Structure, data: &FitData) -> Option<Assembled> {
     };
     let unit_block = LinearBlock { tf: unit.clone(), offset: 0.0 };
     let w = linear_stage(&s.effects, &unit_block, split.as_ref(), &u, dt).ok()?;
-    let factor: Option<Vec<f64>> = s.effects.iter().find_map(|e| match (e, &conditions) {
+    Some(LinearPart { unit, conditions, w })
+}
+
+/// [`assemble`] from the structure's [`LinearPart`] (which must be `s`'s own, or that of a
+/// structure with the same roots, dead time and blocks that shape it).
+pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) -> Option<Assembled> {
+    let dt = data.dt_secs;
+    let (unit, conditions, w) = (&part.unit, &part.conditions, part.w.clone());
+    let factor: Option<Vec<f64>> = s.effects.iter().find_map(|e| match (e, conditions) {
         (EffectBlock::AmbientCorrection(a), Some(c)) => Some(a.output_factor(c)),
         _ => None,
     });

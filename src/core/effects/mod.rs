@@ -332,6 +332,14 @@ impl EffectBlock {
         }
     }
 
+    /// Whether the block shapes the linear part of a fit's simulation (see `fit::LinearPart`): it
+    /// acts on the input or the spool. A rate limit, the stand's dynamics and the map's kink act
+    /// after it. A calibration drift and the ambient correction count as shaping it (the drift's
+    /// offset and the correction's factors reach the input).
+    pub(crate) fn shapes_linear_part(&self) -> bool {
+        !matches!(self, Self::RateLimit(_) | Self::SensorDynamics(_) | Self::StaticMapOrder(_))
+    }
+
     /// Position in the signal path.
     pub fn rank(&self) -> usize {
         self.id().rank()

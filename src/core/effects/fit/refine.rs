@@ -3,6 +3,7 @@
 //! poles).
 use num_complex::Complex64;
 
+use super::memo::LinearMemo;
 use super::{Assembled, FitData, Structure, assemble};
 use crate::core::effects::EffectBlock;
 use crate::core::identification::refine::RootParams;
@@ -93,7 +94,9 @@ fn refine_with(
         }
         Some(Structure { poles, zeros, effects, map_order: start.map_order, delay: start.delay })
     };
-    let residual = |theta: &[f64]| unpack(theta).and_then(|s| assemble(&s, data)).map(|a| a.residual);
+    let mut memo = LinearMemo::default();
+    let residual =
+        |theta: &[f64]| unpack(theta).and_then(|s| memo.assemble(&s, data)).map(|a| a.residual);
     let mut problem: LeastSquares<_, LmError> =
         LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
     let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;

@@ -2,6 +2,7 @@
 //! refined with the roots and the other effects.
 use num_complex::Complex64;
 
+use super::memo::LinearMemo;
 use super::{Assembled, FitData, REFINED_STARTS, Structure, assemble, check_channels, refine};
 use crate::core::effects::model::ExtendedModel;
 use crate::core::effects::stats::mean;
@@ -109,13 +110,14 @@ impl Search<'_> {
             effects: around.effects.iter().filter(|e| e.id() != self.id).cloned().collect(),
             ..around.clone()
         };
+        let mut memo = LinearMemo::default();
         let mut scored: Vec<(f64, Structure)> = self
             .guesses
             .iter()
             .filter(|g| !tried.contains(g))
             .filter_map(|g| {
                 let s = around.with(g.clone());
-                assemble(&s, self.data).map(|a| (a.cost, s))
+                memo.assemble(&s, self.data).map(|a| (a.cost, s))
             })
             .collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -1,21 +1,12 @@
 //! A list of independent jobs spread over two threads (the machine's cores): for studies and tests
 //! that run the whole pipeline on many engines, and for a diagnosis's trials.
 
-/// `f` on every item, the first half of the list on one thread and the second on another; the
-/// results in the order of the items. A panic in `f` is carried on to the caller unchanged.
+/// `f` on every item, on the calling thread and one helper taking turns (see
+/// [`taking_turns_on_two_threads`]); the results in the order of the items. A panic in `f` is
+/// carried on to the caller unchanged.
 pub fn on_two_threads<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let half = items.len().div_ceil(2);
-    std::thread::scope(|scope| {
-        let f = &f;
-        let handles: Vec<_> = items
-            .chunks(half.max(1))
-            .map(|chunk| scope.spawn(move || chunk.iter().map(f).collect::<Vec<R>>()))
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
-            .collect()
-    })
+    // Never stopped (the progress always goes on), so every item has its result.
+    taking_turns_on_two_threads(items, f, &mut |_| true).unwrap_or_default()
 }
 
 /// `f` on every item, on the calling thread and one helper, each taking the next item no one has

@@ -3,6 +3,7 @@
 //! cross-validation across segments under the parsimony rule, each decision recorded as a
 //! [`Verdict`] or a [`DeadTimeDecision`].
 use crate::core::identification::cluster::{ClusterEval, RootKind};
+use crate::core::parallel::on_two_threads;
 use crate::core::identification::cross_validation::{cross_validate, fitted};
 use crate::core::identification::dead_time::{DeadTimeDecision, DeadTimeVerdict};
 use crate::core::identification::parsimony::{
@@ -121,9 +122,13 @@ impl<'d, 'a> ForwardSelection<'d, 'a> {
     /// model.
     fn first_pole(&mut self) -> Option<Current> {
         let mut first: Option<(usize, Polished)> = None;
-        for (i, g) in self.groups.iter().enumerate() {
-            let Some(g) = g.as_ref().filter(|g| g.kind == RootKind::Pole) else { continue };
-            match fitted(self.data, std::slice::from_ref(g)) {
+        let poles: Vec<(usize, &RootGroup)> = (self.groups.iter().enumerate())
+            .filter_map(|(i, g)| Some((i, g.as_ref().filter(|g| g.kind == RootKind::Pole)?)))
+            .collect();
+        let data = self.data;
+        let fits = on_two_threads(&poles, |(_, g)| fitted(data, std::slice::from_ref(*g)));
+        for (&(i, _), fit) in poles.iter().zip(fits) {
+            match fit {
                 Some(p) => {
                     self.verdicts[i].rms_with = Some(p.assembled.rms());
                     if first.as_ref().is_none_or(|(_, b)| p.assembled.rms() < b.assembled.rms()) {
@@ -157,7 +162,7 @@ impl<'d, 'a> ForwardSelection<'d, 'a> {
     fn trials(&mut self, current: &Current, at: &IdentData) -> Vec<(usize, Polished)> {
         let groups = &current.model.groups;
         let (n_poles, n_zeros) = (count_of(groups, RootKind::Pole), count_of(groups, RootKind::Zero));
-        let mut trials: Vec<(usize, Polished)> = Vec::new();
+        let mut tried: Vec<(usize, Vec<RootGroup>)> = Vec::new();
         for (i, g) in self.groups.iter().enumerate() {
             let Some(g) = g.as_ref().filter(|_| !self.kept.contains(&i)) else { continue };
             if g.kind == RootKind::Zero && n_zeros + g.count() > n_poles {
@@ -166,9 +171,15 @@ impl<'d, 'a> ForwardSelection<'d, 'a> {
             }
             let mut trial_groups = groups.clone();
             trial_groups.push(g.clone());
-            match fitted(at, &trial_groups) {
-                Some(trial) => trials.push((i, trial)),
-                None => self.verdicts[i].verdict = Verdict::NoModelBeside,
+            tried.push((i, trial_groups));
+        }
+        // Each candidate's fit is independent of the others': fitted on two threads, gathered in order.
+        let fits = on_two_threads(&tried, |(_, trial_groups)| fitted(at, trial_groups));
+        let mut trials: Vec<(usize, Polished)> = Vec::new();
+        for ((i, _), fit) in tried.iter().zip(fits) {
+            match fit {
+                Some(trial) => trials.push((*i, trial)),
+                None => self.verdicts[*i].verdict = Verdict::NoModelBeside,
             }
         }
         trials.sort_by(|a, b| a.1.assembled.rms().total_cmp(&b.1.assembled.rms()));

@@ -127,29 +127,14 @@ impl DiscreteTf {
 
     /// Simulate `y = G u` with all past inputs equal to `u_past` and past outputs equal to `y_past`.
     pub fn simulate_with_history(&self, u: &[f64], u_past: f64, y_past: f64) -> Vec<f64> {
-        let (b, a) = (&self.num_zinv, self.den_zinv.get(1..).unwrap_or(&[]));
-        let mut y: Vec<f64> = Vec::with_capacity(u.len());
-        // While the history reaches back before the first sample.
-        let warm = b.len().saturating_sub(1).max(a.len()).min(u.len());
-        for k in 0..warm {
+        let mut y = Vec::with_capacity(u.len());
+        for k in 0..u.len() {
             let mut acc = 0.0;
-            for (j, b) in b.iter().enumerate() {
+            for (j, b) in self.num_zinv.iter().enumerate() {
                 acc += b * if k >= j { u[k - j] } else { u_past };
             }
-            for (i, a) in a.iter().enumerate() {
-                acc -= a * if k > i { y[k - 1 - i] } else { y_past };
-            }
-            y.push(acc);
-        }
-        // Then every term from the signals themselves, in the same order (the same sums, bit for
-        // bit), without a test per term.
-        for k in warm..u.len() {
-            let mut acc = 0.0;
-            for (b, x) in b.iter().zip(u[..=k].iter().rev()) {
-                acc += b * x;
-            }
-            for (a, x) in a.iter().zip(y[..k].iter().rev()) {
-                acc -= a * x;
+            for (i, a) in self.den_zinv.iter().enumerate().skip(1) {
+                acc -= a * if k >= i { y[k - i] } else { y_past };
             }
             y.push(acc);
         }

@@ -2,11 +2,11 @@
 //! when fitted without it ([`cross_validate`]); the model of a structure on all the data
 //! ([`fitted`]). How a trial is judged against the current structure from these errors is the
 //! parsimony rule (`core::identification::parsimony`).
-use crate::core::parallel::on_two_threads;
 use crate::core::identification::reduce::{
     IdentData, Polished, RootGroup, assemble_groups, polish, polish_with, rms,
 };
 use crate::core::identification::refine::Refinement;
+use crate::core::parallel::on_two_threads;
 
 /// Starting points kept after screening a grid on the identification error, to be [`fitted`].
 pub(super) const REFINED_GUESSES: usize = 2;

@@ -95,8 +95,7 @@ fn refine_with(
         Some(Structure { poles, zeros, effects, map_order: start.map_order, delay: start.delay })
     };
     let mut memo = LinearMemo::default();
-    let residual =
-        |theta: &[f64]| unpack(theta).and_then(|s| memo.assemble(&s, data)).map(|a| a.residual);
+    let residual = |theta: &[f64]| unpack(theta).and_then(|s| memo.assemble(&s, data)).map(|a| a.residual);
     let mut problem: LeastSquares<_, LmError> =
         LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
     let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;

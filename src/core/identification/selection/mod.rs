@@ -3,7 +3,6 @@
 //! cross-validation across segments under the parsimony rule, each decision recorded as a
 //! [`Verdict`] or a [`DeadTimeDecision`].
 use crate::core::identification::cluster::{ClusterEval, RootKind};
-use crate::core::parallel::on_two_threads;
 use crate::core::identification::cross_validation::{cross_validate, fitted};
 use crate::core::identification::dead_time::{DeadTimeDecision, DeadTimeVerdict};
 use crate::core::identification::parsimony::{
@@ -11,6 +10,7 @@ use crate::core::identification::parsimony::{
 };
 use crate::core::identification::reduce::{IdentData, Polished, RootGroup, count_of};
 use crate::core::identification::verdict::{CandidateVerdict, Verdict};
+use crate::core::parallel::on_two_threads;
 
 mod dead_time_trials;
 

@@ -22,11 +22,10 @@
 //! [`screened`]). A run inside its band on every output fits as well as its engine's healthy runs,
 //! which leaves a missing effect too little of the error to be found on one run.
 use anyhow::{Context, Result};
-use serde::{Deserialize, Serialize};
 
-use crate::core::control::bands::{ParameterInterval, parameter_intervals};
+use crate::core::control::bands::parameter_intervals;
 use crate::core::diagnose::{DiagnosisKind, diagnose};
-use crate::core::effects::{EffectId, ExtendedModel};
+use crate::core::effects::ExtendedModel;
 use crate::core::identification::fits::fit_segments_for;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
@@ -34,7 +33,8 @@ use crate::workflow::runs::{segments, steps_from};
 use crate::workflow::uncertainty::parameter_covariance;
 
 use super::EngineResult;
-use super::flags::{EngineBands, plain, quantity_word};
+use super::finding::{Finding, RunDiagnosis};
+use super::flags::{EngineBands, quantity_word};
 use super::manifest::FleetRun;
 use super::reference::Reference;
 use super::score::{INITIAL, RunScore, read_run};
@@ -43,78 +43,6 @@ use super::score::{INITIAL, RunScore, read_run};
 /// `fit_segments`), and a judge run with fewer than two set-point changes says little about
 /// dynamics.
 const MIN_STEPS_PER_PART: usize = 2;
-
-/// An effect the diagnosis finds significant on a run, for one output.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Finding {
-    pub output: String,
-    pub effect: EffectId,
-    /// The test's one-sided p-value.
-    pub p_value: f64,
-    /// The second part's error beyond the noise (in units of the noise) of the reference refitted on
-    /// the first part, and of the reference with the effect.
-    pub beyond_noise_before: f64,
-    pub beyond_noise_after: f64,
-    /// The evidence sentence read from the reference's residuals.
-    pub evidence: String,
-    /// The effect's parameters with their 95 % intervals (empty when the covariance cannot be
-    /// estimated; the note says why).
-    pub params: Vec<ParameterInterval>,
-    /// The other effects the diagnosis finds significant on this output, each with its error beyond
-    /// the noise: they explain less of the same residual (ranked below `effect`).
-    #[serde(default)]
-    pub also: Vec<(EffectId, f64)>,
-}
-
-/// What the diagnosis of one run found, and what it could not do.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct RunDiagnosis {
-    /// The outputs the diagnosis ran on.
-    pub diagnosed: Vec<String>,
-    pub findings: Vec<Finding>,
-    pub notes: Vec<String>,
-}
-
-impl Finding {
-    /// "missing effect on speed: rate limit (error from 35 to 11 σ beyond the noise, p = 2.6e-4;
-    /// fall_per_s 1530 [1490, 1570], rise_per_s 2980 [2900, 3050]): measured peak slopes … : both
-    /// accelerations and decelerations saturate at a constant rate".
-    pub fn words(&self) -> String {
-        let params: Vec<String> = self
-            .params
-            .iter()
-            .map(|p| {
-                let name = p.name.split_once('.').map_or(p.name.as_str(), |(_, n)| n);
-                match p.ci95 {
-                    Some([lo, hi]) => {
-                        format!("{name} {} [{}, {}]", plain(p.value, 3), plain(lo, 3), plain(hi, 3))
-                    }
-                    None => format!("{name} {}", plain(p.value, 3)),
-                }
-            })
-            .collect();
-        let params = if params.is_empty() { String::new() } else { format!("; {}", params.join(", ")) };
-        let also: Vec<String> = self
-            .also
-            .iter()
-            .map(|(id, after)| format!("{} (to {} σ)", id.name().replace('_', " "), plain(*after, 2)))
-            .collect();
-        let also = if also.is_empty() {
-            String::new()
-        } else {
-            format!(" (also significant, explaining less: {})", also.join(", "))
-        };
-        format!(
-            "missing effect on {}: {} (error from {} to {} σ beyond the noise, p = {:.1e}{params}): {}{also}",
-            quantity_word(&self.output),
-            self.effect.name().replace('_', " "),
-            plain(self.beyond_noise_before, 2),
-            plain(self.beyond_noise_after, 2),
-            self.p_value,
-            self.evidence
-        )
-    }
-}
 
 /// The runs (indices in the engine's trend order) the diagnosis runs on: flagged, or with an error
 /// above the engine's band on some output.

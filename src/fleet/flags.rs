@@ -3,6 +3,7 @@
 use crate::core::health::{BAND_SIGMAS, Band, Estimate, local_bands};
 use crate::core::run::Quantity;
 
+use super::finding::Finding;
 use super::score::{RunScore, Starved};
 
 /// A run's error is unusual only when it is also this many times the engine's usual error. The
@@ -123,7 +124,7 @@ impl EngineBands {
             .iter()
             .map(|o| {
                 let mut reasons = self.output_reasons(index, o);
-                reasons.extend(findings.clone().filter(|f| f.output == o.output).map(|f| f.words()));
+                reasons.extend(findings.clone().filter(|f| f.output == o.output).map(finding_words));
                 (o.output.clone(), reasons)
             })
             .collect();
@@ -201,6 +202,45 @@ fn direction_from_reference(gain: Estimate, fuel: &str, first: Option<&str>) -> 
             plain(hi, 3)
         )
     })
+}
+
+/// "missing effect on speed: rate limit (error from 35 to 11 σ beyond the noise, p = 2.6e-4;
+/// fall_per_s 1530 [1490, 1570], rise_per_s 2980 [2900, 3050]): measured peak slopes … : both
+/// accelerations and decelerations saturate at a constant rate".
+pub fn finding_words(f: &Finding) -> String {
+    let params: Vec<String> = f
+        .params
+        .iter()
+        .map(|p| {
+            let name = p.name.split_once('.').map_or(p.name.as_str(), |(_, n)| n);
+            match p.ci95 {
+                Some([lo, hi]) => {
+                    format!("{name} {} [{}, {}]", plain(p.value, 3), plain(lo, 3), plain(hi, 3))
+                }
+                None => format!("{name} {}", plain(p.value, 3)),
+            }
+        })
+        .collect();
+    let params = if params.is_empty() { String::new() } else { format!("; {}", params.join(", ")) };
+    let also: Vec<String> = f
+        .also
+        .iter()
+        .map(|(id, after)| format!("{} (to {} σ)", id.name().replace('_', " "), plain(*after, 2)))
+        .collect();
+    let also = if also.is_empty() {
+        String::new()
+    } else {
+        format!(" (also significant, explaining less: {})", also.join(", "))
+    };
+    format!(
+        "missing effect on {}: {} (error from {} to {} σ beyond the noise, p = {:.1e}{params}): {}{also}",
+        quantity_word(&f.output),
+        f.effect.name().replace('_', " "),
+        plain(f.beyond_noise_before, 2),
+        plain(f.beyond_noise_after, 2),
+        f.p_value,
+        f.evidence
+    )
 }
 
 /// "pump at its limit (7.09 V) for 160 s while speed falls 21000 rpm short of the 101000 rpm the

@@ -17,6 +17,7 @@ use crate::io::figures::{TrendPanel, TrendPoint, trend_png};
 use crate::io::staging::Staging;
 
 pub mod diagnosis;
+pub mod finding;
 pub mod flags;
 pub mod manifest;
 pub mod reference;

@@ -11,7 +11,7 @@ use crate::core::numerics::stats::significant;
 use crate::core::run::Run;
 use crate::workflow::runs::{DT_TOLERANCE, load_source};
 
-use super::diagnosis::RunDiagnosis;
+use super::finding::RunDiagnosis;
 use super::manifest::FleetRun;
 use super::reference::Reference;
 

@@ -323,7 +323,16 @@ fn a_run_diagnosis_finds_a_rate_limit_and_nothing_on_the_healthy_run() {
             let cfg = SimConfig::for_test("run", TestKind::Validation, seed + 100).unwrap();
             simulate(&cfg.on_engine(&drawn).with_effects(effects)).unwrap().measured
         };
-        let healthy = diagnose_samples(&run(Vec::new()), usize::MAX, &reference);
+        let plain = run(Vec::new());
+        // Cut after its first steps, a run has too few to split: said, and nothing found.
+        let short = diagnose_samples(&plain, plain.len() / 20, &reference);
+        assert!(short.diagnosed.is_empty() && short.findings.is_empty(), "{short:?}");
+        assert!(
+            short.notes.iter().any(|n| n.contains("not diagnosed: fewer than 2 steps")),
+            "{:?}",
+            short.notes
+        );
+        let healthy = diagnose_samples(&plain, usize::MAX, &reference);
         assert_eq!(healthy.diagnosed.len(), 2, "engine {seed}: both outputs diagnosed: {:?}", healthy.notes);
         assert!(healthy.findings.is_empty(), "engine {seed}, healthy run: {:?}", healthy.findings);
         let limited = run(vec![Effect::with_defaults(EffectId::RateLimit).unwrap()]);

@@ -1,7 +1,9 @@
 //! `jetid fleet MANIFEST --out DIR`: every run of every engine against its engine's reference model
 //! ([`reference`]): scored per output, its health deltas fitted with their intervals
 //! (`core::health`), each delta and the error judged against the engine's normal band across its
-//! runs, and the runs outside it flagged in physical words ([`flags`]). The results — fleet.csv,
+//! runs, and the runs outside it flagged in physical words ([`flags`]); the runs the bands screen
+//! are diagnosed against the reference, and an effect found is a reason of the flag
+//! ([`diagnosis`]). The results — fleet.csv,
 //! fleet.parquet ([`table`]), report.md and one trend figure per engine — are written into a
 //! staging folder and moved into DIR only when every run was scored (`io::staging`).
 //!

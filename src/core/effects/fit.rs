@@ -9,12 +9,14 @@
 //! (variable projection, as `core::identification::refine` does for the base model). Discrete choices — the delay
 //! in samples, the starting point of every other parameter — are screened on that same error first.
 //! [`refine`] holds the Levenberg–Marquardt step, [`search`] the screening when one block is added.
+use std::borrow::Cow;
+
 use num_complex::Complex64;
 
 use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output_stage, rate_limit};
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
-use super::{AsymmetricDynamics, EffectBlock, EffectError};
+use super::{AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
@@ -233,39 +235,42 @@ pub(super) fn linear_part(s: &Structure, data: &FitData) -> Option<LinearPart> {
 /// structure with the same roots, dead time and blocks that shape it).
 pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) -> Option<Assembled> {
     let dt = data.dt_secs;
-    let (unit, conditions, w) = (&part.unit, &part.conditions, part.w.clone());
+    let (unit, conditions) = (&part.unit, &part.conditions);
     let factor: Option<Vec<f64>> = s.effects.iter().find_map(|e| match (e, conditions) {
         (EffectBlock::AmbientCorrection(a), Some(c)) => Some(a.output_factor(c)),
         _ => None,
     });
-    let y_c: Vec<f64> = match &factor {
+    let y_c: Cow<[f64]> = match &factor {
         Some(f) => data.y.iter().zip(f).map(|(y, f)| y / f).collect(),
-        None => data.y.clone(),
+        None => Cow::Borrowed(&data.y),
     };
     let sensor = s.effects.iter().find_map(|e| match e {
         EffectBlock::SensorDynamics(sd) => Some(sd),
         _ => None,
     });
-    let seen = |w: &[f64]| match sensor {
-        Some(sensor) => sensor.apply(w, dt),
-        None => w.to_vec(),
-    };
-    let (mut gain, mut offset) = data.fit_gain_offset(&seen(&w), &y_c)?;
+    // What the sensor sees of `w`: `w` itself without the stand's dynamics.
+    fn seen<'w>(sensor: Option<&SensorDynamics>, w: &'w [f64], dt: f64) -> Cow<'w, [f64]> {
+        match sensor {
+            Some(sensor) => Cow::Owned(sensor.apply(w, dt)),
+            None => Cow::Borrowed(w),
+        }
+    }
+    let mut w = Cow::Borrowed(part.w.as_slice());
+    let (mut gain, mut offset) = data.fit_gain_offset(&seen(sensor, &w, dt), &y_c)?;
     let mut structure = s.clone();
-    let mut w = w;
     if let Some(limit) = rate_limit(&s.effects) {
         // The limits are in output units, the unit-gain response is not: limit `w` at the limits
         // the unlimited fit's gain gives, refit gain and offset, and record the limits `gain·w`
         // then has (what the model simulates), as the kink's slope is recorded below.
         let limited = limit.for_unit_gain(gain)?.apply(&w, dt);
-        let (g, o) = data.fit_gain_offset(&seen(&limited), &y_c)?;
+        let (g, o) = data.fit_gain_offset(&seen(sensor, &limited, dt), &y_c)?;
         let recorded = limit.for_unit_gain(gain)?.of_scaled(g)?;
         for e in &mut structure.effects {
             if let EffectBlock::RateLimit(r) = e {
                 *r = recorded.clone();
             }
         }
-        (gain, offset, w) = (g, o, limited);
+        (gain, offset, w) = (g, o, Cow::Owned(limited));
     }
     let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
     let (vs, ys): (Vec<f64>, Vec<f64>) = data

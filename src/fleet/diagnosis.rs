@@ -27,6 +27,7 @@ use crate::core::control::bands::parameter_intervals;
 use crate::core::diagnose::{DiagnosisKind, diagnose};
 use crate::core::effects::ExtendedModel;
 use crate::core::identification::fits::fit_segments_for;
+use crate::core::identification::segment::Segment;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::run::Run;
 use crate::workflow::runs::{segments, steps_from};
@@ -59,6 +60,8 @@ pub fn screened(bands: &EngineBands, scores: &[RunScore]) -> Vec<usize> {
 /// The diagnosis of `run` against `reference` on every output the run holds; `score` is the run's
 /// score (its starved stretches are left out).
 pub fn diagnose_run(run: &FleetRun, reference: &Reference, score: &RunScore) -> Result<RunDiagnosis> {
+    // Read again rather than kept from the scoring: a fleet holds no run's samples in memory, and
+    // only the few screened runs are read twice.
     let data = read_run(run, reference, &mut Vec::new())?;
     let end = score.starved.iter().map(|s| s.start).min().unwrap_or(data.len());
     Ok(diagnose_samples(&data, end, reference))
@@ -77,11 +80,18 @@ pub fn diagnose_samples(data: &Run, end: usize, reference: &Reference) -> RunDia
         ));
         return out;
     };
+    // The first part's steps, found once for every output.
+    let channel = steps_from(&first, &[], None);
+    let parts = segments(&first, &[], None, channel.channel()).map_err(anyhow::Error::from);
     for model in &reference.models {
         if data.output(&model.output).is_none() {
             continue;
         }
-        match findings_of(model, &first, &second) {
+        let found = match &parts {
+            Ok(parts) => findings_of(model, &first, parts, &second),
+            Err(e) => Err(anyhow::anyhow!("{e:#}")),
+        };
+        match found {
             Ok(found) => {
                 out.diagnosed.push(model.output.clone());
                 out.findings.extend(found);
@@ -114,11 +124,14 @@ fn split(run: &Run) -> Option<(Run, Run)> {
 /// The first significant physics of one output's diagnosis (the effect its loop would add), with
 /// its parameters' intervals and the other significant physics, which explain less of the same
 /// residual.
-fn findings_of(model: &ExtendedModel, first: &Run, second: &Run) -> Result<Option<Finding>> {
+fn findings_of(
+    model: &ExtendedModel,
+    first: &Run,
+    parts: &[Segment],
+    second: &Run,
+) -> Result<Option<Finding>> {
     let settings = OutputSettings { initial_state: INITIAL, ..OutputSettings::for_output(&model.output) };
-    let channel = steps_from(first, &[], None);
-    let parts = segments(first, &[], None, channel.channel())?;
-    let fits = fit_segments_for(first, &model.output, &parts, &settings)?;
+    let fits = fit_segments_for(first, &model.output, parts, &settings)?;
     let report = diagnose(model, first, &fits, &[second], &settings)?;
     let mut significant = report
         .entries

@@ -13,7 +13,9 @@ use std::borrow::Cow;
 
 use num_complex::Complex64;
 
-use super::model::{ExtendedModel, input_stage, linear_stage, needs_split, output_stage, rate_limit};
+use super::model::{
+    ExtendedModel, StageInput, input_stage, linear_stages, needs_split, output_stage, rate_limit,
+};
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::{AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics};
@@ -219,16 +221,47 @@ pub(super) struct LinearPart {
 }
 
 pub(super) fn linear_part(s: &Structure, data: &FitData) -> Option<LinearPart> {
+    linear_parts(&[s], data).pop().flatten()
+}
+
+/// [`linear_part`] of several structures, their simulations stepped side by side
+/// ([`linear_stages`]); each the one [`linear_part`] gives alone, bit for bit.
+pub(super) fn linear_parts(structures: &[&Structure], data: &FitData) -> Vec<Option<LinearPart>> {
+    /// A structure's unit-gain block, its input after the input stage, and its spool split.
+    struct Prepared {
+        block: LinearBlock,
+        u: Vec<f64>,
+        conditions: Option<super::ambient_correction::Conditions>,
+        split: Option<super::spool::SplitShape>,
+    }
     let dt = data.dt_secs;
-    let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
-    let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
-    let split = match needs_split(&s.effects) {
-        true => Some(AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?),
-        false => None,
+    let prepare = |s: &Structure| -> Option<Prepared> {
+        let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
+        let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
+        let split = match needs_split(&s.effects) {
+            true => Some(AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?),
+            false => None,
+        };
+        Some(Prepared { block: LinearBlock { tf: unit, offset: 0.0 }, u, conditions, split })
     };
-    let unit_block = LinearBlock { tf: unit.clone(), offset: 0.0 };
-    let w = linear_stage(&s.effects, &unit_block, split.as_ref(), &u, dt).ok()?;
-    Some(LinearPart { unit, conditions, w })
+    let prepared: Vec<Option<Prepared>> = structures.iter().map(|s| prepare(s)).collect();
+    let stages: Vec<StageInput> = structures
+        .iter()
+        .zip(&prepared)
+        .filter_map(|(s, p)| {
+            let p = p.as_ref()?;
+            Some(StageInput { effects: &s.effects, linear: &p.block, split: p.split.as_ref(), u: &p.u })
+        })
+        .collect();
+    let mut ws = linear_stages(&stages, dt).into_iter();
+    prepared
+        .into_iter()
+        .map(|p| {
+            let p = p?;
+            let w = ws.next()?.ok()?;
+            Some(LinearPart { unit: p.block.tf, conditions: p.conditions, w })
+        })
+        .collect()
 }
 
 /// [`assemble`] from the structure's [`LinearPart`] (which must be `s`'s own, or that of a

@@ -2,6 +2,7 @@
 use num_complex::Complex64;
 
 use super::ambient_correction::Conditions;
+use super::scheduled_time_constant::{ScheduledTimeConstant, Section};
 use super::spool::SplitShape;
 use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, RateLimit,
@@ -11,6 +12,7 @@ use crate::core::identification::initial_state::{InitialState, fit_free_response
 use crate::core::identification::pipeline::GrayBoxModel;
 use crate::core::identification::static_map::StaticMap;
 use crate::core::identification::wiener::{LinearBlock, WienerModel};
+use crate::core::numerics::tf::DiscreteTf;
 use crate::core::run::Run;
 
 /// The gray-box model of one output with the effects added to it.
@@ -218,37 +220,110 @@ pub(super) fn linear_stage(
     u: &[f64],
     dt_secs: f64,
 ) -> Result<Vec<f64>, EffectError> {
-    let asymmetric = effects.iter().find_map(|e| match e {
+    let stage = StageInput { effects, linear, split, u };
+    linear_stages(&[stage], dt_secs).pop().unwrap_or_else(|| Ok(Vec::new()))
+}
+
+/// What [`linear_stage`] takes, for [`linear_stages`].
+pub(super) struct StageInput<'a> {
+    pub effects: &'a [EffectBlock],
+    pub linear: &'a LinearBlock,
+    pub split: Option<&'a SplitShape>,
+    pub u: &'a [f64],
+}
+
+/// How one [`StageInput`] is simulated: its whole linear block, or the spool split off it (with the
+/// block's gain, and the input delayed by the block's dead time, which the split's roots lack).
+enum Path<'a> {
+    Block,
+    Spool {
+        split: &'a SplitShape,
+        gain: f64,
+        delayed: Vec<f64>,
+        asymmetric: Option<&'a AsymmetricDynamics>,
+        scheduled: Option<&'a ScheduledTimeConstant>,
+    },
+}
+
+/// [`linear_stage`] of several inputs, their simulations stepped side by side
+/// ([`DiscreteTf::simulate_each_from_steady`], [`super::scheduled_time_constant::respond_each`]):
+/// what a finite-difference Jacobian's columns ask for. Each result is the one [`linear_stage`]
+/// gives alone, bit for bit.
+pub(super) fn linear_stages(stages: &[StageInput], dt_secs: f64) -> Vec<Result<Vec<f64>, EffectError>> {
+    let paths: Vec<Result<Path, EffectError>> = stages.iter().map(path).collect();
+    // The linear simulations first: each whole block, or each spool's rest.
+    let blocks: Vec<(&DiscreteTf, &[f64])> = stages
+        .iter()
+        .zip(&paths)
+        .filter_map(|(stage, path)| match path {
+            Ok(Path::Block) => Some((&stage.linear.tf, stage.u)),
+            Ok(Path::Spool { split, delayed, .. }) => Some((split.rest.as_ref()?, delayed.as_slice())),
+            Err(_) => None,
+        })
+        .collect();
+    let mut simulated = DiscreteTf::simulate_each_from_steady(&blocks).into_iter();
+    let mut responses: Vec<Option<Vec<f64>>> = Vec::with_capacity(stages.len());
+    let mut sections = Vec::new();
+    for path in &paths {
+        match path {
+            Ok(Path::Block) => responses.push(simulated.next()),
+            Ok(Path::Spool { split, delayed, asymmetric, scheduled, .. }) => {
+                let r = match split.rest {
+                    Some(_) => simulated.next().unwrap_or_default(),
+                    None => delayed.clone(),
+                };
+                sections.push(Section { shape: split, r, asymmetric: *asymmetric, scheduled: *scheduled });
+                responses.push(None);
+            }
+            Err(_) => responses.push(None),
+        }
+    }
+    let mut spooled = super::scheduled_time_constant::respond_each(sections).into_iter();
+    stages
+        .iter()
+        .zip(paths)
+        .zip(responses)
+        .map(|((stage, path), response)| {
+            let mut v = match path? {
+                Path::Block => response.unwrap_or_default(),
+                Path::Spool { gain, .. } => {
+                    spooled.next().unwrap_or_default().iter().map(|w| gain * w).collect()
+                }
+            };
+            for effect in stage.effects {
+                if let EffectBlock::ThermalSoak(soak) = effect {
+                    v = soak.apply(&v, dt_secs);
+                }
+            }
+            for x in &mut v {
+                *x += stage.linear.offset;
+            }
+            Ok(v)
+        })
+        .collect()
+}
+
+/// How `stage` is simulated: through the spool when it is split and an effect acts on the spool.
+fn path<'a>(stage: &StageInput<'a>) -> Result<Path<'a>, EffectError> {
+    let asymmetric = stage.effects.iter().find_map(|e| match e {
         EffectBlock::AsymmetricDynamics(a) => Some(a),
         _ => None,
     });
-    let scheduled = effects.iter().find_map(|e| match e {
+    let scheduled = stage.effects.iter().find_map(|e| match e {
         EffectBlock::ScheduledTimeConstant(s) => Some(s),
         _ => None,
     });
-    let mut v = match split.filter(|_| asymmetric.is_some() || scheduled.is_some()) {
+    match stage.split.filter(|_| asymmetric.is_some() || scheduled.is_some()) {
         Some(split) => {
             let gain =
-                linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
+                stage.linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
             // The split is built from the roots alone; the block's dead time delays its input.
-            let delayed = linear.tf.input_delay();
-            let u = TransportDelay { delay_samples: delayed as f64 }.delay(u);
-            super::scheduled_time_constant::respond(split, &u, asymmetric, scheduled)
-                .iter()
-                .map(|w| gain * w)
-                .collect()
+            let delay_samples = stage.linear.tf.input_delay() as f64;
+            let delayed = TransportDelay { delay_samples }.delay(stage.u);
+            Ok(Path::Spool { split, gain, delayed, asymmetric, scheduled })
         }
-        None => linear.tf.simulate_from_steady(u),
-    };
-    for effect in effects {
-        if let EffectBlock::ThermalSoak(soak) = effect {
-            v = soak.apply(&v, dt_secs);
-        }
+        None => Ok(Path::Block),
     }
-    for x in &mut v {
-        *x += linear.offset;
-    }
-    Ok(v)
 }
 
 /// The rate limit among the blocks, if any. It acts on `v` in output units, so it is applied after

@@ -76,15 +76,39 @@ impl ScheduledTimeConstant {
 
 /// Unit-gain response of the split linear block to `u`, from the steady state of `u[0]`, with the
 /// spool pole's time constant scaled by the operating point it is heading for (`scheduled`) and by
-/// the direction of motion (`asymmetric`, its decel factor while falling).
-pub fn respond(
+/// the direction of motion (`asymmetric`, its decel factor while falling). The model simulates
+/// through [`respond_each`].
+#[cfg(test)]
+fn respond(
     shape: &SplitShape,
     u: &[f64],
     asymmetric: Option<&AsymmetricDynamics>,
     scheduled: Option<&ScheduledTimeConstant>,
 ) -> Vec<f64> {
-    let decel = asymmetric.map_or(1.0, |a| a.decel_factor);
-    spool::respond(shape, u, decel, |x, r| scheduled.map_or(1.0, |s| s.factor(x, r)))
+    respond_each(vec![Section { shape, r: spool::rest_response(shape, u), asymmetric, scheduled }])
+        .pop()
+        .unwrap_or_default()
+}
+
+/// One spool for [`respond_each`]: the split, the section's input `r` (the rest's response,
+/// [`spool::rest_response`]) and the blocks that act on the spool.
+pub(super) struct Section<'a> {
+    pub shape: &'a SplitShape,
+    pub r: Vec<f64>,
+    pub asymmetric: Option<&'a AsymmetricDynamics>,
+    pub scheduled: Option<&'a ScheduledTimeConstant>,
+}
+
+/// [`respond`] for several spools at once, stepped side by side ([`spool::respond_each`]).
+pub(super) fn respond_each(sections: Vec<Section>) -> Vec<Vec<f64>> {
+    let spools = sections
+        .into_iter()
+        .map(|Section { shape, r, asymmetric, scheduled }| {
+            let decel = asymmetric.map_or(1.0, |a| a.decel_factor);
+            spool::Spool::new(shape, r, decel, move |x, r| scheduled.map_or(1.0, |s| s.factor(x, r)))
+        })
+        .collect();
+    spool::respond_each(spools)
 }
 
 block_impl!(

@@ -83,37 +83,90 @@ pub(super) fn respond(
     decel: f64,
     schedule: impl Fn(f64, f64) -> f64,
 ) -> Vec<f64> {
-    let r = match &shape.rest {
+    respond_each(vec![Spool::new(shape, rest_response(shape, u), decel, schedule)]).pop().unwrap_or_default()
+}
+
+/// What drives the spool section: the unit-gain rest's response to `u`, or `u` itself.
+pub(super) fn rest_response(shape: &SplitShape, u: &[f64]) -> Vec<f64> {
+    match &shape.rest {
         Some(tf) => tf.simulate_from_steady(u),
         None => u.to_vec(),
-    };
-    // The spool's root as a continuous-time rate: scaling the time constant by `factor` divides it.
-    let ln_root = Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
-    let pair = shape.is_pair();
-    let start = r.first().copied().unwrap_or(0.0);
-    // State: the section's output now and one sample ago; its input one and two samples ago.
-    let (mut x, mut x_old, mut prev, mut prev_old) = (start, start, start, start);
-    r.iter()
-        .map(|rk| {
-            let mut factor = schedule(x, prev);
-            if prev < x {
-                factor *= decel;
+    }
+}
+
+/// The spool section of one response (see [`respond`]), stepped a sample at a time.
+pub(super) struct Spool<S> {
+    /// The section's input: the rest's response ([`rest_response`]).
+    r: Vec<f64>,
+    /// The spool's root as a continuous-time rate: scaling the time constant by `factor` divides it.
+    ln_root: Complex64,
+    pair: bool,
+    decel: f64,
+    schedule: S,
+    /// The section's output now and one sample ago; its input one and two samples ago.
+    x: f64,
+    x_old: f64,
+    prev: f64,
+    prev_old: f64,
+}
+
+impl<S: Fn(f64, f64) -> f64> Spool<S> {
+    /// The section of `shape` driven by `r`, from the steady state of `r[0]`.
+    pub(super) fn new(shape: &SplitShape, r: Vec<f64>, decel: f64, schedule: S) -> Self {
+        let ln_root = Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
+        let start = r.first().copied().unwrap_or(0.0);
+        Self {
+            r,
+            ln_root,
+            pair: shape.is_pair(),
+            decel,
+            schedule,
+            x: start,
+            x_old: start,
+            prev: start,
+            prev_old: start,
+        }
+    }
+
+    /// The section's output after the input `rk` is taken in.
+    fn step(&mut self, rk: f64) -> f64 {
+        let (x, prev) = (self.x, self.prev);
+        let mut factor = (self.schedule)(x, prev);
+        if prev < x {
+            factor *= self.decel;
+        }
+        let factor = factor.max(f64::MIN_POSITIVE);
+        let next = if self.pair {
+            let root = (self.ln_root / factor).exp();
+            // Unit-gain pair (1 − a₁ + a₂) z⁻² / (1 − a₁ z⁻¹ + a₂ z⁻²), as `unit_gain_tf` builds it.
+            let (a1, a2) = (2.0 * root.re, root.norm_sqr());
+            a1 * x - a2 * self.x_old + (1.0 - a1 + a2) * self.prev_old
+        } else {
+            // A real root's rate has no imaginary part: its exponential is real (the complex
+            // one's cosine of zero, sine of zero and their products are skipped, the same number).
+            let root = (self.ln_root.re / factor).exp();
+            root * x + (1.0 - root) * prev
+        };
+        (self.x_old, self.x) = (x, next);
+        (self.prev_old, self.prev) = (prev, rk);
+        next
+    }
+}
+
+/// The responses of several spool sections, stepped together sample by sample. Each section's
+/// samples form one chain of dependent exponentials, whose latency, not the processor's throughput,
+/// sets its pace; independent chains stepped side by side overlap their latencies (what a
+/// finite-difference Jacobian's columns are). Each response is the one [`respond`] gives alone, bit
+/// for bit: every section does the same arithmetic in the same order.
+pub(super) fn respond_each<S: Fn(f64, f64) -> f64>(mut spools: Vec<Spool<S>>) -> Vec<Vec<f64>> {
+    let longest = spools.iter().map(|s| s.r.len()).max().unwrap_or(0);
+    let mut out: Vec<Vec<f64>> = spools.iter().map(|s| Vec::with_capacity(s.r.len())).collect();
+    for k in 0..longest {
+        for (spool, y) in spools.iter_mut().zip(&mut out) {
+            if let Some(&rk) = spool.r.get(k) {
+                y.push(spool.step(rk));
             }
-            let factor = factor.max(f64::MIN_POSITIVE);
-            let next = if pair {
-                let root = (ln_root / factor).exp();
-                // Unit-gain pair (1 − a₁ + a₂) z⁻² / (1 − a₁ z⁻¹ + a₂ z⁻²), as `unit_gain_tf` builds it.
-                let (a1, a2) = (2.0 * root.re, root.norm_sqr());
-                a1 * x - a2 * x_old + (1.0 - a1 + a2) * prev_old
-            } else {
-                // A real root's rate has no imaginary part: its exponential is real (the complex
-                // one's cosine of zero, sine of zero and their products are skipped, the same number).
-                let root = (ln_root.re / factor).exp();
-                root * x + (1.0 - root) * prev
-            };
-            (x_old, x) = (x, next);
-            (prev_old, prev) = (prev, *rk);
-            x
-        })
-        .collect()
+        }
+    }
+    out
 }

@@ -92,6 +92,7 @@ impl StaticMap {
             .then_some((self.v_center - self.v_scale, self.v_center + self.v_scale))
     }
 
+    #[inline]
     pub fn eval(&self, v: f64) -> f64 {
         let x = (v - self.v_center) / self.v_scale;
         match self.end_beyond(x) {
@@ -126,6 +127,7 @@ impl StaticMap {
     }
 
     /// The end of the identified range (±1) that `x` lies beyond, when the map continues past it.
+    #[inline]
     fn end_beyond(&self, x: f64) -> Option<f64> {
         (self.beyond == Beyond::EndTrend && x.abs() > 1.0).then(|| x.signum())
     }
@@ -138,6 +140,7 @@ impl StaticMap {
         EndTrend { value, slope, curvature, length: slowing.then(|| (slope / curvature).abs()) }
     }
 
+    #[inline]
     fn poly(&self, x: f64) -> f64 {
         self.coeffs_scaled.iter().rev().fold(0.0, |acc, c| acc * x + c)
     }

@@ -88,7 +88,7 @@ pub struct Calibration {
 }
 
 /// The linear block with its spool root split off, for asymmetric or scheduled dynamics
-/// (`scheduled_time_constant::respond`).
+/// (`scheduled_time_constant::respond_each`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Spool {
     /// Input dead time of the linear block, samples (`DiscreteTf::input_delay`).

@@ -7,7 +7,7 @@
 use std::collections::VecDeque;
 use std::rc::Rc;
 
-use super::{Assembled, FitData, LinearPart, Structure, assemble_from, linear_part};
+use super::{Assembled, FitData, LinearPart, Structure, assemble_from, linear_parts};
 
 /// Linear parts kept: more than the parameters of any structure the fits move (roots and effect
 /// parameters, a dozen or so), so that the point a Jacobian is taken at is still kept when the last
@@ -23,19 +23,48 @@ pub(super) struct LinearMemo {
 impl LinearMemo {
     /// [`super::assemble`], with the linear part taken from a kept structure that shares it.
     pub(super) fn assemble(&mut self, s: &Structure, data: &FitData) -> Option<Assembled> {
-        let key = key(s);
-        let part = match self.kept.iter().find(|(k, _)| *k == key) {
-            Some((_, part)) => Rc::clone(part),
-            None => {
-                let part = Rc::new(linear_part(s, data)?);
-                if self.kept.len() == KEPT {
-                    self.kept.pop_front();
-                }
-                self.kept.push_back((key, Rc::clone(&part)));
-                part
+        self.assemble_each(&[Some(s)], data).pop().flatten()
+    }
+
+    /// [`LinearMemo::assemble`] of each structure (`None` passes through): the linear parts not
+    /// kept are simulated together ([`linear_parts`]), each once.
+    pub(super) fn assemble_each(
+        &mut self,
+        structures: &[Option<&Structure>],
+        data: &FitData,
+    ) -> Vec<Option<Assembled>> {
+        let keys: Vec<Option<String>> = structures.iter().map(|s| s.map(key)).collect();
+        // Each key's part as kept now, before the new ones push any out.
+        let mut parts: Vec<(String, Rc<LinearPart>)> = Vec::new();
+        let mut missing: Vec<(String, &Structure)> = Vec::new();
+        for (k, s) in keys.iter().zip(structures) {
+            let (Some(k), Some(s)) = (k, s) else { continue };
+            if parts.iter().any(|(p, _)| p == k) || missing.iter().any(|(m, _)| m == k) {
+                continue;
             }
-        };
-        assemble_from(s, data, &part)
+            match self.kept.iter().find(|(kept, _)| kept == k) {
+                Some((_, part)) => parts.push((k.clone(), Rc::clone(part))),
+                None => missing.push((k.clone(), s)),
+            }
+        }
+        let simulated = linear_parts(&missing.iter().map(|(_, s)| *s).collect::<Vec<_>>(), data);
+        for ((k, _), part) in missing.into_iter().zip(simulated) {
+            let Some(part) = part else { continue };
+            let part = Rc::new(part);
+            if self.kept.len() == KEPT {
+                self.kept.pop_front();
+            }
+            self.kept.push_back((k.clone(), Rc::clone(&part)));
+            parts.push((k, part));
+        }
+        keys.iter()
+            .zip(structures)
+            .map(|(k, s)| {
+                let (k, s) = (k.as_ref()?, (*s)?);
+                let (_, part) = parts.iter().find(|(p, _)| p == k)?;
+                assemble_from(s, data, part)
+            })
+            .collect()
     }
 }
 

@@ -8,7 +8,7 @@ use super::{Assembled, FitData, Structure, assemble};
 use crate::core::effects::EffectBlock;
 use crate::core::identification::refine::RootParams;
 use crate::core::numerics::lm::{
-    Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
+    Damping, Jacobian, LeastSquares, LmError, LmSettings, Residual, StepSolver, minimise, no_progress,
 };
 use crate::core::numerics::tf::alternates_sign;
 
@@ -94,12 +94,33 @@ fn refine_with(
         }
         Some(Structure { poles, zeros, effects, map_order: start.map_order, delay: start.delay })
     };
-    let mut memo = LinearMemo::default();
-    let residual = |theta: &[f64]| unpack(theta).and_then(|s| memo.assemble(&s, data)).map(|a| a.residual);
+    let residual = Refinement { unpack: &unpack, memo: LinearMemo::default(), data };
     let mut problem: LeastSquares<_, LmError> =
         LeastSquares::new(residual, Jacobian::default(), StepSolver::QrOnce);
     let fitted = minimise(&mut problem, &theta0, settings, &mut no_progress).ok()?;
     assemble(&unpack(&fitted.theta)?, data)
+}
+
+/// The refinement's residual: the identification error of the structure θ unpacks to, with the
+/// linear parts of recent structures kept ([`LinearMemo`]) and a Jacobian's columns simulated side
+/// by side ([`LinearMemo::assemble_each`]).
+struct Refinement<'a, U> {
+    unpack: U,
+    memo: LinearMemo,
+    data: &'a FitData,
+}
+
+impl<U: Fn(&[f64]) -> Option<Structure>> Residual for Refinement<'_, U> {
+    fn at(&mut self, theta: &[f64]) -> Option<Vec<f64>> {
+        let s = (self.unpack)(theta)?;
+        self.memo.assemble(&s, self.data).map(|a| a.residual)
+    }
+
+    fn at_each(&mut self, thetas: &[Vec<f64>]) -> Vec<Option<Vec<f64>>> {
+        let structures: Vec<Option<Structure>> = thetas.iter().map(|theta| (self.unpack)(theta)).collect();
+        let structures: Vec<Option<&Structure>> = structures.iter().map(Option::as_ref).collect();
+        self.memo.assemble_each(&structures, self.data).into_iter().map(|a| a.map(|a| a.residual)).collect()
+    }
 }
 
 /// Real poles left of [`MIN_REAL_POLE`] moved onto it. Projecting rather than refusing such a step

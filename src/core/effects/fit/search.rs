@@ -110,16 +110,13 @@ impl Search<'_> {
             effects: around.effects.iter().filter(|e| e.id() != self.id).cloned().collect(),
             ..around.clone()
         };
-        let mut memo = LinearMemo::default();
-        let mut scored: Vec<(f64, Structure)> = self
-            .guesses
-            .iter()
-            .filter(|g| !tried.contains(g))
-            .filter_map(|g| {
-                let s = around.with(g.clone());
-                memo.assemble(&s, self.data).map(|a| (a.cost, s))
-            })
-            .collect();
+        // The guesses' linear parts simulated side by side, each once ([`LinearMemo::assemble_each`]).
+        let structures: Vec<Structure> =
+            self.guesses.iter().filter(|g| !tried.contains(g)).map(|g| around.with(g.clone())).collect();
+        let assembled =
+            LinearMemo::default().assemble_each(&structures.iter().map(Some).collect::<Vec<_>>(), self.data);
+        let mut scored: Vec<(f64, Structure)> =
+            assembled.into_iter().zip(structures).filter_map(|(a, s)| Some((a?.cost, s))).collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         scored.into_iter().take(REFINED_STARTS).map(|(_, s)| s).collect()
     }

@@ -34,6 +34,24 @@ pub enum StepSolver {
     QrOnce,
 }
 
+/// The residual `r(θ)` of a least-squares problem: any `FnMut(&[f64]) -> Option<Vec<f64>>`
+/// (`None` where θ is not admissible), or a problem that evaluates several θ at once faster than one
+/// by one.
+pub trait Residual {
+    fn at(&mut self, theta: &[f64]) -> Option<Vec<f64>>;
+
+    /// `r` at each θ (what the finite-difference Jacobian's columns need), in order.
+    fn at_each(&mut self, thetas: &[Vec<f64>]) -> Vec<Option<Vec<f64>>> {
+        thetas.iter().map(|theta| self.at(theta)).collect()
+    }
+}
+
+impl<F: FnMut(&[f64]) -> Option<Vec<f64>>> Residual for F {
+    fn at(&mut self, theta: &[f64]) -> Option<Vec<f64>> {
+        self(theta)
+    }
+}
+
 /// `r(θ)` with its Jacobian options; `E` is the caller's error type.
 pub struct LeastSquares<F, E> {
     residual: F,
@@ -44,10 +62,7 @@ pub struct LeastSquares<F, E> {
     error: std::marker::PhantomData<E>,
 }
 
-impl<F, E> LeastSquares<F, E>
-where
-    F: FnMut(&[f64]) -> Option<Vec<f64>>,
-{
+impl<F: Residual, E> LeastSquares<F, E> {
     pub fn new(residual: F, jacobian: Jacobian, solver: StepSolver) -> Self {
         Self { residual, jacobian, solver, last: None, error: std::marker::PhantomData }
     }
@@ -55,22 +70,29 @@ where
     fn residual_at(&mut self, theta: &[f64]) -> Option<Vec<f64>> {
         match &self.last {
             Some((at, r)) if at.as_slice() == theta => Some(r.clone()),
-            _ => (self.residual)(theta),
+            _ => self.residual.at(theta),
         }
     }
 
-    /// The Jacobian's columns at θ, where the residual is `r`.
+    /// The Jacobian's columns at θ, where the residual is `r`: every forward point evaluated at
+    /// once ([`Residual::at_each`]), then the backward points where those are not admissible.
     fn columns(&mut self, theta: &[f64], r: &[f64]) -> Vec<Vec<f64>> {
         let opts = self.jacobian;
-        (0..theta.len())
-            .map(|j| {
-                let h = opts.rel_step * theta[j].abs().max(opts.floor);
-                let shifted = |delta: f64| -> Vec<f64> {
-                    theta.iter().enumerate().map(|(i, t)| if i == j { t + delta } else { *t }).collect()
-                };
-                let forward = (self.residual)(&shifted(h)).map(|rj| (rj, h));
-                let found = forward.or_else(|| {
-                    opts.backward_fallback.then(|| (self.residual)(&shifted(-h)).map(|rj| (rj, -h))).flatten()
+        let steps: Vec<f64> = theta.iter().map(|t| opts.rel_step * t.abs().max(opts.floor)).collect();
+        let shifted = |j: usize, delta: f64| -> Vec<f64> {
+            theta.iter().enumerate().map(|(i, t)| if i == j { t + delta } else { *t }).collect()
+        };
+        let forward_points: Vec<Vec<f64>> = steps.iter().enumerate().map(|(j, h)| shifted(j, *h)).collect();
+        let forward = self.residual.at_each(&forward_points);
+        forward
+            .into_iter()
+            .zip(&steps)
+            .enumerate()
+            .map(|(j, (rj, &h))| {
+                let found = rj.map(|rj| (rj, h)).or_else(|| {
+                    opts.backward_fallback
+                        .then(|| self.residual.at(&shifted(j, -h)).map(|rj| (rj, -h)))
+                        .flatten()
                 });
                 match found {
                     Some((rj, signed_h)) => rj.iter().zip(r).map(|(a, b)| (a - b) / signed_h).collect(),
@@ -95,14 +117,14 @@ fn column_norms(cols: &[Vec<f64>]) -> Vec<f64> {
 
 impl<F, E> LmProblem for LeastSquares<F, E>
 where
-    F: FnMut(&[f64]) -> Option<Vec<f64>>,
+    F: Residual,
     E: From<LmError>,
 {
     type Linearisation = Linearised;
     type Error = E;
 
     fn objective(&mut self, theta: &[f64]) -> Option<f64> {
-        let r = (self.residual)(theta)?;
+        let r = self.residual.at(theta)?;
         let cost = sum_of_squares(&r);
         self.last = Some((theta.to_vec(), r));
         Some(cost)

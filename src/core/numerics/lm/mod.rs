@@ -12,7 +12,7 @@ use crate::core::numerics::lstsq::LstsqError;
 
 mod least_squares;
 
-pub use least_squares::{Jacobian, LeastSquares, StepSolver};
+pub use least_squares::{Jacobian, LeastSquares, Residual, StepSolver};
 
 /// How the damping moves: it starts at `start`, is scaled by `on_accept` (not below `floor`) after
 /// an accepted step and by `on_reject` after a rejected one; an iteration tries at most `max_tries`

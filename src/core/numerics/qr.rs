@@ -25,24 +25,52 @@ pub fn qr_reduce(mut cols: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> (Vec<Vec<f64>>, 
         if vnorm2 <= f64::MIN_POSITIVE {
             continue;
         }
-        let reflect = |y: &mut [f64]| {
-            let dot: f64 = v.iter().zip(y.iter()).map(|(a, b)| a * b).sum();
-            let f = 2.0 * dot / vnorm2;
-            for (yi, vi) in y.iter_mut().zip(&v) {
-                *yi -= f * vi;
-            }
-        };
-        for col in cols.iter_mut().skip(k) {
-            if let Some(tail) = col.get_mut(k..) {
-                reflect(tail);
-            }
-        }
-        if let Some(tail) = rhs.get_mut(k..) {
-            reflect(tail);
-        }
+        let mut tails: Vec<&mut [f64]> = cols.iter_mut().skip(k).filter_map(|col| col.get_mut(k..)).collect();
+        tails.extend(rhs.get_mut(k..));
+        reflect_each(&v, vnorm2, &mut tails);
     }
     let r = cols.iter().map(|c| c.iter().take(p).copied().collect()).collect();
     (r, rhs.into_iter().take(p).collect())
+}
+
+/// Reflect each of `tails` in the hyperplane normal to `v` (`y ← y − 2 (v·y / v·v) v`, `vnorm2` = v·v).
+fn reflect_each(v: &[f64], vnorm2: f64, tails: &mut [&mut [f64]]) {
+    let dots = dot_each(v, tails);
+    for (y, dot) in tails.iter_mut().zip(&dots) {
+        let f = 2.0 * dot / vnorm2;
+        for (yi, vi) in y.iter_mut().zip(v) {
+            *yi -= f * vi;
+        }
+    }
+}
+
+/// `v · y` for each of `ys`, four at a time in one pass where they have the same length. Each dot
+/// product is a chain of dependent additions whose latency sets its pace; four independent chains
+/// overlap theirs. Each is the sum `Iterator::sum` gives, bit for bit: the same products added in
+/// the same order from the same start (−0, where `Sum for f64` starts).
+fn dot_each(v: &[f64], ys: &[&mut [f64]]) -> Vec<f64> {
+    let dot = |y: &[f64]| -> f64 { v.iter().zip(y).map(|(a, b)| a * b).sum() };
+    let mut dots = Vec::with_capacity(ys.len());
+    let mut fours = ys.chunks_exact(4);
+    for four in &mut fours {
+        match four {
+            [a, b, c, d] if a.len() == b.len() && a.len() == c.len() && a.len() == d.len() => {
+                let mut sums = [-0.0_f64; 4];
+                for ((((vi, ai), bi), ci), di) in
+                    v.iter().zip(a.iter()).zip(b.iter()).zip(c.iter()).zip(d.iter())
+                {
+                    sums[0] += vi * ai;
+                    sums[1] += vi * bi;
+                    sums[2] += vi * ci;
+                    sums[3] += vi * di;
+                }
+                dots.extend(sums);
+            }
+            _ => dots.extend(four.iter().map(|y| dot(y))),
+        }
+    }
+    dots.extend(fours.remainder().iter().map(|y| dot(y)));
+    dots
 }
 
 /// Solve the upper-triangular `R x = c`; components whose pivot is negligible are set to zero.

@@ -25,27 +25,20 @@ use serde::{Deserialize, Serialize};
 use crate::core::identification::cluster::{ClusterEval, RootKind, natural_freq_and_damping};
 use crate::core::identification::error::PipelineError;
 use crate::core::identification::fits::{SegmentFits, output_values};
-use crate::core::identification::refine::Refinement;
 use crate::core::identification::settings::{OutputSettings, PolishRegion};
 use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
-use crate::core::identification::wiener::{WienerModel, fit_linear_block_excluding};
-use crate::core::numerics::lm::{
-    Damping, Jacobian, LeastSquares, LmError, LmSettings, StepSolver, minimise, no_progress,
+use crate::core::identification::wiener::{
+    LinearBlock, WienerError, WienerModel, linear_block_on, linear_shape,
 };
 use crate::core::numerics::stats::mean;
+use crate::core::numerics::tf::DiscreteTf;
 use crate::core::run::Run;
 
-/// Roots must stay inside this modulus while polishing (a stable, not quite integrating block).
-const MAX_POLE_MODULUS: f64 = 0.999;
 /// A root whose distance from its circle's centre is at least this share of the radius is on the
 /// rim: the tanh map has then used 98 % of its room, so the optimiser was stopped by the circle.
 const RIM_SHARE: f64 = 0.98;
 /// Largest |w| a starting point may have inside its circle (w = (z − c)/r), so atanh stays finite.
 const MAX_START_SHARE: f64 = 0.995;
-/// Iterations of the polish; it usually converges in 5–15.
-const POLISH_ITERATIONS: usize = 30;
-/// Relative cost decrease below which the polish stops.
-const POLISH_COST_TOL: f64 = 1e-7;
 
 /// A circle a root is kept in.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -297,17 +290,60 @@ pub fn assemble(
     zeros: &[Complex64],
     static_order: Option<usize>,
 ) -> Result<Assembled, PipelineError> {
-    let fits = data.fits;
-    let linear = fit_linear_block_excluding(
-        poles,
-        zeros,
-        data.delay,
-        data.u,
-        data.y,
-        fits.dt_secs,
-        data.held_out.clone(),
-    )?;
-    let v = linear.simulate(data.u);
+    let one = assemble_each(data, &[(poles, zeros)], static_order).pop();
+    one.unwrap_or(Err(PipelineError::Wiener(WienerError::TooFewSamples { samples: 0 })))
+}
+
+/// [`assemble`] for each set of roots (poles, zeros), their simulations stepped side by side
+/// ([`DiscreteTf::simulate_each_from_steady`]): what a finite-difference Jacobian's columns ask for.
+/// Each result is the one [`assemble`] gives alone, bit for bit.
+pub fn assemble_each(
+    data: &IdentData,
+    roots: &[(&[Complex64], &[Complex64])],
+    static_order: Option<usize>,
+) -> Vec<Result<Assembled, PipelineError>> {
+    let dt = data.fits.dt_secs;
+    let shapes: Vec<Result<DiscreteTf, WienerError>> = roots
+        .iter()
+        .map(|(poles, zeros)| linear_shape(poles, zeros, data.delay, data.u, data.y, dt))
+        .collect();
+    let responses = simulate_ok(&shapes, data.u);
+    let linears: Vec<Result<LinearBlock, WienerError>> = shapes
+        .into_iter()
+        .zip(responses)
+        .map(|(shape, w)| linear_block_on(shape?, &w, data.y, data.held_out.clone()))
+        .collect();
+    let blocks: Vec<Result<DiscreteTf, WienerError>> =
+        linears.iter().map(|l| l.as_ref().map(|l| l.tf.clone()).map_err(Clone::clone)).collect();
+    let outputs = simulate_ok(&blocks, data.u);
+    linears
+        .into_iter()
+        .zip(outputs)
+        .map(|(linear, mut v)| {
+            let linear = linear?;
+            for x in &mut v {
+                *x += linear.offset;
+            }
+            with_map(data, linear, v, static_order)
+        })
+        .collect()
+}
+
+/// Each block's response to `u` from its steady state (empty where there is no block), simulated
+/// side by side.
+fn simulate_ok(blocks: &[Result<DiscreteTf, WienerError>], u: &[f64]) -> Vec<Vec<f64>> {
+    let ok: Vec<(&DiscreteTf, &[f64])> = blocks.iter().filter_map(|b| Some((b.as_ref().ok()?, u))).collect();
+    let mut simulated = DiscreteTf::simulate_each_from_steady(&ok).into_iter();
+    blocks.iter().map(|b| b.as_ref().ok().and_then(|_| simulated.next()).unwrap_or_default()).collect()
+}
+
+/// The static map on the steady points of `v` (the linear block's output), and the residual.
+fn with_map(
+    data: &IdentData,
+    linear: LinearBlock,
+    v: Vec<f64>,
+    static_order: Option<usize>,
+) -> Result<Assembled, PipelineError> {
     let steady_points: Vec<(f64, f64)> = steady_windows(data)
         .into_iter()
         .filter_map(|w| {
@@ -361,92 +397,8 @@ pub fn assemble_groups(
     assemble(data, &roots_of(groups, RootKind::Pole), &roots_of(groups, RootKind::Zero), static_order)
 }
 
-/// RMS of the residual over the samples that take part in the fit.
-fn fitted_rms(data: &IdentData, residual: &[f64]) -> f64 {
-    let kept: Vec<f64> =
-        residual.iter().enumerate().filter(|(k, _)| data.fits_sample(*k)).map(|(_, r)| *r).collect();
-    rms(&kept)
-}
-
-/// The groups moved to a parameter vector; `None` where a pole leaves [`MAX_POLE_MODULUS`].
-fn decode_all(groups: &[RootGroup], theta: &[f64]) -> Option<Vec<RootGroup>> {
-    let mut at = 0;
-    let mut out = Vec::with_capacity(groups.len());
-    for g in groups {
-        let n = g.n_params();
-        let moved = g.decode(theta.get(at..at + n)?)?;
-        if moved.kind == RootKind::Pole && moved.root.norm() >= MAX_POLE_MODULUS {
-            return None;
-        }
-        out.push(moved);
-        at += n;
-    }
-    Some(out)
-}
-
-/// A polished model: the roots where the polish left them, and what it did.
-#[derive(Clone, Debug)]
-pub struct Polished {
-    pub groups: Vec<RootGroup>,
-    pub assembled: Assembled,
-    pub refinement: Refinement,
-}
-
-/// Polish the roots by simulation error on the identification range, each cluster's root inside its
-/// circle, free roots anywhere inside the unit circle; the static map keeps `static_order`. `None`
-/// when the starting roots give no model. The result is never worse than the start.
-pub fn polish(data: &IdentData, groups: &[RootGroup], static_order: usize) -> Option<Polished> {
-    polish_with(data, groups, static_order, POLISH_ITERATIONS)
-}
-
-/// [`polish`] with at most `max_iterations` Levenberg–Marquardt steps.
-pub fn polish_with(
-    data: &IdentData,
-    groups: &[RootGroup],
-    static_order: usize,
-    max_iterations: usize,
-) -> Option<Polished> {
-    let start = assemble_groups(data, groups, Some(static_order)).ok()?;
-    let theta0: Vec<f64> = groups.iter().flat_map(RootGroup::encode).collect();
-    let residual = |theta: &[f64]| {
-        let moved = decode_all(groups, theta)?;
-        let full = assemble_groups(data, &moved, Some(static_order)).ok()?.residual;
-        Some(match &data.held_out {
-            None => full,
-            Some(_) => {
-                full.into_iter().enumerate().filter(|(k, _)| data.fits_sample(*k)).map(|(_, r)| r).collect()
-            }
-        })
-    };
-    let settings = LmSettings { max_iterations, cost_tol: POLISH_COST_TOL, damping: Damping::marquardt(12) };
-    let mut problem: LeastSquares<_, LmError> =
-        LeastSquares::new(residual, Jacobian::default(), StepSolver::Svd);
-    let fitted = minimise(&mut problem, &theta0, &settings, &mut no_progress).ok();
-    let moved = fitted.as_ref().and_then(|f| decode_all(groups, &f.theta));
-    let after = moved.as_ref().and_then(|m| assemble_groups(data, m, Some(static_order)).ok());
-    let before_rms = fitted_rms(data, &start.residual);
-    let refinement = |after_rms: f64, iterations: usize| Refinement {
-        poles_before: roots_of(groups, RootKind::Pole),
-        zeros_before: roots_of(groups, RootKind::Zero),
-        rms_before: before_rms,
-        rms_after: after_rms,
-        iterations,
-    };
-    match (moved, after, fitted) {
-        (Some(moved), Some(after), Some(fit)) if fitted_rms(data, &after.residual) < before_rms => {
-            Some(Polished {
-                refinement: refinement(fitted_rms(data, &after.residual), fit.iterations),
-                groups: moved,
-                assembled: after,
-            })
-        }
-        (_, _, fit) => Some(Polished {
-            refinement: refinement(before_rms, fit.map_or(0, |f| f.iterations)),
-            groups: groups.to_vec(),
-            assembled: start,
-        }),
-    }
-}
+mod polish;
+pub use polish::{Polished, polish, polish_with};
 
 #[cfg(test)]
 mod tests;

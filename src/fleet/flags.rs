@@ -1,7 +1,7 @@
 //! The engine's normal band for every delta and for the error, and each run's flag in physical
 //! words: which delta left the band, by how much, and what that means for the engine.
 use crate::core::health::{BAND_SIGMAS, Band, Estimate, local_bands};
-use crate::core::run::Quantity;
+use crate::core::run::{Quantity, unit_from_column_name};
 
 use super::finding::Finding;
 use super::score::{RunScore, Starved};
@@ -204,20 +204,36 @@ fn direction_from_reference(gain: Estimate, fuel: &str, first: Option<&str>) -> 
     })
 }
 
+/// The unit of an effect parameter, read from the suffix its name carries (`ParamSpec::name`):
+/// a rate in the output's unit per second (the rate limit acts on the linear block's output, which
+/// is in output units), seconds, hertz or samples; `None` for a ratio, or a rate of an output whose
+/// unit is unknown.
+fn param_unit(name: &str, output: &str) -> Option<String> {
+    if name.ends_with("_per_s") {
+        let unit = unit_from_column_name(output);
+        return (!unit.is_empty()).then(|| format!("{unit}/s"));
+    }
+    [("_s", "s"), ("_hz", "Hz"), ("_samples", "samples")]
+        .iter()
+        .find(|(suffix, _)| name.ends_with(suffix))
+        .map(|(_, unit)| (*unit).to_owned())
+}
+
 /// "missing effect on speed: rate limit (error from 35 to 11 σ beyond the noise, p = 2.6e-4;
-/// fall_per_s 1530 [1490, 1570], rise_per_s 2980 [2900, 3050]): measured peak slopes … : both
-/// accelerations and decelerations saturate at a constant rate".
+/// fall_per_s 1530 rpm/s [1490, 1570], rise_per_s 2980 rpm/s [2900, 3050]): measured peak
+/// slopes … : both accelerations and decelerations saturate at a constant rate".
 pub fn finding_words(f: &Finding) -> String {
     let params: Vec<String> = f
         .params
         .iter()
         .map(|p| {
             let name = p.name.split_once('.').map_or(p.name.as_str(), |(_, n)| n);
+            let unit = param_unit(name, &f.output).map_or(String::new(), |u| format!(" {u}"));
             match p.ci95 {
                 Some([lo, hi]) => {
-                    format!("{name} {} [{}, {}]", plain(p.value, 3), plain(lo, 3), plain(hi, 3))
+                    format!("{name} {}{unit} [{}, {}]", plain(p.value, 3), plain(lo, 3), plain(hi, 3))
                 }
-                None => format!("{name} {}", plain(p.value, 3)),
+                None => format!("{name} {}{unit}", plain(p.value, 3)),
             }
         })
         .collect();
@@ -315,5 +331,19 @@ mod tests {
         assert_eq!(super::plain(0.012_34, 3), "0.0123");
         assert_eq!(super::plain(6.149, 2), "6.1");
         assert_eq!(super::plain(-350.4, 2), "-350");
+    }
+
+    #[test]
+    fn effect_parameters_carry_their_units() {
+        use super::param_unit;
+        assert_eq!(param_unit("fall_per_s", "shaft_speed_rpm").as_deref(), Some("rpm/s"));
+        assert_eq!(param_unit("rise_per_s", "thrust_n").as_deref(), Some("N/s"));
+        // A rate of an output whose unit is unknown, and ratios, get no unit.
+        assert_eq!(param_unit("rise_per_s", "speed"), None);
+        assert_eq!(param_unit("decel_factor", "shaft_speed_rpm"), None);
+        assert_eq!(param_unit("zeta", "thrust_n"), None);
+        assert_eq!(param_unit("tau_s", "thrust_n").as_deref(), Some("s"));
+        assert_eq!(param_unit("delay_samples", "thrust_n").as_deref(), Some("samples"));
+        assert_eq!(param_unit("freq_hz", "thrust_n").as_deref(), Some("Hz"));
     }
 }

@@ -95,6 +95,24 @@ pub fn back_substitute(r: &[Vec<f64>], c: &[f64]) -> Vec<f64> {
 mod tests {
     use super::*;
 
+    /// Four columns at a time, with a remainder and a column of another length: each dot product
+    /// is the one `Iterator::sum` gives, bit for bit.
+    #[test]
+    fn dots_summed_together_are_each_dot_alone() {
+        let v: Vec<f64> = (0..997).map(|k| (0.37 * k as f64).sin() * 1e3).collect();
+        let mut cols: Vec<Vec<f64>> = (0..6)
+            .map(|j| (0..997).map(|k| ((j + 1) as f64 * 0.11 * k as f64).cos() / 7.0).collect())
+            .collect();
+        cols[5].truncate(500);
+        let tails: Vec<&mut [f64]> = cols.iter_mut().map(Vec::as_mut_slice).collect();
+        let dots = dot_each(&v, &tails);
+        for (y, dot) in tails.iter().zip(&dots) {
+            let alone: f64 = v.iter().zip(y.iter()).map(|(a, b)| a * b).sum();
+            assert_eq!(alone.to_bits(), dot.to_bits());
+        }
+        assert_eq!(dots.len(), 6);
+    }
+
     #[test]
     fn solves_least_squares() {
         // Overdetermined linear system: the residual of the solution is orthogonal to the columns.

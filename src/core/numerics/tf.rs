@@ -288,6 +288,23 @@ mod tests {
         assert!((amp - expect).abs() < 0.01 * expect, "{amp} vs {expect}");
     }
 
+    /// Blocks stepped side by side give each the response it gives alone, bit for bit, with inputs
+    /// of different lengths (and an empty one).
+    #[test]
+    fn blocks_stepped_together_respond_as_each_alone() {
+        let fast = DiscreteTf::new(vec![0.0, 0.3, 0.1], vec![1.0, -0.6], 0.1).unwrap();
+        let u: Vec<f64> = (0..300).map(|k| (0.07 * k as f64).sin() + 2.0).collect();
+        let blocks: [(&DiscreteTf, &[f64]); 4] =
+            [(&paper_gs(), &u), (&fast, &u[..111]), (&fast, &[]), (&fast, &u)];
+        let together = DiscreteTf::simulate_each_from_steady(&blocks);
+        for ((tf, u), y) in blocks.iter().zip(&together) {
+            let alone = tf.simulate_from_steady(u);
+            assert_eq!(alone.len(), y.len());
+            assert!(alone.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits()));
+        }
+        assert_eq!(together[1].len(), 111);
+    }
+
     #[test]
     fn steady_start_stays_put() {
         let tf = paper_gs();

@@ -108,34 +108,22 @@ pub fn fit_linear_block_excluding(
     dt_secs: f64,
     held_out: Option<std::ops::Range<usize>>,
 ) -> Result<LinearBlock, WienerError> {
-    let shape = linear_shape(poles, zeros, delay, u, y, dt_secs)?;
+    let shape = unit_gain_tf(poles, zeros, dt_secs)?.with_input_delay(delay);
     let w = shape.simulate_from_steady(u);
     linear_block_on(shape, &w, y, held_out)
 }
 
-/// The unit-gain block of [`fit_linear_block_excluding`], once `u` and `y` are checked.
-pub fn linear_shape(
-    poles: &[Complex64],
-    zeros: &[Complex64],
-    delay: usize,
-    u: &[f64],
-    y: &[f64],
-    dt_secs: f64,
-) -> Result<DiscreteTf, WienerError> {
-    let shape = unit_gain_tf(poles, zeros, dt_secs)?.with_input_delay(delay);
-    if u.len() < 3 || u.len() != y.len() {
-        return Err(WienerError::TooFewSamples { samples: u.len().min(y.len()) });
-    }
-    Ok(shape)
-}
-
-/// Gain and offset of [`fit_linear_block_excluding`] from the unit-gain block's response `w`.
+/// Gain and offset of [`fit_linear_block_excluding`] from the unit-gain block's response `w` (as
+/// long as the input); fewer than 3 samples, or `w` and `y` of different lengths, are refused.
 pub fn linear_block_on(
     shape: DiscreteTf,
     w: &[f64],
     y: &[f64],
     held_out: Option<std::ops::Range<usize>>,
 ) -> Result<LinearBlock, WienerError> {
+    if w.len() < 3 || w.len() != y.len() {
+        return Err(WienerError::TooFewSamples { samples: w.len().min(y.len()) });
+    }
     let kept: Vec<usize> = match &held_out {
         Some(out) => (0..w.len()).filter(|k| !out.contains(k)).collect(),
         None => (0..w.len()).collect(),

@@ -28,7 +28,7 @@ use crate::core::identification::fits::{SegmentFits, output_values};
 use crate::core::identification::settings::{OutputSettings, PolishRegion};
 use crate::core::identification::static_map::{OrderSuggestion, fit_static_map, suggest_order};
 use crate::core::identification::wiener::{
-    LinearBlock, WienerError, WienerModel, linear_block_on, linear_shape,
+    LinearBlock, WienerError, WienerModel, linear_block_on, unit_gain_tf,
 };
 use crate::core::numerics::stats::mean;
 use crate::core::numerics::tf::DiscreteTf;
@@ -305,7 +305,7 @@ pub fn assemble_each(
     let dt = data.fits.dt_secs;
     let shapes: Vec<Result<DiscreteTf, WienerError>> = roots
         .iter()
-        .map(|(poles, zeros)| linear_shape(poles, zeros, data.delay, data.u, data.y, dt))
+        .map(|(poles, zeros)| Ok(unit_gain_tf(poles, zeros, dt)?.with_input_delay(data.delay)))
         .collect();
     let responses = simulate_ok(&shapes, data.u);
     let linears: Vec<Result<LinearBlock, WienerError>> = shapes

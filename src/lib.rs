@@ -1,15 +1,12 @@
 //! jetid: turbojet test-bench runs to control-oriented gray-box (Wiener) models.
 //!
-//! `core` is the headless numerics; `sim` the turbojet simulator; `io` files; `workflow` the one
+//! The headless core is the `jetid-headless` crate (`src/headless.rs`), whose modules this crate
+//! re-exports: `core` the numerics; `sim` the turbojet simulator; `io` files; `workflow` the one
 //! place that turns a project into models (runs by role, each output's model with its effects,
-//! model files, shared products); `batch` the headless pipeline over it; `cli` the command line;
-//! `ui` the desktop app over it (feature `gui`).
-pub mod batch;
+//! model files, shared products); `batch` the headless pipeline over it; `fleet` many runs of many
+//! engines. This crate adds `cli`, the command line, and `ui`, the desktop app over the workflow
+//! (feature `gui`).
+pub use jetid_headless::{batch, core, fleet, io, sim, workflow};
 pub mod cli;
-pub mod core;
-pub mod fleet;
-pub mod io;
-pub mod sim;
 #[cfg(feature = "gui")]
 pub mod ui;
-pub mod workflow;

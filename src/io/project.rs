@@ -367,7 +367,7 @@ pub fn load_project(path: &Path) -> Result<Project> {
 /// The bundled sample runs: `sample_runs/` under the current folder, else beside the sources.
 pub fn bundled_samples_dir() -> Option<PathBuf> {
     let candidates =
-        [PathBuf::from("sample_runs"), Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs")];
+        [PathBuf::from("sample_runs"), Path::new(env!("CARGO_MANIFEST_DIR")).join("../sample_runs")];
     candidates.into_iter().find(|p| p.join("sr30").is_dir())
 }
 

@@ -6,7 +6,7 @@
 //! the comparisons are skipped with a message, unless `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), where a
 //! missing tool fails the test.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-use crate::common::{build_model, have_cc, have_python, jetid};
+use crate::common::{build_model, have_cc, have_python, jetid, python3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -145,7 +145,7 @@ fn reproduce(
             "export python",
         );
         let out = dir.join(format!("{tag}_python.csv"));
-        let o = Command::new("python3").arg(&program).arg(run).arg(&out).args(extra).output().unwrap();
+        let o = python3().arg(&program).arg(run).arg(&out).args(extra).output().unwrap();
         ok(&o, "the exported Python program");
         agree(&expected, &out)
     });
@@ -238,24 +238,28 @@ fn static_map_order_and_the_local_linear_model() {
         &jetid(&["export", "--model", s(&model), "--format", "python", "--out", s(&program)]),
         "export python",
     );
-    for v_star in [knot - 1000.0, knot + 1000.0] {
-        let u_star = (v_star - offset) / g1;
+    // One Python for both points (each start imports python-control): a line per point.
+    let v_stars = [knot - 1000.0, knot + 1000.0];
+    let u_stars: Vec<f64> = v_stars.iter().map(|v| (v - offset) / g1).collect();
+    let script = format!(
+        "import sys; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
+         for u in {u_stars:?}:\n    g = m.operating_point({name:?}, u)\n    \
+         print(repr(float(g.dcgain())), repr(float(abs(g.poles() - m.TF[{name:?}].poles()).max())))",
+        dir = s(dir.path()),
+        name = out.name,
+    );
+    let printed = ok(&python3().args(["-c", &script]).output().unwrap(), "operating_point");
+    let mut lines = printed.lines();
+    for v_star in v_stars {
         let expected = (out.wiener.map.slope(v_star) + if v_star > knot { slope_change } else { 0.0 }) * g1;
-        let script = format!(
-            "import sys; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
-             g = m.operating_point({name:?}, {u_star:?})\n\
-             print(repr(float(g.dcgain())), repr(float(abs(g.poles() - m.TF[{name:?}].poles()).max())))",
-            dir = s(dir.path()),
-            name = out.name,
-        );
-        let printed = ok(&Command::new("python3").args(["-c", &script]).output().unwrap(), "operating_point");
-        let numbers: Vec<f64> = printed.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        let line = lines.next().unwrap_or_else(|| panic!("no line for v* = {v_star}: {printed}"));
+        let numbers: Vec<f64> = line.split_whitespace().map(|x| x.parse().unwrap()).collect();
         assert!(
             (numbers[0] - expected).abs() <= 1e-9 * expected.abs(),
             "K at v* = {v_star}: {} vs {expected}",
             numbers[0]
         );
-        assert!(numbers[1] < 1e-12, "the local model has G's poles: {printed}");
+        assert!(numbers[1] < 1e-12, "the local model has G's poles: {line}");
     }
 }
 
@@ -488,7 +492,7 @@ fn the_python_sample_models_follow_the_covariance() {
          print(' '.join(repr(x) for x in m.operating_point_ci95(o, {u:?})['gain']))",
         dir = s(dir.path()),
     );
-    let printed = ok(&Command::new("python3").args(["-c", &script]).output().unwrap(), "sample_models");
+    let printed = ok(&python3().args(["-c", &script]).output().unwrap(), "sample_models");
     let lines: Vec<Vec<f64>> =
         printed.lines().map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect()).collect();
     let n = stated.values.len();
@@ -535,20 +539,25 @@ fn the_python_operating_points_are_the_reports() {
             &jetid(&["export", "--model", s(&model), "--format", "python", "--out", s(&program)]),
             "export python",
         );
+        // One Python for the three points (each start imports python-control, two seconds): a line
+        // per point and frequency.
         let omegas = [0.05, 0.5, 2.0, 8.0];
-        for p in [&points[0], &points[4], &points[8]] {
-            let u = p["u"].as_f64().unwrap();
+        let chosen = [&points[0], &points[4], &points[8]];
+        let us: Vec<f64> = chosen.iter().map(|p| p["u"].as_f64().unwrap()).collect();
+        let script = format!(
+            "import sys, numpy as np; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
+             for u in {us:?}:\n    g = m.operating_point('shaft_speed_rpm', u)\n    \
+             for w in {omegas:?}:\n        r = g(np.exp(1j * w * m.DT))\n        \
+             print(repr(float(r.real)), repr(float(r.imag)))",
+            dir = s(dir.path()),
+        );
+        let printed = ok(&python3().args(["-c", &script]).output().unwrap(), "operating_point");
+        let mut lines = printed.lines();
+        for (p, u) in chosen.iter().zip(&us) {
             let local: jetid::core::numerics::tf::DiscreteTf =
                 serde_json::from_value(p["local"].clone()).unwrap();
-            let script = format!(
-                "import sys, numpy as np; sys.path.insert(0, {dir:?}); import jetid_model as m\n\
-                 g = m.operating_point('shaft_speed_rpm', {u:?})\n\
-                 for w in {omegas:?}:\n    r = g(np.exp(1j * w * m.DT))\n    print(repr(float(r.real)), repr(float(r.imag)))",
-                dir = s(dir.path()),
-            );
-            let printed =
-                ok(&Command::new("python3").args(["-c", &script]).output().unwrap(), "operating_point");
-            for (line, w) in printed.lines().zip(omegas) {
+            for w in omegas {
+                let line = lines.next().unwrap_or_else(|| panic!("{effect}, u* = {u}: no line for ω = {w}"));
                 let parts: Vec<f64> = line.split_whitespace().map(|x| x.parse().unwrap()).collect();
                 let expected = local.freq_response(w);
                 let got = num_complex::Complex64::new(parts[0], parts[1]);

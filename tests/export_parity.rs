@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use crate::common::{have_cc, have_python, jetid_in};
+use crate::common::{have_cc, have_python, jetid_in, python3};
 
 /// The sample time of the runs and of the models.
 const DT: f64 = 0.1;
@@ -460,7 +460,7 @@ fn the_programs_accept_and_refuse_what_jetid_predict_does() {
             let out = format!("{i:02}_{language}.csv");
             let mut command = match language {
                 "python" => {
-                    let mut python = Command::new("python3");
+                    let mut python = python3();
                     python.arg(program);
                     python
                 }

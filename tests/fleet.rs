@@ -166,7 +166,7 @@ fn the_fleet_table_reads_back_with_pyarrow() {
                   t = pq.read_table(sys.argv[1])\n\
                   print(json.dumps({'columns': t.column_names, 'rows': t.num_rows, \
                   'rmse': t.column('rmse').to_pylist(), 'flag': t.column('flag').to_pylist()}))";
-    let o = Command::new("python3")
+    let o = crate::common::python3()
         .args(["-c", script, out.join("fleet.parquet").to_str().unwrap()])
         .output()
         .unwrap();

@@ -22,10 +22,20 @@ pub fn jetid_in(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_jetid")).current_dir(dir).args(args).output().expect("jetid runs")
 }
 
+/// `python3`, for the exported programs and the scripts that read them. Its BLAS on one thread:
+/// the tests already run two at a time on every core, and numpy's BLAS threads would only wait on
+/// each other (spinning) for the small matrices the programs use.
+pub fn python3() -> Command {
+    let mut python = Command::new("python3");
+    python.env("OPENBLAS_NUM_THREADS", "1");
+    python
+}
+
 /// Whether `tool` can be used, for the tests that run the exported programs; when it cannot, says
-/// so and, with `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), fails.
-pub fn have(tool: &str, probe: &mut Command) -> bool {
-    let found = probe.output().is_ok_and(|o| o.status.success());
+/// so and, with `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), fails. `probe` runs once per test process
+/// (`found` keeps its answer): python3's imports python-control, two seconds each time.
+fn have(tool: &str, found: &OnceLock<bool>, probe: impl FnOnce() -> Command) -> bool {
+    let found = *found.get_or_init(|| probe().output().is_ok_and(|o| o.status.success()));
     if !found {
         assert!(
             std::env::var("JETID_REQUIRE_EXPORT_TOOLS").as_deref() != Ok("1"),
@@ -38,20 +48,32 @@ pub fn have(tool: &str, probe: &mut Command) -> bool {
 
 /// python3 with numpy and python-control, which the exported Python program needs.
 pub fn have_python() -> bool {
-    have(
-        "python3 with numpy and python-control",
-        Command::new("python3").args(["-c", "import numpy, control"]),
-    )
+    static FOUND: OnceLock<bool> = OnceLock::new();
+    have("python3 with numpy and python-control", &FOUND, || {
+        let mut probe = python3();
+        probe.args(["-c", "import numpy, control"]);
+        probe
+    })
 }
 
 /// python3 with pyarrow, which reads the fleet's table as a fleet analyst's tools would.
 pub fn have_pyarrow() -> bool {
-    have("python3 with pyarrow", Command::new("python3").args(["-c", "import pyarrow.parquet"]))
+    static FOUND: OnceLock<bool> = OnceLock::new();
+    have("python3 with pyarrow", &FOUND, || {
+        let mut probe = python3();
+        probe.args(["-c", "import pyarrow.parquet"]);
+        probe
+    })
 }
 
 /// A C compiler, for the exported C program.
 pub fn have_cc() -> bool {
-    have("a C compiler (cc)", Command::new("cc").arg("--version"))
+    static FOUND: OnceLock<bool> = OnceLock::new();
+    have("a C compiler (cc)", &FOUND, || {
+        let mut probe = Command::new("cc");
+        probe.arg("--version");
+        probe
+    })
 }
 
 /// The shared real-data folder `name` beside the repository (`../shared/realdata/NAME`; real data

@@ -166,8 +166,18 @@ impl DiscreteTf {
         out
     }
 
-    /// Output `k` of [`DiscreteTf::simulate_with_history`], from the inputs and outputs before it.
+    /// Output `k` of [`DiscreteTf::simulate_with_history`], from the inputs `u[..=k]` and the outputs
+    /// `y[..k]` before it. Once every coefficient reaches back no further than the first sample, the
+    /// sums run over slices of the newest samples, with no test per term: the same products added in
+    /// the same order (the same sums, bit for bit), and a loop the compiler keeps in registers.
     fn next_output(&self, u: &[f64], y: &[f64], k: usize, u_past: f64, y_past: f64) -> f64 {
+        let (b, a) = (&self.num_zinv, self.den_zinv.get(1..).unwrap_or(&[]));
+        let newest_u = (k + 1).checked_sub(b.len()).and_then(|first| u.get(first..=k));
+        let newest_y = k.checked_sub(a.len()).and_then(|first| y.get(first..k));
+        if let (Some(newest_u), Some(newest_y)) = (newest_u, newest_y) {
+            let acc = b.iter().zip(newest_u.iter().rev()).fold(0.0, |acc, (b, x)| acc + b * x);
+            return a.iter().zip(newest_y.iter().rev()).fold(acc, |acc, (a, x)| acc - a * x);
+        }
         let mut acc = 0.0;
         for (j, b) in self.num_zinv.iter().enumerate() {
             acc += b * if k >= j { u[k - j] } else { u_past };

@@ -215,11 +215,12 @@ fn no_effect_free_engine_gets_a_significant_effect() {
 /// Engines each hidden effect is tried on (an effect must be found on at least two of them).
 const EFFECT_ENGINES: [u64; 3] = [3, 7, 11];
 
-/// On how many of [`EFFECT_ENGINES`] the workbench loop reaches `id` first, with `spec` hidden.
+/// On how many of [`EFFECT_ENGINES`] `found` holds for the workbench loop, with `spec` hidden.
+/// `found` gets the bench, the identified model the loop started from and the loop's last report.
 fn found_on(
     spec: &str,
     output: &str,
-    found: impl Fn(&Bench, &DiagnosisReport) -> bool + Sync,
+    found: impl Fn(&Bench, &Identified, &DiagnosisReport) -> bool + Sync,
 ) -> (usize, String) {
     let effect: Effect = spec.parse().unwrap();
     found_on_benches(|seed| bench(seed, std::slice::from_ref(&effect)), output, found)
@@ -229,12 +230,13 @@ fn found_on(
 fn found_on_benches(
     make: impl Fn(u64) -> Bench + Sync,
     output: &str,
-    found: impl Fn(&Bench, &DiagnosisReport) -> bool + Sync,
+    found: impl Fn(&Bench, &Identified, &DiagnosisReport) -> bool + Sync,
 ) -> (usize, String) {
     let outcomes = on_two_threads(&EFFECT_ENGINES, |&seed| {
         let b = make(seed);
-        let report = structure_first(&b, output);
-        (found(&b, &report), format!("engine {seed}: {}", summary(&report)))
+        let (identified, settings) = identify(&b, output);
+        let report = structure_first_from(&b, output, &identified, &settings);
+        (found(&b, &identified, &report), format!("engine {seed}: {}", summary(&report)))
     });
     let count = outcomes.iter().filter(|(f, _)| *f).count();
     let log: Vec<String> =
@@ -253,7 +255,7 @@ fn first_physics_is(report: &DiagnosisReport, id: &str) -> bool {
 
 fn assert_found_on_two(spec: &str, output: &str) {
     let id = spec.split(':').next().unwrap();
-    let (count, log) = found_on(spec, output, |_, report| first_physics_is(report, id));
+    let (count, log) = found_on(spec, output, |_, _, report| first_physics_is(report, id));
     eprintln!("{spec}:\n{log}");
     assert!(count >= 2, "{spec} found on {count} of {} engines:\n{log}", EFFECT_ENGINES.len());
 }
@@ -269,7 +271,7 @@ fn calibration_drift_between_test_days_is_found_on_engines_of_the_family() {
         let (count, log) = found_on_benches(
             |seed| bench_days(seed, &[], std::slice::from_ref(&drift)),
             output,
-            |_, report| first_physics_is(report, "calibration_drift"),
+            |_, _, report| first_physics_is(report, "calibration_drift"),
         );
         eprintln!("calibration_drift on {output}:\n{log}");
         assert!(
@@ -302,7 +304,7 @@ fn ambient_correction_is_found_on_engines_of_the_family() {
 #[test]
 fn rate_limit_is_found_on_engines_of_the_family() {
     let limit: Effect = "rate_limit".parse().unwrap();
-    let (count, log) = found_on("rate_limit", SPEED, |b, report| {
+    let (count, log) = found_on("rate_limit", SPEED, |b, identified, report| {
         let Some(entry) = report.entries.iter().find(|d| d.significant && d.kind == DiagnosisKind::Physics)
         else {
             return false;
@@ -315,7 +317,6 @@ fn rate_limit_is_found_on_engines_of_the_family() {
         let truth = &fresh.truth.output(SPEED).unwrap().values;
         let error =
             |m: &ExtendedModel| metrics(truth, &m.simulate(&fresh.measured).unwrap()).unwrap().rmspe_pct;
-        let (identified, _) = identify(b, SPEED);
         let (before, after) = (error(&ExtendedModel::from_gray_box(&identified.model)), error(&entry.model));
         eprintln!(
             "engine {}: fresh-run error {before:.3} % → {after:.3} % with {}",
@@ -332,7 +333,7 @@ fn rate_limit_is_found_on_engines_of_the_family() {
 /// units of the load cell's noise.
 #[test]
 fn rate_limit_is_found_on_thrust_too() {
-    let (count, log) = found_on("rate_limit", THRUST, |_, report| {
+    let (count, log) = found_on("rate_limit", THRUST, |_, _, report| {
         first_physics_is(report, "rate_limit")
             && report.entries.iter().any(|d| d.effect.name() == "rate_limit" && d.evidence.contains(SPEED))
     });
@@ -357,8 +358,7 @@ fn static_map_order_is_found_on_engines_of_the_family() {
 fn transport_delay_is_found_on_engines_of_the_family() {
     let delay_s = 0.9;
     let spec = format!("transport_delay:delay_s={delay_s}");
-    let (count, log) = found_on(&spec, SPEED, |b, report| {
-        let (identified, _) = identify(b, SPEED);
+    let (count, log) = found_on(&spec, SPEED, |b, identified, report| {
         let timed =
             identified.proposal.as_ref().map_or(0, |p| p.dead_time.in_model()) as f64 * b.ident.dt_secs;
         (timed - delay_s).abs() <= 3.0 * b.ident.dt_secs || first_physics_is(report, "transport_delay")
@@ -371,7 +371,7 @@ fn transport_delay_is_found_on_engines_of_the_family() {
 /// (the residual spectrum of the thrust model) names its frequency.
 #[test]
 fn sensor_dynamics_shows_in_the_evidence_on_engines_of_the_family() {
-    let (count, log) = found_on("sensor_dynamics", THRUST, |_, report| {
+    let (count, log) = found_on("sensor_dynamics", THRUST, |_, _, report| {
         report.entries.iter().find(|d| d.effect.name() == "sensor_dynamics").is_some_and(|d| {
             let freq_hz: Option<f64> = d
                 .evidence

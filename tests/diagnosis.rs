@@ -18,7 +18,7 @@ use jetid::core::effects::{
     AmbientCorrection, EffectBlock, EffectError, EffectId, ExtendedModel, FitData, refit,
 };
 use jetid::core::identification::fits::{SegmentFits, fit_segments, segments_for};
-use jetid::core::identification::pipeline::{build_gray_box, identify_output};
+use jetid::core::identification::pipeline::{Identified, build_gray_box, identify_output};
 use jetid::core::identification::segment::SegmentSettings;
 use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
@@ -61,10 +61,15 @@ struct Current {
     settings: OutputSettings,
 }
 
+/// The pipeline's identification of `output` on `run`: automatic segments and clusters.
+fn identify(run: &Run, output: &str, settings: &OutputSettings) -> Identified {
+    let segments = segments_for(run, None, &SegmentSettings::default()).unwrap();
+    identify_output(run, output, settings, &segments, None).unwrap()
+}
+
 /// The pipeline's model of `output`, automatic segments and clusters.
 fn pipeline_model(b: &Bench, output: &str, settings: OutputSettings) -> Current {
-    let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
-    let identified = identify_output(&b.ident, output, &settings, &segments, None).unwrap();
+    let identified = identify(&b.ident, output, &settings);
     Current { model: ExtendedModel::from_gray_box(&identified.model), fits: identified.fits, settings }
 }
 
@@ -235,8 +240,7 @@ fn slow_deceleration_is_not_read_as_a_rate_limit() {
 
 fn speed_without_dead_time(b: &Bench) -> Current {
     let settings = OutputSettings::for_output(SPEED);
-    let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
-    let identified = identify_output(&b.ident, SPEED, &settings, &segments, None).unwrap();
+    let identified = identify(&b.ident, SPEED, &settings);
     let clusters = identified.proposal.unwrap().clusters;
     let (model, _) = build_gray_box(&identified.fits, &b.ident, &clusters, &settings).unwrap();
     assert_eq!(model.wiener.linear.tf.input_delay(), 0);
@@ -285,8 +289,7 @@ fn the_identification_finds_a_dead_time_and_no_lag_stands_in_for_it() {
     for (delay_s, seed) in [(1.0, 2), (1.2, 3)] {
         let b = bench(&[&format!("transport_delay:delay_s={delay_s}")], seed);
         let settings = OutputSettings::for_output(SPEED);
-        let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
-        let identified = identify_output(&b.ident, SPEED, &settings, &segments, None).unwrap();
+        let identified = identify(&b.ident, SPEED, &settings);
         let model = ExtendedModel::from_gray_box(&identified.model);
         let proposal = identified.proposal.unwrap();
         let found = proposal.dead_time.in_model() as f64 * b.ident.dt_secs;
@@ -317,8 +320,7 @@ fn the_fuel_line_delay_of_the_simulator_is_in_the_model() {
         let b = bench(&["transport_delay"], seed);
         let truth = 0.45;
         let settings = OutputSettings::for_output(SPEED);
-        let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
-        let identified = identify_output(&b.ident, SPEED, &settings, &segments, None).unwrap();
+        let identified = identify(&b.ident, SPEED, &settings);
         let dead_time = identified.proposal.as_ref().unwrap().dead_time.clone();
         let dt = b.ident.dt_secs;
         let kept = dead_time.in_model() as f64 * dt;
@@ -386,9 +388,8 @@ fn sensor_resonance_shows_in_the_evidence() {
 /// RMSPE of the validation run and the chirp, averaged).
 fn loop_history(spec: &[&str], seed: u64) -> (Vec<String>, usize, Vec<f64>) {
     let b = bench(spec, seed);
-    let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
     let settings = OutputSettings::for_output(SPEED);
-    let identified = identify_output(&b.ident, SPEED, &settings, &segments, None).unwrap();
+    let identified = identify(&b.ident, SPEED, &settings);
     let dead_time = identified.proposal.as_ref().map_or(0, |p| p.dead_time.in_model());
     let mut model = ExtendedModel::from_gray_box(&identified.model);
     let error = |m: &ExtendedModel| {
@@ -652,8 +653,7 @@ fn loop_on_family_engine(engine: u64, spec: &str, output: &str) -> Vec<String> {
     };
     let (ident, validation) = (run(TestKind::Ident, 101), run(TestKind::Validation, 102));
     let settings = OutputSettings::for_output(output);
-    let segments = segments_for(&ident, None, &SegmentSettings::default()).unwrap();
-    let identified = identify_output(&ident, output, &settings, &segments, None).unwrap();
+    let identified = identify(&ident, output, &settings);
     let base = ExtendedModel::from_gray_box(&identified.model);
     let runs = [&validation];
     let mut sequence = apply_in_order(&base, &[], &ident, &identified.fits, &settings, &runs);

@@ -153,16 +153,25 @@ fn reproduce(
         let source = dir.join(format!("{tag}_model.c"));
         ok(&jetid(&["export", "--model", s(model), "--format", "c", "--out", s(&source)]), "export c");
         let binary = dir.join(format!("{tag}_model"));
-        let strict = ["-O2", "-std=c99", "-Wall", "-Werror"];
-        let o =
-            Command::new("cc").args(strict).arg(&source).arg("-o").arg(&binary).arg("-lm").output().unwrap();
+        let strict = ["-std=c99", "-Wall", "-Werror"];
+        let o = Command::new("cc")
+            .arg("-O2")
+            .args(strict)
+            .arg(&source)
+            .arg("-o")
+            .arg(&binary)
+            .arg("-lm")
+            .output()
+            .unwrap();
         ok(&o, "cc on the exported C program");
         // Without its main, as a library: the same source was just compiled and optimised whole, so
         // what is left to check is that the rest stands alone, warnings as errors (a helper only
         // main used would be unused). Unoptimised: `-fsyntax-only` would skip the unused-function
         // check, and -O2's optimisation would repeat the compile above.
         let o = Command::new("cc")
-            .args(["-O0", "-std=c99", "-Wall", "-Werror", "-DJETID_NO_MAIN", "-c"])
+            .arg("-O0")
+            .args(strict)
+            .args(["-DJETID_NO_MAIN", "-c"])
             .arg(&source)
             .arg("-o")
             .arg(dir.join(format!("{tag}_model.o")))

@@ -34,8 +34,8 @@ pub fn python3() -> Command {
 /// Whether `tool` can be used, for the tests that run the exported programs; when it cannot, says
 /// so and, with `JETID_REQUIRE_EXPORT_TOOLS=1` (CI), fails. `probe` runs once per test process
 /// (`found` keeps its answer): python3's imports python-control, two seconds each time.
-fn have(tool: &str, found: &OnceLock<bool>, probe: impl FnOnce() -> Command) -> bool {
-    let found = *found.get_or_init(|| probe().output().is_ok_and(|o| o.status.success()));
+fn have(tool: &str, found: &OnceLock<bool>, probe: &mut Command) -> bool {
+    let found = *found.get_or_init(|| probe.output().is_ok_and(|o| o.status.success()));
     if !found {
         assert!(
             std::env::var("JETID_REQUIRE_EXPORT_TOOLS").as_deref() != Ok("1"),
@@ -49,31 +49,19 @@ fn have(tool: &str, found: &OnceLock<bool>, probe: impl FnOnce() -> Command) -> 
 /// python3 with numpy and python-control, which the exported Python program needs.
 pub fn have_python() -> bool {
     static FOUND: OnceLock<bool> = OnceLock::new();
-    have("python3 with numpy and python-control", &FOUND, || {
-        let mut probe = python3();
-        probe.args(["-c", "import numpy, control"]);
-        probe
-    })
+    have("python3 with numpy and python-control", &FOUND, python3().args(["-c", "import numpy, control"]))
 }
 
 /// python3 with pyarrow, which reads the fleet's table as a fleet analyst's tools would.
 pub fn have_pyarrow() -> bool {
     static FOUND: OnceLock<bool> = OnceLock::new();
-    have("python3 with pyarrow", &FOUND, || {
-        let mut probe = python3();
-        probe.args(["-c", "import pyarrow.parquet"]);
-        probe
-    })
+    have("python3 with pyarrow", &FOUND, python3().args(["-c", "import pyarrow.parquet"]))
 }
 
 /// A C compiler, for the exported C program.
 pub fn have_cc() -> bool {
     static FOUND: OnceLock<bool> = OnceLock::new();
-    have("a C compiler (cc)", &FOUND, || {
-        let mut probe = Command::new("cc");
-        probe.arg("--version");
-        probe
-    })
+    have("a C compiler (cc)", &FOUND, Command::new("cc").arg("--version"))
 }
 
 /// The shared real-data folder `name` beside the repository (`../shared/realdata/NAME`; real data

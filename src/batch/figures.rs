@@ -34,6 +34,8 @@ pub struct OutputCurves<'a> {
     bode_band: Option<bands::BodeBand>,
     /// The 95 % region of each of its roots, as outlines in z.
     regions: Vec<Vec<[f64; 2]>>,
+    /// The final model's poles and zeros (the regions are drawn around them).
+    model_roots: (Vec<num_complex::Complex64>, Vec<num_complex::Complex64>),
 }
 
 /// Points on each root region's outline.
@@ -90,7 +92,7 @@ impl<'a> OutputCurves<'a> {
             .collect();
         Self {
             identified,
-            bode: bode_curves(identified),
+            bode: bode_curves(identified, uncertain.map(|(model, _)| model)),
             static_map: static_map_curve(&identified.model),
             traces,
             chirp: freq.and_then(chirp_curves),
@@ -103,13 +105,20 @@ impl<'a> OutputCurves<'a> {
                 .and_then(|(model, cov)| bands::root_regions(model, cov).ok())
                 .map(|rs| rs.iter().map(|r| r.outline(REGION_POINTS)).collect())
                 .unwrap_or_default(),
+            model_roots: uncertain
+                .and_then(|(model, _)| model.roots().ok())
+                .or_else(|| {
+                    let tf = &identified.model.wiener.linear.tf;
+                    Some((tf.poles().ok()?, tf.zeros().ok()?))
+                })
+                .unwrap_or_default(),
         }
     }
 }
 
 /// Segment models are in deviation units; the reduced model's curve is drawn beside them to compare
-/// shapes.
-fn bode_curves(identified: &Identified) -> Vec<BodeCurve> {
+/// shapes, and the final model's block when its effects' refit moved it (the band is of that block).
+fn bode_curves(identified: &Identified, finished: Option<&ExtendedModel>) -> Vec<BodeCurve> {
     let fits = &identified.fits;
     let omegas = bode_grid(fits.dt_secs);
     let mut curves: Vec<BodeCurve> = fits
@@ -131,8 +140,22 @@ fn bode_curves(identified: &Identified) -> Vec<BodeCurve> {
         colour: Some(figures::palette::REDUCED),
         dashed: false,
     });
+    if let Some(block) =
+        finished.map(|m| &m.wiener.linear.tf).filter(|tf| **tf != identified.model.wiener.linear.tf)
+    {
+        curves.push(BodeCurve {
+            name: REFITTED_NAME.into(),
+            points: block.bode_response(&omegas),
+            emphasis: true,
+            colour: Some(figures::palette::model(ModelKind::GrayBox)),
+            dashed: false,
+        });
+    }
     curves
 }
+
+/// The name of the final model's block when the effects' refit moved it from the reduced model's.
+const REFITTED_NAME: &str = "model with effects";
 
 /// f(v) at 101 points over the range of the steady points.
 fn static_map_curve(model: &GrayBoxModel) -> Vec<(f64, f64)> {
@@ -201,7 +224,11 @@ pub fn output_figures(
             &fits.roots,
             &curves.identified.evals,
             fits.dt_secs,
-            &curves.regions,
+            &figures::ModelRoots {
+                poles: &curves.model_roots.0,
+                zeros: &curves.model_roots.1,
+                regions: &curves.regions,
+            },
         ),
     );
     let name = format!("{output}_bode.png");

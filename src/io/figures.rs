@@ -33,7 +33,7 @@ pub use residuals::residuals_png;
 pub use stats::{boxplot_png, histogram_png};
 pub use trend::{TrendPanel, TrendPoint, trend_png};
 pub use xy::{static_map_png, traces_png, traces_with_band_png};
-pub use zplane::{ZPLANE_SIZE, zplane_png, zplane_with_regions_png};
+pub use zplane::{ModelRoots, ZPLANE_SIZE, zplane_png, zplane_with_regions_png};
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/fonts/DejaVuSans-LICENSE.txt`).
 static FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");

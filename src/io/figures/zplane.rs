@@ -40,19 +40,29 @@ pub fn zplane_png(
     evals: &[ClusterEval],
     dt_secs: f64,
 ) -> Result<(), FigureError> {
-    zplane_with_regions_png(path, title, roots, evals, dt_secs, &[])
+    zplane_with_regions_png(path, title, roots, evals, dt_secs, &ModelRoots::default())
 }
 
-/// [`zplane_png`] with the 95 % region of each of the model's roots drawn over it (closed
-/// outlines in z, a pair's with its mirror image), named in the legend.
+/// The model's own poles and zeros, and the 95 % region of each (closed outlines in z, the upper
+/// root of a pair; its mirror image is drawn too).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ModelRoots<'a> {
+    pub poles: &'a [Complex64],
+    pub zeros: &'a [Complex64],
+    pub regions: &'a [Vec<[f64; 2]>],
+}
+
+/// [`zplane_png`] with the model's roots, large, and the 95 % region of each drawn over it, named
+/// in the legend.
 pub fn zplane_with_regions_png(
     path: &Path,
     title: &str,
     roots: &[SegmentRoots],
     evals: &[ClusterEval],
     dt_secs: f64,
-    regions: &[Vec<[f64; 2]>],
+    model: &ModelRoots<'_>,
 ) -> Result<(), FigureError> {
+    let regions = model.regions;
     if !(dt_secs.is_finite() && dt_secs > 0.0) {
         return Err(FigureError::InvalidParameter {
             path: path.to_path_buf(),
@@ -85,13 +95,17 @@ pub fn zplane_with_regions_png(
                 chart.draw_series(LineSeries::new(line, palette::FIT.stroke_width(2)))?;
             }
         }
+        let outside_model = draw_model_roots(&mut chart, model)?;
         if roots.iter().all(|s| s.poles.is_empty() && s.zeros.is_empty()) && evals.is_empty() {
             let style = desc_font().color(&palette::NOTE).pos(Pos::new(HPos::Center, VPos::Center));
             chart.plotting_area().draw(&Text::new("no roots or clusters", (0.0, 0.5), style))?;
         }
-        let mut entries = legend_entries(roots, evals, dt_secs, outside);
+        let mut entries = legend_entries(roots, evals, dt_secs, outside + outside_model);
+        if !(model.poles.is_empty() && model.zeros.is_empty()) {
+            entries.push(LegendEntry::new("model's roots", Swatch::Cross(palette::FIT)));
+        }
         if !regions.is_empty() {
-            entries.push(LegendEntry::line("roots' 95 % regions", palette::FIT, 2));
+            entries.push(LegendEntry::line("their 95 % regions", palette::FIT, 2));
         }
         draw_legend(&legend_area, &entries)
     })
@@ -211,12 +225,28 @@ fn draw_roots(
     segment: &SegmentRoots,
     color: RGBColor,
 ) -> Result<usize, super::DrawError> {
+    draw_marks(chart, &segment.poles, &segment.zeros, color.stroke_width(2), 6)
+}
+
+/// The model's own roots: larger and heavier than the segments' so that they show among them.
+fn draw_model_roots(chart: &mut ZChart<'_, '_>, model: &ModelRoots<'_>) -> Result<usize, super::DrawError> {
+    draw_marks(chart, model.poles, model.zeros, palette::FIT.stroke_width(3), 9)
+}
+
+/// Poles as crosses and zeros as rings of `size` pixels; returns how many lie off the view.
+fn draw_marks(
+    chart: &mut ZChart<'_, '_>,
+    poles: &[Complex64],
+    zeros: &[Complex64],
+    style: ShapeStyle,
+    size: i32,
+) -> Result<usize, super::DrawError> {
     let inside = |z: &&Complex64| z.re.abs() <= LIMIT && z.im.abs() <= LIMIT;
-    let poles: Vec<(f64, f64)> = segment.poles.iter().filter(inside).map(|z| (z.re, z.im)).collect();
-    let zeros: Vec<(f64, f64)> = segment.zeros.iter().filter(inside).map(|z| (z.re, z.im)).collect();
-    let outside = segment.poles.len() + segment.zeros.len() - poles.len() - zeros.len();
-    chart.draw_series(poles.into_iter().map(|p| Cross::new(p, 6, color.stroke_width(2))))?;
-    chart.draw_series(zeros.into_iter().map(|p| Circle::new(p, 5, color.stroke_width(2))))?;
+    let shown_poles: Vec<(f64, f64)> = poles.iter().filter(inside).map(|z| (z.re, z.im)).collect();
+    let shown_zeros: Vec<(f64, f64)> = zeros.iter().filter(inside).map(|z| (z.re, z.im)).collect();
+    let outside = poles.len() + zeros.len() - shown_poles.len() - shown_zeros.len();
+    chart.draw_series(shown_poles.into_iter().map(|p| Cross::new(p, size, style)))?;
+    chart.draw_series(shown_zeros.into_iter().map(|p| Circle::new(p, size - 1, style)))?;
     Ok(outside)
 }
 

@@ -5,11 +5,14 @@
 //! one); a drag preview has none.
 use std::sync::Arc;
 
+use num_complex::Complex64;
+
 use crate::core::control::ParameterCovariance;
 use crate::core::control::bands::{self, BodeBand, RootRegion};
 use crate::core::effects::ExtendedModel;
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::settings::OutputSettings;
+use crate::core::numerics::tf::{BodePoint, DiscreteTf};
 use crate::core::run::Run;
 use crate::workflow::uncertainty::parameter_covariance;
 
@@ -32,6 +35,27 @@ pub struct ModelUncertainty {
     pub bode: BodeBand,
     /// The 95 % region of each root (poles, then zeros).
     pub roots: Vec<RootRegion>,
+    /// The finished model's linear block, which the bands and regions are drawn around: the
+    /// reduced model's block refitted with the effects, when there are any.
+    pub block: FinishedBlock,
+}
+
+/// The linear block of the finished model.
+#[derive(Clone, Debug)]
+pub struct FinishedBlock {
+    pub tf: DiscreteTf,
+    /// Its Bode response at the cache's frequency grid.
+    pub bode: Vec<BodePoint>,
+    pub poles: Vec<Complex64>,
+    pub zeros: Vec<Complex64>,
+}
+
+impl ModelUncertainty {
+    /// The finished model's linear block when the effects' refit moved it away from `reduced`
+    /// (the block the views draw as the reduced model); `None` when the two are the same block.
+    pub fn refitted_block(&self, reduced: &DiscreteTf) -> Option<&FinishedBlock> {
+        (self.block.tf != *reduced).then_some(&self.block)
+    }
 }
 
 /// The bands of `model` (identified on `ident` with `fits` and `settings`) on the scored `runs`.
@@ -51,5 +75,12 @@ pub fn of(
         .collect();
     let roots = bands::root_regions(model, &covariance).map_err(|e| e.to_string())?;
     let bode = bands::bode_band(&draws, omegas_rad_s);
-    Ok(Arc::new(ModelUncertainty { covariance, draws, run_bands, bode, roots }))
+    let tf = model.wiener.linear.tf.clone();
+    let block = FinishedBlock {
+        bode: tf.bode_response(omegas_rad_s),
+        poles: tf.poles().unwrap_or_default(),
+        zeros: tf.zeros().unwrap_or_default(),
+        tf,
+    };
+    Ok(Arc::new(ModelUncertainty { covariance, draws, run_bands, bode, roots, block }))
 }

@@ -18,6 +18,10 @@ const REDUCED_NAME: &str = "reduced model G(z)";
 /// The legend entry of its band: 2.5 to 97.5 percentiles over models drawn from the parameter
 /// covariance.
 const BAND_NAME: &str = "G(z): 95 % band (parameters)";
+/// The legend entry of the finished model's block when the effects' refit moved it.
+const REFITTED_NAME: &str = "G(z) refitted with the effects";
+/// Its band's legend entry.
+const REFITTED_BAND_NAME: &str = "refitted G(z): 95 % band (parameters)";
 
 #[derive(Default)]
 pub struct BodeViewState {
@@ -101,8 +105,15 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>, state: &BodeViewState) {
         }
         if let Ok(live) = view.live {
             plot_util::line_key_ui(ui, theme::REDUCED, 3.0, false, REDUCED_NAME);
-            if live.uncertainty.is_ok() {
-                plot_util::line_key_ui(ui, theme::REDUCED.gamma_multiply(0.6), 8.0, false, BAND_NAME);
+            if let Ok(u) = &live.uncertainty {
+                let (colour, name) = match u.refitted_block(&live.model.wiener.linear.tf) {
+                    Some(_) => {
+                        plot_util::line_key_ui(ui, theme::MODEL, 3.0, false, REFITTED_NAME);
+                        (theme::MODEL, REFITTED_BAND_NAME)
+                    }
+                    None => (theme::REDUCED, BAND_NAME),
+                };
+                plot_util::line_key_ui(ui, colour.gamma_multiply(0.6), 8.0, false, name);
             }
         }
         if !view.output.empirical_bode.points.is_empty() {
@@ -130,8 +141,20 @@ fn draw_curves(plot_ui: &mut egui_plot::PlotUi<'_>, view: &LiveView<'_>, state: 
                     Part::Phase => u.bode.phase_deg.iter().map(side).collect(),
                 }
             };
-            if let Some(band) = plot_util::band(BAND_NAME, &x, &pick(0), &pick(1), theme::REDUCED) {
+            // The band is the finished model's: drawn around its own block, which is the reduced
+            // model's unless the effects' refit moved it.
+            let refitted = u.refitted_block(&live.model.wiener.linear.tf);
+            let (colour, name) = if refitted.is_some() {
+                (theme::MODEL, REFITTED_BAND_NAME)
+            } else {
+                (theme::REDUCED, BAND_NAME)
+            };
+            if let Some(band) = plot_util::band(name, &x, &pick(0), &pick(1), colour) {
                 plot_ui.add(band);
+            }
+            if let Some(block) = refitted {
+                plot_ui
+                    .line(Line::new(REFITTED_NAME, curve(&block.bode, part)).color(theme::MODEL).width(3.0));
             }
         }
         plot_ui.line(Line::new(REDUCED_NAME, curve(&live.bode, part)).color(theme::REDUCED).width(3.0));

@@ -233,9 +233,17 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
         mark_ui(ui, Mark::Circle { dashed: true }, theme::CLUSTER_INVALID, "invalid cluster");
         ui.add_space(8.0);
         mark_ui(ui, Mark::PoleAndZero, theme::REDUCED, "reduced model");
-        if view.live.as_ref().is_ok_and(|live| live.uncertainty.is_ok()) {
+        if let Ok(live) = view.live
+            && let Ok(u) = &live.uncertainty
+        {
             ui.add_space(8.0);
-            mark_ui(ui, Mark::Circle { dashed: false }, theme::REDUCED, "its 95 % regions (parameters)");
+            if u.refitted_block(&live.model.wiener.linear.tf).is_some() {
+                mark_ui(ui, Mark::PoleAndZero, theme::MODEL, zplane_plot::REFITTED_NAME);
+                ui.add_space(8.0);
+                mark_ui(ui, Mark::Circle { dashed: false }, theme::MODEL, "their 95 % regions (parameters)");
+            } else {
+                mark_ui(ui, Mark::Circle { dashed: false }, theme::REDUCED, "its 95 % regions (parameters)");
+            }
         }
     });
 }

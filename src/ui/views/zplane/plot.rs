@@ -4,7 +4,7 @@
 //! The plot's own pan, zoom and reset are off: the view keeps its own bounds (drag on empty space
 //! pans, the wheel zooms about the pointer) so that pointer positions map to z through a transform
 //! that does not move under a handle being dragged.
-use egui::{Align2, Pos2, RichText};
+use egui::{Align2, Color32, Pos2, RichText};
 use egui_plot::{
     Line, LineStyle, MarkerShape, Plot, PlotBounds, PlotPoint, PlotTransform, PlotUi, Points, Text,
 };
@@ -164,35 +164,42 @@ const REGION_POINTS: usize = 72;
 fn reduced_roots_ui(plot_ui: &mut PlotUi<'_>, view: &LiveView<'_>) {
     let Ok(live) = view.live else { return };
     if let Ok(u) = &live.uncertainty {
+        let colour = if u.refitted_block(&live.model.wiener.linear.tf).is_some() {
+            theme::MODEL
+        } else {
+            theme::REDUCED
+        };
         for region in &u.roots {
             let outline = region.outline(REGION_POINTS);
             let mirrored: Vec<[f64; 2]> = outline.iter().map(|[x, y]| [*x, -*y]).collect();
             for points in [outline, mirrored] {
                 if points.iter().all(|[x, y]| x.is_finite() && y.is_finite()) {
                     plot_ui.line(
-                        Line::new("95 % region of the roots (parameters)", points)
-                            .color(theme::REDUCED)
-                            .width(1.2),
+                        Line::new("95 % region of the roots (parameters)", points).color(colour).width(1.2),
                     );
                 }
             }
         }
     }
     let tf = &live.model.wiener.linear.tf;
+    let refitted = live.uncertainty.as_ref().ok().and_then(|u| u.refitted_block(tf));
+    if let Some(block) = refitted {
+        roots_ui(plot_ui, REFITTED_NAME, &block.poles, &block.zeros, theme::MODEL);
+    }
     let poles = tf.poles().unwrap_or_default();
     let zeros = tf.zeros().unwrap_or_default();
+    roots_ui(plot_ui, "reduced model", &poles, &zeros, theme::REDUCED);
+}
+
+/// The legend entry of the finished model's roots when the effects' refit moved them (their 95 %
+/// regions are drawn around them, not around the reduced model's).
+pub const REFITTED_NAME: &str = "model with effects";
+
+/// Poles as crosses and zeros as rings, large.
+fn roots_ui(plot_ui: &mut PlotUi<'_>, name: &str, poles: &[Complex64], zeros: &[Complex64], colour: Color32) {
+    plot_ui.points(Points::new(name, folded(poles)).shape(MarkerShape::Cross).radius(8.0).color(colour));
     plot_ui.points(
-        Points::new("reduced model", folded(&poles))
-            .shape(MarkerShape::Cross)
-            .radius(8.0)
-            .color(theme::REDUCED),
-    );
-    plot_ui.points(
-        Points::new("reduced model", folded(&zeros))
-            .shape(MarkerShape::Circle)
-            .filled(false)
-            .radius(7.0)
-            .color(theme::REDUCED),
+        Points::new(name, folded(zeros)).shape(MarkerShape::Circle).filled(false).radius(7.0).color(colour),
     );
 }
 

@@ -16,6 +16,7 @@ mod architecture;
 mod baselines;
 mod batch_cli;
 mod control;
+mod coverage;
 mod diagnosis;
 mod edges;
 mod engine_family;

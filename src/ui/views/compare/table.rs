@@ -119,8 +119,11 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
             |ui| {
                 ui.label("");
                 for column in &columns {
-                    let first = column.what == "RMSPE %";
-                    ui.label(RichText::new(if first { column.group.as_str() } else { "" }).strong());
+                    if column.what == "RMSPE %" {
+                        group_label_ui(ui, &column.group);
+                    } else {
+                        ui.label("");
+                    }
                 }
                 ui.end_row();
                 ui.label(RichText::new("model").strong());
@@ -155,6 +158,20 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
             );
         }
     });
+}
+
+/// Characters of a run's name shown above its two columns: a grid cell cannot span both, so a longer
+/// name would widen the RMSPE column alone and push the SE column away from it (the JetCat's run
+/// names are 34 characters). The whole name shows on hover.
+const GROUP_CHARS: usize = 14;
+
+fn group_label_ui(ui: &mut egui::Ui, group: &str) {
+    if group.chars().count() <= GROUP_CHARS {
+        ui.label(RichText::new(group).strong());
+    } else {
+        let cut: String = group.chars().take(GROUP_CHARS - 1).collect();
+        ui.label(RichText::new(format!("{cut}…")).strong()).on_hover_text(group);
+    }
 }
 
 /// The models that fail on a run (fit below 50 %), one line each with why; nothing when none does.

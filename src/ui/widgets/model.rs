@@ -71,6 +71,17 @@ pub fn model_state_ui(ui: &mut egui::Ui, view: &LiveView<'_>) -> bool {
 }
 
 /// `0.9369` or `0.8404±0.1982i` (conjugate pairs once).
+/// `name` cut to `max_chars` characters, the last one an ellipsis, for a column or panel too
+/// narrow for a long run name (show the whole name on hover); unchanged when it fits.
+pub fn clipped(name: &str, max_chars: usize) -> String {
+    if name.chars().count() <= max_chars {
+        return name.to_owned();
+    }
+    let mut cut: String = name.chars().take(max_chars.saturating_sub(1)).collect();
+    cut.push('…');
+    cut
+}
+
 pub fn complex_text(z: Complex64) -> String {
     if z.im.abs() < 5e-5 { format!("{:.4}", z.re) } else { format!("{:.4}{:+.4}i", z.re, z.im) }
 }

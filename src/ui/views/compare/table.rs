@@ -166,12 +166,8 @@ pub fn table1_ui(ui: &mut egui::Ui, comparison: &OutputComparison, unit: &str) {
 const GROUP_CHARS: usize = 14;
 
 fn group_label_ui(ui: &mut egui::Ui, group: &str) {
-    if group.chars().count() <= GROUP_CHARS {
-        ui.label(RichText::new(group).strong());
-    } else {
-        let cut: String = group.chars().take(GROUP_CHARS - 1).collect();
-        ui.label(RichText::new(format!("{cut}…")).strong()).on_hover_text(group);
-    }
+    ui.label(RichText::new(crate::ui::widgets::model::clipped(group, GROUP_CHARS)).strong())
+        .on_hover_text(group);
 }
 
 /// The models that fail on a run (fit below 50 %), one line each with why; nothing when none does.

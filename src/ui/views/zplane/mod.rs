@@ -248,6 +248,10 @@ fn legend_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
     });
 }
 
+/// Characters of a run's name in the live strip: the side column is as wide as the overview, and a
+/// longer name (the JetCat's are 34 characters) pushed the fit column out of the view.
+const RUN_NAME_CHARS: usize = 24;
+
 /// The reduced model and its validation errors, live while dragging.
 fn live_strip_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
     ui.label(RichText::new("Reduced model").strong());
@@ -284,7 +288,11 @@ fn live_strip_ui(ui: &mut egui::Ui, view: &LiveView<'_>) {
         ui.label(RichText::new("fit").small());
         ui.end_row();
         for run in &live.runs {
-            ui.label(&run.name).on_hover_text(run.role.label());
+            ui.label(model_ui::clipped(&run.name, RUN_NAME_CHARS)).on_hover_text(format!(
+                "{} ({})",
+                run.name,
+                run.role.label()
+            ));
             ui.label(RichText::new(format!("{:.3} %", run.gray_box.metrics.rmspe_pct)).monospace().strong());
             ui.label(RichText::new(format!("{:.1} %", run.gray_box.metrics.fit_pct)).monospace());
             ui.end_row();

@@ -184,3 +184,20 @@ pub fn metrics_table_ui(ui: &mut egui::Ui, id: &str, runs: &[ScoredRun]) {
         }
     });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::clipped;
+
+    #[test]
+    fn a_long_name_is_cut_to_its_width_with_an_ellipsis_and_a_short_one_kept() {
+        let name = "runA_2023-01-09_steps60k-34k-100k";
+        let cut = clipped(name, 14);
+        assert_eq!(cut.chars().count(), 14);
+        assert_eq!(cut, "runA_2023-01-…");
+        assert_eq!(clipped("validation", 14), "validation");
+        assert_eq!(clipped("exactly_14_chr", 14), "exactly_14_chr");
+        // Characters, not bytes: a multi-byte name is cut on a character boundary.
+        assert_eq!(clipped("Prüfstand_Lauf_Nr_12", 10), "Prüfstand…");
+    }
+}

@@ -346,6 +346,26 @@ fn thermal_soak_is_found_on_thrust_too() {
     assert_found_on_two("thermal_soak", THRUST);
 }
 
+#[test]
+fn asymmetric_dynamics_is_found_on_thrust_too() {
+    assert_found_on_two("asymmetric_dynamics", THRUST);
+}
+
+/// The inlet's temperature and pressure scale the thrust (by δ) as well as the corrected speed.
+/// Within one run they drift slowly, so the identification run's held-out steps cannot witness the
+/// correction; the validation run of another day's conditions does.
+#[test]
+fn ambient_correction_is_found_on_thrust_too() {
+    assert_found_on_two("ambient_correction", THRUST);
+}
+
+/// The bleed valve loads the spool above its opening speed: the speed's steady states bend, and
+/// thrust, which follows the speed, bends with them.
+#[test]
+fn static_map_order_is_found_on_thrust_too() {
+    assert_found_on_two("static_map_order:bleed_rpm=78000,gain=8", THRUST);
+}
+
 /// The bleed valve opens at 78,000 rpm (corrected), inside the top of every engine's range.
 #[test]
 fn static_map_order_is_found_on_engines_of_the_family() {

@@ -8,6 +8,7 @@ use super::{
     Bench, Comparison, Diagnosis, DiagnosisKind, DiagnosisReport, RIVAL_LEVEL, SIGNIFICANCE_LEVEL,
     SkippedEffect, p_text,
 };
+use crate::core::effects::EffectId;
 
 /// The trials so far.
 #[derive(Default)]
@@ -53,8 +54,18 @@ impl Trials {
     ///   against the current model is counted and at least as strong as the refinement's. Where
     ///   the held-out responses support both alike (seven responses all better give both the
     ///   floor p = 1/128), the physics' own evidence, which agrees or it would not count, is the
-    ///   support the refinement lacks. Without a held-out witness of its own, a block with more
-    ///   freedom has not shown it explains more, and the physics is not counted.
+    ///   support the refinement lacks. Without a held-out witness of its own where the refinement
+    ///   has one, a block with more freedom has not shown it explains more, and the physics is not
+    ///   counted.
+    /// - Where the physics is caused by a run's conditions
+    ///   ([`EffectId::caused_by_conditions`](crate::core::effects::EffectId::caused_by_conditions):
+    ///   the day's ambient, the meter's calibration) and the refinement has no held-out witness
+    ///   either, the held-out responses of the identification run cannot decide: they hold out
+    ///   steps, not conditions. The validation runs, the only data that saw both under other
+    ///   conditions, do: the physics keeps its place when it ranks above the refinement there (less
+    ///   error beyond the noise), its evidence being again the support the refinement lacks. Any
+    ///   other physics acts on the steps themselves, and the held-out steps are its witness: the
+    ///   rule above holds.
     ///
     /// The note names both with the numbers and the experiment that would separate them, for the
     /// first physics this touches among the trials that count.
@@ -87,8 +98,13 @@ impl Trials {
             }
             let rival_better = Comparison::of(scores, &rival_scores, yardstick).p_value < SIGNIFICANCE_LEVEL;
             let own_support = held_out_support(&d.test);
-            let held_out_prefers =
-                own_support.is_some_and(|own| rival_support.is_none_or(|theirs| own <= theirs));
+            let held_out_prefers = match (own_support, rival_support) {
+                (Some(own), Some(theirs)) => own <= theirs,
+                (Some(_), None) => true,
+                (None, Some(_)) => false,
+                // The identification run cannot show the physics: only the validation runs saw it.
+                (None, None) => i < rival && d.effect.as_effect().is_some_and(EffectId::caused_by_conditions),
+            };
             let support_words = format!(
                 "held-out support against the current model: {} for {}, {} for {}",
                 support_text(own_support),
@@ -108,7 +124,13 @@ impl Trials {
                 ));
             }
             if note.is_none() && first_counting == Some(i) {
-                let verdict = if kept {
+                let verdict = if kept && own_support.is_none() {
+                    format!(
+                        "{} is counted: the held-out responses witness neither, and the validation runs put it \
+                         first",
+                        d.effect
+                    )
+                } else if kept {
                     format!("{} is counted: the held-out responses prefer it", d.effect)
                 } else {
                     format!("{} is not counted: the physics is taken only when the data prefer it", d.effect)

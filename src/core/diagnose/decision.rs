@@ -5,10 +5,9 @@
 use super::held_out::{HeldOut, Recipe};
 use super::witness::Scores;
 use super::{
-    Bench, Comparison, Diagnosis, DiagnosisKind, DiagnosisReport, RIVAL_LEVEL, SIGNIFICANCE_LEVEL,
-    SkippedEffect, p_text,
+    Bench, Comparison, Diagnosis, DiagnosisKind, DiagnosisReport, MIN_RELATIVE_REDUCTION, RIVAL_LEVEL,
+    SIGNIFICANCE_LEVEL, SkippedEffect, p_text,
 };
-use crate::core::effects::EffectId;
 
 /// The trials so far.
 #[derive(Default)]
@@ -57,15 +56,18 @@ impl Trials {
     ///   support the refinement lacks. Without a held-out witness of its own where the refinement
     ///   has one, a block with more freedom has not shown it explains more, and the physics is not
     ///   counted.
-    /// - Where the physics is caused by a run's conditions
-    ///   ([`EffectId::caused_by_conditions`](crate::core::effects::EffectId::caused_by_conditions):
-    ///   the day's ambient, the meter's calibration) and the refinement has no held-out witness
-    ///   either, the held-out responses of the identification run cannot decide: they hold out
-    ///   steps, not conditions. The validation runs, the only data that saw both under other
-    ///   conditions, do: the physics keeps its place when it ranks above the refinement there (less
-    ///   error beyond the noise), its evidence being again the support the refinement lacks. Any
-    ///   other physics acts on the steps themselves, and the held-out steps are its witness: the
-    ///   rule above holds.
+    /// - Where the held-out responses witness neither (each moves fewer than
+    ///   [`MIN_WITNESS_RESPONSES`](super::MIN_WITNESS_RESPONSES) of them by more than the noise:
+    ///   a limit or a day's conditions the identification steps do not exercise, or a load cell
+    ///   whose noise hides what either changes on one step), they cannot decide, and the validation
+    ///   runs, the only data that tell the two apart, do on the terms rule 1 sets against the
+    ///   current model, short of its beyond-noise test (the physics has passed that against the
+    ///   current model already): the physics keeps its place when the validation runs lean its way
+    ///   against the refinement (p < [`RIVAL_LEVEL`]) and it removes at least
+    ///   [`MIN_RELATIVE_REDUCTION`] of the refinement's error beyond the noise (of one noise σ
+    ///   when that error is smaller, as rule 1 reckons the share), enough to matter.
+    ///   Two explanations that differ by less explain the same residual as far as any data here can
+    ///   tell, and the physics is then not counted.
     ///
     /// The note names both with the numbers and the experiment that would separate them, for the
     /// first physics this touches among the trials that count.
@@ -102,8 +104,8 @@ impl Trials {
                 (Some(own), Some(theirs)) => own <= theirs,
                 (Some(_), None) => true,
                 (None, Some(_)) => false,
-                // The identification run cannot show the physics: only the validation runs saw it.
-                (None, None) => i < rival && d.effect.as_effect().is_some_and(EffectId::caused_by_conditions),
+                // The held-out steps witness neither: the validation runs decide.
+                (None, None) => against.p_value < RIVAL_LEVEL && against.reduction >= MIN_RELATIVE_REDUCTION,
             };
             let support_words = format!(
                 "held-out support against the current model: {} for {}, {} for {}",
@@ -126,9 +128,10 @@ impl Trials {
             if note.is_none() && first_counting == Some(i) {
                 let verdict = if kept && own_support.is_none() {
                     format!(
-                        "{} is counted: the held-out responses witness neither, and the validation runs put it \
-                         first",
-                        d.effect
+                        "{} is counted: the held-out responses witness neither, and on the validation runs it \
+                         removes {:.0} % of the refinement's error beyond the noise",
+                        d.effect,
+                        100.0 * against.reduction
                     )
                 } else if kept {
                     format!("{} is counted: the held-out responses prefer it", d.effect)

@@ -232,16 +232,6 @@ impl EffectId {
         )
     }
 
-    /// Whether the block's cause is a run's conditions rather than its steps: the ambient
-    /// temperature and pressure of the day, a fuel meter's calibration of the day. Within one run
-    /// they hold or drift slowly, so every segment of the identification run is seen under about the
-    /// same conditions: the segment cross-validation, which holds out steps of that run, cannot
-    /// exercise such a block, and only runs of other conditions (the validation runs) can witness
-    /// it.
-    pub fn caused_by_conditions(self) -> bool {
-        matches!(self, Self::AmbientCorrection | Self::CalibrationDrift)
-    }
-
     /// The evidence for the block, computed from the current model's residuals on the given runs
     /// (identification range and validation runs).
     pub fn evidence(self, traces: &[stats::ResidualTrace]) -> Evidence {

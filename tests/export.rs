@@ -182,11 +182,34 @@ fn reproduce(
         ok(&Command::new(&binary).arg(run).arg(&out).args(extra).output().unwrap(), "the exported C program");
         agree(&expected, &out)
     });
+    let octave = (extra.is_empty() && predict_extra.is_empty())
+        .then(|| octave_reproduces(dir, model, run, &expected, &tag))
+        .flatten();
     eprintln!(
-        "{}: largest relative difference from jetid predict: Python {python:?}, C {c:?}",
+        "{}: largest relative difference from jetid predict: Python {python:?}, C {c:?}, MATLAB {octave:?}",
         model.display()
     );
     (python, c)
+}
+
+/// The MATLAB export run by GNU Octave on `run`, against `expected`, when Octave is installed (CI
+/// does not install it: the MATLAB file is then checked as text by `matlab_file_holds_…`).
+fn octave_reproduces(dir: &Path, model: &Path, run: &Path, expected: &Path, tag: &str) -> Option<f64> {
+    if !Command::new("octave").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        eprintln!("SKIPPED: octave is not installed, so the MATLAB file is not run");
+        return None;
+    }
+    let name: String =
+        format!("m_{tag}").chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    let program = dir.join(format!("{name}.m"));
+    ok(&jetid(&["export", "--model", s(model), "--format", "matlab", "--out", s(&program)]), "export matlab");
+    let out = dir.join(format!("{tag}_octave.csv"));
+    let call = format!("{name}('csv', '{}', '{}')", s(run), s(&out));
+    ok(
+        &Command::new("octave").current_dir(dir).args(["--quiet", "--eval", &call]).output().unwrap(),
+        "octave",
+    );
+    Some(agree(expected, &out))
 }
 
 fn exports_reproduce_predict(effect: Option<&str>, output: Option<&str>) {

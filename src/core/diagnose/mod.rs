@@ -85,7 +85,7 @@ pub use history::{
 };
 pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, TrialId};
 pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
-use witness::{Judge, Scores, Verdict};
+use witness::{Judge, Scores, ValidationResponses, Verdict};
 
 /// Largest one-sided p-value of a significant effect: with a dozen trials per diagnosis, the chance
 /// that noise alone makes one of them significant stays near 10 % (1 − 0.99¹²), and the 10 %
@@ -150,7 +150,7 @@ pub fn validation_rmspe(
     validation: &[&Run],
     initial: InitialState,
 ) -> Result<f64, DiagnoseError> {
-    Ok(Scores::of(model, validation, initial)?.rmspe())
+    Ok(Scores::of(model, validation, initial, &ValidationResponses::default())?.rmspe())
 }
 
 /// Why an effect cannot be tried on these runs, if it cannot.
@@ -239,10 +239,11 @@ pub fn diagnose_with_progress(
         return Err(DiagnoseError::NoValidationRuns);
     }
     let data = FitData::new(ident, fits, settings)?;
-    let before = Scores::of(current, validation, settings.initial_state)?;
+    let responses = ValidationResponses::of(validation);
+    let before = Scores::of(current, validation, settings.initial_state, &responses)?;
     let reference = refit(current, &data)?;
     let folds = HeldOut::of(&data, current);
-    let mut yardstick = Scores::of(&reference, validation, settings.initial_state)?;
+    let mut yardstick = Scores::of(&reference, validation, settings.initial_state, &responses)?;
     yardstick.cross_validate(Recipe::Current, folds.as_ref());
     let bench = Bench {
         current,
@@ -251,6 +252,7 @@ pub fn diagnose_with_progress(
         validation,
         all_runs: std::iter::once(ident).chain(validation.iter().copied()).collect(),
         initial: settings.initial_state,
+        responses: &responses,
         folds: folds.as_ref(),
         judge: Judge { yardstick: &yardstick, current: &before },
         traces: residual_traces(current, &data, validation, settings.initial_state)?,
@@ -294,6 +296,8 @@ struct Bench<'a> {
     /// The identification run, then the validation runs (where an effect's channels are checked).
     all_runs: Vec<&'a Run>,
     initial: InitialState,
+    /// The validation runs' step responses (see `witness::ValidationResponses`).
+    responses: &'a ValidationResponses,
     folds: Option<&'a HeldOut>,
     judge: Judge<'a>,
     /// The current model's residuals (the evidence is read from them).
@@ -309,7 +313,7 @@ impl Bench<'_> {
         let trial = refine_structure(self.reference, change, self.data)
             .map_err(DiagnoseError::from)
             .and_then(|(model, words)| {
-                let mut after = Scores::of(&model, self.validation, self.initial)?;
+                let mut after = Scores::of(&model, self.validation, self.initial, self.responses)?;
                 self.judge.consult(&mut after, Recipe::Structure(change), self.folds);
                 Ok((model, words, after))
             });
@@ -356,7 +360,7 @@ impl Bench<'_> {
         }
         let trial =
             apply_effect(self.reference, id, self.data).map_err(DiagnoseError::from).and_then(|model| {
-                let mut after = Scores::of(&model, self.validation, self.initial)?;
+                let mut after = Scores::of(&model, self.validation, self.initial, self.responses)?;
                 self.judge.consult(&mut after, Recipe::Effect(id), self.folds);
                 Ok((model, after))
             });

@@ -8,6 +8,7 @@ use crate::core::effects::stats::{
     DmTest, SignedRankTest, diebold_mariano, signed_rank_test, stouffer_combined,
 };
 use crate::core::identification::initial_state::InitialState;
+use crate::core::identification::segment::{SegmentSettings, auto_segments};
 use crate::core::run::Run;
 
 /// A model's errors on the evidence (see `loss`): each validation run, and each segment response
@@ -15,6 +16,8 @@ use crate::core::run::Run;
 #[derive(Clone, Debug)]
 pub(super) struct Scores {
     pub(super) validation: Vec<Errors>,
+    /// The validation runs' step responses, each run's in turn (see [`ValidationResponses`]).
+    responses: Vec<Errors>,
     held_out: Option<Vec<Errors>>,
     /// Why there are no held-out errors although there is a cross-validation.
     held_out_note: Option<&'static str>,
@@ -38,18 +41,21 @@ impl Scores {
         model: &ExtendedModel,
         validation: &[&Run],
         initial: InitialState,
+        responses: &ValidationResponses,
     ) -> Result<Self, DiagnoseError> {
-        let validation = validation
-            .iter()
-            .map(|run| {
-                let y = measured(run, &model.output)?;
-                let y_hat = model
-                    .simulate_scored(run, initial)
-                    .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
-                Ok(Errors::of(y, &y_hat, 0..y.len(), measurement_sigma(y)))
-            })
-            .collect::<Result<_, DiagnoseError>>()?;
-        Ok(Self { validation, held_out: None, held_out_note: None, tried: false })
+        let mut whole = Vec::with_capacity(validation.len());
+        let mut parts = Vec::new();
+        for (i, run) in validation.iter().enumerate() {
+            let y = measured(run, &model.output)?;
+            let y_hat = model
+                .simulate_scored(run, initial)
+                .map_err(|source| DiagnoseError::CurrentModel { run: run.name.clone(), source })?;
+            let sigma = measurement_sigma(y);
+            whole.push(Errors::of(y, &y_hat, 0..y.len(), sigma));
+            let ranges = responses.0.get(i).map_or(&[][..], Vec::as_slice);
+            parts.extend(ranges.iter().map(|&(a, b)| Errors::of(y, &y_hat, a..b, sigma)));
+        }
+        Ok(Self { validation: whole, responses: parts, held_out: None, held_out_note: None, tried: false })
     }
 
     /// The validation error the decision compares: each run's error beyond its measurement noise,
@@ -125,6 +131,9 @@ pub const MIN_WITNESS_RESPONSES: usize = 6;
 pub struct Comparison {
     /// Diebold–Mariano test on the validation runs.
     pub validation: DmTest,
+    /// The validation runs' step responses as a witness (see [`ValidationResponses`] and
+    /// [`validation_p_value`]).
+    pub responses: Option<HeldOutWitness>,
     /// The held-out identification responses, when both models were cross-validated.
     pub held_out: Option<HeldOutWitness>,
     /// Why there is no held-out witness although the data have a cross-validation.
@@ -150,20 +159,25 @@ impl Comparison {
         let d_runs: Vec<Vec<f64>> =
             before.validation.iter().zip(&after.validation).map(|(a, b)| loss(a, b)).collect();
         let validation = diebold_mariano(&d_runs);
+        let responses = (!after.responses.is_empty()
+            && before.responses.len() == after.responses.len()
+            && current.responses.len() == after.responses.len())
+        .then(|| witness(&before.responses, &after.responses, &current.responses));
+        let validation_p = validation_p_value(&validation, responses.as_ref());
         let held_out = match (&before.held_out, &after.held_out, &current.held_out) {
             (Some(a), Some(b), Some(c)) if a.len() == b.len() && c.len() == b.len() => Some(witness(a, b, c)),
             _ => None,
         };
         let p_value = match held_out.filter(|h| h.counted) {
-            Some(h) => stouffer_combined(&[validation.p_value, h.test.p_value]),
-            None => validation.p_value,
+            Some(h) => stouffer_combined(&[validation_p, h.test.p_value]),
+            None => validation_p,
         };
         let reduction = before.validation_reduction(after);
         let held_out_note = match held_out {
             Some(_) => None,
             None => after.held_out_note.or(before.held_out_note),
         };
-        Self { validation, held_out, held_out_note, p_value, reduction }
+        Self { validation, responses, held_out, held_out_note, p_value, reduction }
     }
 
     /// Beyond noise and large enough to matter: `p < SIGNIFICANCE_LEVEL` and at least
@@ -175,7 +189,20 @@ impl Comparison {
     /// What the witnesses say, in words: "validation runs p = 0.0204; held-out identification
     /// responses from 3.190 % to 1.799 %, better on 8 of 10 (p = 0.0068); together p = 0.0007".
     pub fn words(&self) -> String {
-        let validation = format!("validation runs p = {}", p_text(self.validation.p_value));
+        let validation = match self.responses.filter(decides) {
+            Some(r) => format!(
+                "validation runs p = {} (samples p = {}; responses from {:.3} % to {:.3} %, better on {} of {}, \
+                 p = {})",
+                p_text(validation_p_value(&self.validation, Some(&r))),
+                p_text(self.validation.p_value),
+                r.rmspe_before_pct,
+                r.rmspe_after_pct,
+                r.test.wins,
+                r.test.n,
+                p_text(r.test.p_value)
+            ),
+            None => format!("validation runs p = {}", p_text(self.validation.p_value)),
+        };
         match self.held_out {
             Some(h) if h.counted => format!(
                 "{validation}; held-out identification responses from {:.3} % to {:.3} %, better on {} of {} \
@@ -197,6 +224,73 @@ impl Comparison {
                 None => validation,
             },
         }
+    }
+}
+
+/// Fewest validation responses a change must move by more than the noise for their signed-rank
+/// test to take part (see [`validation_p_value`]): eight, whose test reaches p = 1/256 when every
+/// one is better, and twice that, 0.0078, is still below [`SIGNIFICANCE_LEVEL`]: the validation
+/// runs must be able to make a change significant on their own (the held-out witness is often
+/// silent). Seven would top out at 2/128 = 0.016.
+pub const MIN_VALIDATION_RESPONSES: usize = 8;
+
+/// Whether the validation responses take part (see [`MIN_VALIDATION_RESPONSES`]).
+fn decides(responses: &HeldOutWitness) -> bool {
+    responses.test.n >= MIN_VALIDATION_RESPONSES
+}
+
+/// The validation runs' one-sided p-value from their two views: sample by sample (the
+/// Diebold–Mariano test, powerful for a change spread over the run, a scheduled time constant that
+/// helps a little everywhere) and response by response (the signed-rank test over the step
+/// responses, powerful for a change concentrated in transients, a rate limit). Where the responses
+/// take part, the smaller p-value doubled (Bonferroni's bound for the better of two tests, valid
+/// however the two depend on each other, as two readings of the same runs do); otherwise the
+/// Diebold–Mariano test's alone.
+fn validation_p_value(samples: &DmTest, responses: Option<&HeldOutWitness>) -> f64 {
+    match responses.filter(|r| decides(r)) {
+        Some(r) => (2.0 * samples.p_value.min(r.test.p_value)).min(1.0),
+        None => samples.p_value,
+    }
+}
+
+/// The validation runs cut into their step responses: for each run, the samples `(step, end)` of
+/// each response its input's steps make (the automatic step detection, as on an identification
+/// run); none for a run without steps (a chirp).
+///
+/// A model's error on a run of steps comes in transients: a step's response is wrong for as long
+/// as the dynamics last and then settles. Read sample by sample, the Diebold–Mariano test must
+/// estimate how long the loss differences stay correlated; on a test design whose steps repeat (a
+/// staircase up and down) they correlate with themselves a period later, its bandwidth reaches its
+/// cap, and it keeps the power of a handful of samples however consistently one model is better (a
+/// rate limit that removes nine tenths of the error on each of thirty steps: p = 0.02). The step
+/// responses are the unit the held-out identification responses already use: each response's
+/// error is nearly independent of the next's, and the same witness asks how consistently the
+/// second model is better on the responses it changes by more than the noise. When at least
+/// [`MIN_VALIDATION_RESPONSES`] are so changed it takes part beside the Diebold–Mariano test (see
+/// [`validation_p_value`]); otherwise (a chirp, a short log, a change too small to see on single
+/// steps) the Diebold–Mariano test decides alone.
+#[derive(Clone, Debug, Default)]
+pub struct ValidationResponses(pub Vec<Vec<(usize, usize)>>);
+
+impl ValidationResponses {
+    /// The step responses of each of `runs`.
+    pub fn of(runs: &[&Run]) -> Self {
+        let settings = SegmentSettings::default();
+        Self(
+            runs.iter()
+                .map(|run| {
+                    auto_segments(&run.input.values, run.dt_secs, &settings)
+                        .map(|segments| {
+                            segments
+                                .iter()
+                                .map(|s| (s.step_at, s.end.min(run.len())))
+                                .filter(|(a, b)| a < b)
+                                .collect()
+                        })
+                        .unwrap_or_default()
+                })
+                .collect(),
+        )
     }
 }
 

@@ -14,7 +14,8 @@ use std::borrow::Cow;
 use num_complex::Complex64;
 
 use super::model::{
-    ExtendedModel, StageInput, input_stage, linear_stages, needs_split, output_stage, rate_limit,
+    ExtendedModel, StageInput, input_stage, linear_stage, linear_stages, needs_split, output_stage,
+    rate_limit,
 };
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
@@ -250,7 +251,13 @@ pub(super) fn linear_parts(structures: &[&Structure], data: &FitData) -> Vec<Opt
         .zip(&prepared)
         .filter_map(|(s, p)| {
             let p = p.as_ref()?;
-            Some(StageInput { effects: &s.effects, linear: &p.block, split: p.split.as_ref(), u: &p.u })
+            Some(StageInput {
+                effects: &s.effects,
+                linear: &p.block,
+                split: p.split.as_ref(),
+                u: &p.u,
+                limit: None,
+            })
         })
         .collect();
     let mut ws = linear_stages(&stages, dt).into_iter();
@@ -289,32 +296,33 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
         }
     }
     let mut w = Cow::Borrowed(part.w.as_slice());
-    let (mut gain, mut offset) = data.fit_gain_offset(&seen(sensor, &w, dt), &y_c)?;
-    let mut structure = s.clone();
-    if let Some(limit) = rate_limit(&s.effects) {
-        // The limits are in output units, the unit-gain response is not: limit `w` at the limits
-        // the unlimited fit's gain gives, refit gain and offset, and record the limits `gain·w`
-        // then has (what the model simulates), as the kink's slope is recorded below.
-        let limited = limit.for_unit_gain(gain)?.apply(&w, dt);
-        let (g, o) = data.fit_gain_offset(&seen(sensor, &limited, dt), &y_c)?;
-        let recorded = limit.for_unit_gain(gain)?.of_scaled(g)?;
-        for e in &mut structure.effects {
-            if let EffectBlock::RateLimit(r) = e {
-                *r = recorded.clone();
-            }
-        }
-        (gain, offset, w) = (g, o, Cow::Owned(limited));
-    }
-    let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
-    let (vs, ys): (Vec<f64>, Vec<f64>) = data
-        .steady_windows
-        .iter()
-        .filter_map(|&(a, b)| Some((mean(v.get(a..b)?), mean(y_c.get(a..b)?))))
-        .unzip();
+    let (gain, offset) = data.fit_gain_offset(&seen(sensor, &w, dt), &y_c)?;
     let knot = s.effects.iter().find_map(|e| match e {
         EffectBlock::StaticMapOrder(k) => Some(k.knot_v),
         _ => None,
     });
+    let steady = |v: &[f64]| -> (Vec<f64>, Vec<f64>) {
+        data.steady_windows
+            .iter()
+            .filter_map(|&(a, b)| Some((mean(v.get(a..b)?), mean(y_c.get(a..b)?))))
+            .unzip()
+    };
+    if let Some(limit) = rate_limit(&s.effects) {
+        // The limit is on the spool's state in units the gain and the map give (see
+        // `RateLimit::on_state`): both from the unlimited response first (a limit binds on the
+        // transients, so the settled values the map is fitted on are the same with it), then the
+        // response again with the limit in the spool. Gain and offset are not refitted after: the
+        // map's refit below takes up any affine change of `v`.
+        let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
+        let (vs, ys) = steady(&v);
+        let (map, slope_change) = fit_map_with_knot(&vs, &ys, s.map_order, knot)?;
+        let kink = knot.map(|knot_v| super::StaticMapOrder { knot_v, slope_change });
+        let state = limit.on_state(&data.output, dt, gain, offset, &map, kink.as_ref());
+        w = Cow::Owned(limited_response(s, data, state)?);
+    }
+    let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
+    let (vs, ys) = steady(&v);
+    let mut structure = s.clone();
     let (map, slope_change) = fit_map_with_knot(&vs, &ys, s.map_order, knot)?;
     for e in &mut structure.effects {
         if let EffectBlock::StaticMapOrder(k) = e {
@@ -339,6 +347,17 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
         effects: structure.effects.clone(),
     };
     Some(Assembled { model, structure, residual, cost })
+}
+
+/// The unit-gain response of `s` with its spool's state limited by `limit` (see
+/// [`linear_parts`], whose first pass has no limit).
+fn limited_response(s: &Structure, data: &FitData, limit: super::rate_limit::StateLimit) -> Option<Vec<f64>> {
+    let dt = data.dt_secs;
+    let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
+    let (u, _) = input_stage(&s.effects, &data.run).ok()?;
+    let split = AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?;
+    let block = LinearBlock { tf: unit, offset: 0.0 };
+    linear_stage(&s.effects, &block, Some(&split), &u, Some(limit), dt).ok()
 }
 
 impl FitData {

@@ -69,7 +69,7 @@ pub use fit::{
 };
 pub use id::EffectId;
 pub use model::ExtendedModel;
-pub use rate_limit::RateLimit;
+pub use rate_limit::{RateLimit, limits_own_rate};
 pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
 pub use static_map_order::StaticMapOrder;

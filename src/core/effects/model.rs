@@ -2,11 +2,12 @@
 use num_complex::Complex64;
 
 use super::ambient_correction::Conditions;
+use super::rate_limit::StateLimit;
 use super::scheduled_time_constant::{ScheduledTimeConstant, Section};
 use super::spool::SplitShape;
 use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, RateLimit,
-    SensorDynamics, TransportDelay,
+    SensorDynamics, StaticMapOrder, TransportDelay,
 };
 use crate::core::identification::initial_state::{InitialState, fit_free_response};
 use crate::core::identification::pipeline::GrayBoxModel;
@@ -147,17 +148,41 @@ impl ExtendedModel {
         } else {
             None
         };
-        let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, run.dt_secs)?;
-        let v = match rate_limit(&self.effects) {
-            Some(limit) => limit.apply(&v, run.dt_secs),
-            None => v,
-        };
+        let limit = self.state_limit(run.dt_secs)?;
+        let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, limit, run.dt_secs)?;
         let y = output_stage(&self.effects, &self.wiener.map, &v, conditions.as_ref(), run.dt_secs);
         Ok((v, y))
     }
 }
 
 impl ExtendedModel {
+    /// The model's rate limit as its spool section applies it, with samples of `dt_secs`.
+    fn state_limit(&self, dt_secs: f64) -> Result<Option<StateLimit>, EffectError> {
+        let Some(limit) = rate_limit(&self.effects) else { return Ok(None) };
+        let linear = &self.wiener.linear;
+        let gain = linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
+        Ok(Some(limit.on_state(&self.output, dt_secs, gain, linear.offset, &self.wiener.map, self.kink())))
+    }
+
+    /// The static map's kink, when the model has one.
+    fn kink(&self) -> Option<&StaticMapOrder> {
+        self.effects.iter().find_map(|e| match e {
+            EffectBlock::StaticMapOrder(k) => Some(k),
+            _ => None,
+        })
+    }
+
+    /// What the rate limit of a model of this output limits, over a simulation's `v`: the output's
+    /// static map (with its kink) for the shaft speed, `v` itself otherwise (see
+    /// [`super::rate_limit::limits_own_rate`]).
+    pub(super) fn rate_limited_quantity(&self, v: &[f64]) -> Vec<f64> {
+        if !super::rate_limit::limits_own_rate(&self.output) {
+            return v.to_vec();
+        }
+        let kink = self.kink();
+        v.iter().map(|x| self.wiener.map.eval(*x) + kink.map_or(0.0, |k| k.eval(*x))).collect()
+    }
+
     /// The input offset a [`CalibrationDrift`](super::CalibrationDrift) block gives this run (from the run's own steady
     /// holds of the measured output); zero without the block, the output or a usable linear block.
     pub fn calibration_offset(&self, run: &Run, u: &[f64]) -> f64 {
@@ -202,25 +227,31 @@ pub(super) fn input_stage(
     Ok((u, conditions))
 }
 
-/// Whether the blocks act on the spool pole split off the linear block (asymmetric dynamics or a
-/// scheduled time constant).
+/// Whether the blocks act on the spool pole split off the linear block (asymmetric dynamics, a
+/// scheduled time constant, a rate limit).
 pub(super) fn needs_split(effects: &[EffectBlock]) -> bool {
-    effects
-        .iter()
-        .any(|e| matches!(e, EffectBlock::AsymmetricDynamics(_) | EffectBlock::ScheduledTimeConstant(_)))
+    effects.iter().any(|e| {
+        matches!(
+            e,
+            EffectBlock::AsymmetricDynamics(_)
+                | EffectBlock::ScheduledTimeConstant(_)
+                | EffectBlock::RateLimit(_)
+        )
+    })
 }
 
 /// `v`: the linear block (with rise/fall time constants when asymmetric, the spool time constant
-/// following the operating point when scheduled) and the soak branch. `split` must be given when
-/// [`needs_split`].
+/// following the operating point when scheduled, the spool's state rate-limited by `limit`) and the
+/// soak branch. `split` must be given when [`needs_split`].
 pub(super) fn linear_stage(
     effects: &[EffectBlock],
     linear: &LinearBlock,
     split: Option<&SplitShape>,
     u: &[f64],
+    limit: Option<StateLimit>,
     dt_secs: f64,
 ) -> Result<Vec<f64>, EffectError> {
-    let stage = StageInput { effects, linear, split, u };
+    let stage = StageInput { effects, linear, split, u, limit };
     linear_stages(&[stage], dt_secs).pop().unwrap_or_else(|| Ok(Vec::new()))
 }
 
@@ -230,6 +261,9 @@ pub(super) struct StageInput<'a> {
     pub linear: &'a LinearBlock,
     pub split: Option<&'a SplitShape>,
     pub u: &'a [f64],
+    /// The rate limit on the spool's state (the fit's first pass, which finds the gain and the map
+    /// the limit is read through, has none).
+    pub limit: Option<StateLimit>,
 }
 
 /// How one [`StageInput`] is simulated: its whole linear block, or the spool split off it (with the
@@ -242,6 +276,7 @@ enum Path<'a> {
         delayed: Vec<f64>,
         asymmetric: Option<&'a AsymmetricDynamics>,
         scheduled: Option<&'a ScheduledTimeConstant>,
+        limit: Option<StateLimit>,
     },
 }
 
@@ -267,12 +302,18 @@ pub(super) fn linear_stages(stages: &[StageInput], dt_secs: f64) -> Vec<Result<V
     for path in &paths {
         match path {
             Ok(Path::Block) => responses.push(simulated.next()),
-            Ok(Path::Spool { split, delayed, asymmetric, scheduled, .. }) => {
+            Ok(Path::Spool { split, delayed, asymmetric, scheduled, limit, .. }) => {
                 let r = match split.rest {
                     Some(_) => simulated.next().unwrap_or_default(),
                     None => delayed.clone(),
                 };
-                sections.push(Section { shape: split, r, asymmetric: *asymmetric, scheduled: *scheduled });
+                sections.push(Section {
+                    shape: split,
+                    r,
+                    asymmetric: *asymmetric,
+                    scheduled: *scheduled,
+                    limit: limit.clone(),
+                });
                 responses.push(None);
             }
             Err(_) => responses.push(None),
@@ -313,21 +354,21 @@ fn path<'a>(stage: &StageInput<'a>) -> Result<Path<'a>, EffectError> {
         EffectBlock::ScheduledTimeConstant(s) => Some(s),
         _ => None,
     });
-    match stage.split.filter(|_| asymmetric.is_some() || scheduled.is_some()) {
+    match stage.split.filter(|_| asymmetric.is_some() || scheduled.is_some() || stage.limit.is_some()) {
         Some(split) => {
             let gain =
                 stage.linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
             // The split is built from the roots alone; the block's dead time delays its input.
             let delay_samples = stage.linear.tf.input_delay() as f64;
             let delayed = TransportDelay { delay_samples }.delay(stage.u);
-            Ok(Path::Spool { split, gain, delayed, asymmetric, scheduled })
+            Ok(Path::Spool { split, gain, delayed, asymmetric, scheduled, limit: stage.limit.clone() })
         }
         None => Ok(Path::Block),
     }
 }
 
-/// The rate limit among the blocks, if any. It acts on `v` in output units, so it is applied after
-/// [`linear_stage`] (which the fit also runs on the unit-gain block) once the gain is known.
+/// The rate limit among the blocks, if any. It acts on the spool's state in units that need the
+/// gain and the map (see [`RateLimit::on_state`]), so the fit finds those first without it.
 pub(super) fn rate_limit(effects: &[EffectBlock]) -> Option<&RateLimit> {
     effects.iter().find_map(|e| match e {
         EffectBlock::RateLimit(r) => Some(r),

@@ -1,5 +1,6 @@
 //! `scheduled_time_constant`: the spool's time constant follows the operating point it is heading for.
 use super::Evidence;
+use super::rate_limit::StateLimit;
 use super::spool::{self, SplitShape};
 use super::stats::ResidualTrace;
 use super::stats::mean;
@@ -85,9 +86,15 @@ fn respond(
     asymmetric: Option<&AsymmetricDynamics>,
     scheduled: Option<&ScheduledTimeConstant>,
 ) -> Vec<f64> {
-    respond_each(vec![Section { shape, r: spool::rest_response(shape, u), asymmetric, scheduled }])
-        .pop()
-        .unwrap_or_default()
+    respond_each(vec![Section {
+        shape,
+        r: spool::rest_response(shape, u),
+        asymmetric,
+        scheduled,
+        limit: None,
+    }])
+    .pop()
+    .unwrap_or_default()
 }
 
 /// One spool for [`respond_each`]: the split, the section's input `r` (the rest's response,
@@ -97,15 +104,16 @@ pub(super) struct Section<'a> {
     pub r: Vec<f64>,
     pub asymmetric: Option<&'a AsymmetricDynamics>,
     pub scheduled: Option<&'a ScheduledTimeConstant>,
+    pub limit: Option<StateLimit>,
 }
 
 /// [`respond`] for several spools at once, stepped side by side ([`spool::respond_each`]).
 pub(super) fn respond_each(sections: Vec<Section>) -> Vec<Vec<f64>> {
     let spools = sections
         .into_iter()
-        .map(|Section { shape, r, asymmetric, scheduled }| {
+        .map(|Section { shape, r, asymmetric, scheduled, limit }| {
             let decel = asymmetric.map_or(1.0, |a| a.decel_factor);
-            spool::Spool::new(shape, r, decel, move |x, r| scheduled.map_or(1.0, |s| s.factor(x, r)))
+            spool::Spool::new(shape, r, decel, move |x, r| scheduled.map_or(1.0, |s| s.factor(x, r)), limit)
         })
         .collect();
     spool::respond_each(spools)
@@ -185,18 +193,21 @@ mod tests {
                 r: spool::rest_response(&pair_split, &u),
                 asymmetric: Some(&asym),
                 scheduled: Some(&sched),
+                limit: None,
             },
             Section {
                 shape: &real_split,
                 r: spool::rest_response(&real_split, short),
                 asymmetric: Some(&asym),
                 scheduled: None,
+                limit: None,
             },
             Section {
                 shape: &real_split,
                 r: spool::rest_response(&real_split, &u),
                 asymmetric: None,
                 scheduled: Some(&sched),
+                limit: None,
             },
         ]);
         assert_eq!(together.len(), 3);

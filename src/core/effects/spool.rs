@@ -1,8 +1,9 @@
 //! The spool split off a linear block (its slowest real pole, or pair, and the unit-gain rest) and
 //! the block's response with the spool's time constant scaled sample by sample: what
-//! `asymmetric_dynamics` and `scheduled_time_constant` both act on.
+//! `asymmetric_dynamics`, `scheduled_time_constant` and `rate_limit` act on.
 use num_complex::Complex64;
 
+use super::rate_limit::StateLimit;
 use super::{EffectError, EffectId};
 use crate::core::identification::wiener::unit_gain_tf;
 use crate::core::numerics::tf::DiscreteTf;
@@ -83,7 +84,9 @@ pub(super) fn respond(
     decel: f64,
     schedule: impl Fn(f64, f64) -> f64,
 ) -> Vec<f64> {
-    respond_each(vec![Spool::new(shape, rest_response(shape, u), decel, schedule)]).pop().unwrap_or_default()
+    respond_each(vec![Spool::new(shape, rest_response(shape, u), decel, schedule, None)])
+        .pop()
+        .unwrap_or_default()
 }
 
 /// What drives the spool section: the unit-gain rest's response to `u`, or `u` itself.
@@ -103,6 +106,8 @@ pub(super) struct Spool<S> {
     pair: bool,
     decel: f64,
     schedule: S,
+    /// The rate limit on the section's output, when the model has one.
+    limit: Option<StateLimit>,
     /// The section's output now and one sample ago; its input one and two samples ago.
     x: f64,
     x_old: f64,
@@ -111,8 +116,15 @@ pub(super) struct Spool<S> {
 }
 
 impl<S: Fn(f64, f64) -> f64> Spool<S> {
-    /// The section of `shape` driven by `r`, from the steady state of `r[0]`.
-    pub(super) fn new(shape: &SplitShape, r: Vec<f64>, decel: f64, schedule: S) -> Self {
+    /// The section of `shape` driven by `r`, from the steady state of `r[0]`, its output's changes
+    /// clamped by `limit`.
+    pub(super) fn new(
+        shape: &SplitShape,
+        r: Vec<f64>,
+        decel: f64,
+        schedule: S,
+        limit: Option<StateLimit>,
+    ) -> Self {
         let ln_root = Complex64::new(shape.spool.norm().max(f64::MIN_POSITIVE).ln(), shape.spool.arg());
         let start = r.first().copied().unwrap_or(0.0);
         Self {
@@ -121,6 +133,7 @@ impl<S: Fn(f64, f64) -> f64> Spool<S> {
             pair: shape.is_pair(),
             decel,
             schedule,
+            limit,
             x: start,
             x_old: start,
             prev: start,
@@ -146,6 +159,10 @@ impl<S: Fn(f64, f64) -> f64> Spool<S> {
             // one's cosine of zero, sine of zero and their products are skipped, the same number).
             let root = (self.ln_root.re / factor).exp();
             root * x + (1.0 - root) * prev
+        };
+        let next = match &self.limit {
+            Some(limit) => limit.clamp(x, next),
+            None => next,
         };
         (self.x_old, self.x) = (x, next);
         (self.prev_old, self.prev) = (prev, rk);

@@ -241,7 +241,7 @@ function v = linear_stage(o, u, dt)
 if isempty(o.split)
     v = filter_from_steady(o.tf, u);
 else
-    v = o.split.gain * spool(o.split, delay(u, o.split.dead_time, 0));
+    v = o.split.gain * spool(o.split, delay(u, o.split.dead_time, 0), o, dt);
 end
 if ~isempty(o.soak)
     a = exp(-dt / max(o.soak(2), realmin));
@@ -252,20 +252,12 @@ if ~isempty(o.soak)
     end
 end
 v = v + o.offset;
-if ~isempty(o.rate_limit)
-    up = o.rate_limit(1) * dt;
-    down = o.rate_limit(2) * dt;
-    held = v(1);
-    for k = 1:numel(v)
-        held = held + min(max(v(k) - held, -down), up);
-        v(k) = held;
-    end
-end
 end
 
-function out = spool(sp, u)
+function out = spool(sp, u, o, dt)
 % The spool root's time constant scaled by the operating point it is heading for (schedule) and
-% while falling (decel); the rest of the block ahead of it.
+% while falling (decel), its state's changes limited by the rate limit; the rest of the block
+% ahead of it.
 if isempty(sp.rest), r = u; else, r = filter_from_steady(sp.rest, u); end
 x = r(1); x_old = x; prev = x; prev_old = x;
 out = zeros(1, numel(r));
@@ -287,10 +279,34 @@ for k = 1:numel(r)
     else
         nxt = re * x + (1 - re) * prev;
     end
+    if ~isempty(o.rate_limit)
+        nxt = limit_state(o, sp, x, nxt, dt);
+    end
     x_old = x; x = nxt;
     prev_old = prev; prev = r(k);
     out(k) = x;
 end
+end
+
+function nxt = limit_state(o, sp, x, nxt, dt)
+% rate_limit.rs StateLimit::clamp: the state's change limited in the limited quantity's units (the
+% output's, through the map's slope, or v's).
+up = o.rate_limit(1) * dt;
+down = o.rate_limit(2) * dt;
+v = sp.gain * x + o.offset;
+if o.rate_limit(3)
+    rate = sp.gain * static_map_slope(o, v);
+else
+    rate = sp.gain;
+end
+if ~isfinite(rate) || abs(rate) <= realmin
+    return;
+end
+if rate < 0
+    t = up; up = down; down = t;
+end
+r = abs(rate);
+nxt = x + min(max(nxt - x, -down / r), up / r);
 end
 
 function y = static_map(o, v)

@@ -70,8 +70,9 @@ pub(super) fn map_blocks(o: &OutputPlan) -> [Block; 2] {
     ]
 }
 
-/// The blocks acting on `v` after the linear block (soak, then rate limit), which every rendering
-/// lists after it.
+/// The blocks acting on `v` (the soak after the linear block, the rate limit on the split block's
+/// spool state with whether it reads the limit through the map's slope), which every rendering lists
+/// after the linear block.
 pub(super) fn v_blocks(o: &OutputPlan) -> [Block; 2] {
     [
         Block {
@@ -80,10 +81,13 @@ pub(super) fn v_blocks(o: &OutputPlan) -> [Block; 2] {
         },
         Block {
             key: "rate_limit",
-            fields: o
-                .rate_limit
-                .as_ref()
-                .map(|r| vec![("rise_per_s", num(r.rise_per_s)), ("fall_per_s", num(r.fall_per_s))]),
+            fields: o.rate_limit.as_ref().map(|r| {
+                vec![
+                    ("rise_per_s", num(r.rise_per_s)),
+                    ("fall_per_s", num(r.fall_per_s)),
+                    ("limit_through_map", u8::from(o.rate_limit_through_map).to_string()),
+                ]
+            }),
         },
     ]
 }

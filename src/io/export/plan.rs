@@ -134,8 +134,12 @@ pub struct OutputPlan {
     pub input_steps: Vec<InputStep>,
     pub linear: Linear,
     pub soak: Option<ThermalSoak>,
-    /// The slew-rate limit on `v` (output units per second), after the soak.
+    /// The rate limit on the spool's state, inside the split block (see [`RateLimit`]); always
+    /// with a split.
     pub rate_limit: Option<RateLimit>,
+    /// Whether the rate limit is on the output's own rate, read through the static map's slope
+    /// (the shaft speed), or on `v`'s (see `core::effects::limits_own_rate`).
+    pub rate_limit_through_map: bool,
     pub output_steps: Vec<OutputStep>,
     /// The effects' linear dynamics every local model shares (dead time, soak, sensor; unit steady
     /// gain), as `core::control::effect_dynamics` builds them.
@@ -362,6 +366,7 @@ fn direct_plan(out: &OutputModel, model: &ExtendedModel) -> OutputPlan {
         linear: Linear::Direct(Filter::of(tf)),
         soak: None,
         rate_limit: None,
+        rate_limit_through_map: crate::core::effects::limits_own_rate(&out.name),
         output_steps: Vec::new(),
         effect_dynamics: {
             let (num_zinv, den_zinv) = crate::core::control::effect_dynamics(model);
@@ -372,16 +377,19 @@ fn direct_plan(out: &OutputModel, model: &ExtendedModel) -> OutputPlan {
     }
 }
 
-/// What asymmetric and scheduled dynamics ask of the linear block, which either splits.
+/// What asymmetric and scheduled dynamics and a rate limit ask of the linear block, which each
+/// splits.
 #[derive(Default)]
 struct SplitEffects {
     decel: Option<f64>,
     schedule: Option<ScheduledTimeConstant>,
+    /// A rate limit acts on the spool's state.
+    limited: bool,
 }
 
 impl SplitEffects {
     fn needed(&self) -> bool {
-        self.decel.is_some() || self.schedule.is_some()
+        self.decel.is_some() || self.schedule.is_some() || self.limited
     }
 }
 
@@ -397,7 +405,10 @@ fn add_effect(plan: &mut OutputPlan, split: &mut SplitEffects, effect: &EffectBl
                 .push(InputStep::Delay(Delay { whole: whole as usize, frac: d.delay_samples - whole }));
         }
         EffectBlock::ThermalSoak(s) => plan.soak = Some(s.clone()),
-        EffectBlock::RateLimit(r) => plan.rate_limit = Some(r.clone()),
+        EffectBlock::RateLimit(r) => {
+            plan.rate_limit = Some(r.clone());
+            split.limited = true;
+        }
         EffectBlock::AmbientCorrection(AmbientCorrection { output_theta_exp, output_delta_exp }) => {
             plan.input_steps.push(InputStep::AmbientInput);
             plan.output_steps.push(OutputStep::AmbientOutput {

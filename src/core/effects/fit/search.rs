@@ -68,8 +68,9 @@ fn lift_unreached_limits(best: Assembled, data: &FitData) -> Result<ExtendedMode
     let Some(EffectBlock::RateLimit(limit)) = best.model.effect(EffectId::RateLimit).cloned() else {
         return Ok(best.model);
     };
-    let (v_free, _) = best.model.without_effect(EffectId::RateLimit)?.simulate_with_v(&data.run)?;
-    let lifted = limit.lifted_where_unreached(&v_free, data.dt_secs);
+    let free = best.model.without_effect(EffectId::RateLimit)?;
+    let (v_free, _) = free.simulate_with_v(&data.run)?;
+    let lifted = limit.lifted_where_unreached(&free.rate_limited_quantity(&v_free), data.dt_secs);
     if lifted == limit {
         return Ok(best.model);
     }
@@ -155,7 +156,7 @@ fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Optio
     match id {
         EffectId::RateLimit => {
             let (v, _) = current.simulate_with_v(&data.run).ok()?;
-            RateLimit::neutral(&v, data.dt_secs).map(EffectBlock::RateLimit)
+            RateLimit::neutral(&current.rate_limited_quantity(&v), data.dt_secs).map(EffectBlock::RateLimit)
         }
         EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.0, tau_s: 20.0 })),
         EffectId::AsymmetricDynamics => {
@@ -221,7 +222,18 @@ fn starting_points(
         }
         EffectId::RateLimit => {
             let (v, _) = current.simulate_with_v(&data.run)?;
-            RateLimit::guesses(&v, data.dt_secs).into_iter().map(EffectBlock::RateLimit).collect()
+            let limited = current.rate_limited_quantity(&v);
+            let mut guesses = RateLimit::guesses(&limited, data.dt_secs);
+            if super::super::rate_limit::limits_own_rate(&data.output) {
+                let fitted: Vec<f64> = data
+                    .y
+                    .iter()
+                    .enumerate()
+                    .map(|(k, y)| if data.is_fitted(k) { *y } else { f64::NAN })
+                    .collect();
+                guesses.extend(RateLimit::measured_guess(&fitted, data.dt_secs));
+            }
+            guesses.into_iter().map(EffectBlock::RateLimit).collect()
         }
         EffectId::StaticMapOrder => {
             let (v, _) = current.simulate_with_v(&data.run)?;

@@ -56,6 +56,7 @@ typedef struct {
     double soak_gain, soak_tau_s;
     int has_rate_limit;
     double rise_per_s, fall_per_s;
+    int limit_through_map;
     int n_output_steps;
     jetid_output_step output_steps[2];
 } jetid_params;
@@ -85,7 +86,6 @@ typedef struct {
     jetid_delay_state dead;
     double x, x_old, prev, prev_old; /* the spool: output now and before, its input before */
     double soak_a, soak_s;
-    double rate_v; /* the rate-limited v of the previous sample */
     jetid_sensor_state sensor[2];
 } jetid_state;
 
@@ -119,6 +119,28 @@ static double jetid_delay_step(jetid_delay_state *s, int whole, double frac, dou
     return (1.0 - frac) * s->line[whole] + frac * s->line[whole + 1];
 }
 
+static double jetid_map_slope(const jetid_params *p, double v);
+
+/* rate_limit.rs StateLimit::clamp: the spool state's change limited in the limited quantity's units
+ * (the output's, through the map's slope, or v's). */
+static double jetid_limit_state(const jetid_state *s, double x, double next)
+{
+    const jetid_params *p = s->p;
+    double up = p->rise_per_s * s->dt, down = p->fall_per_s * s->dt, v = p->gain * x + p->offset, rate, r, change;
+    rate = p->gain * (p->limit_through_map ? jetid_map_slope(p, v) : 1.0);
+    if (!isfinite(rate) || fabs(rate) <= DBL_MIN) return next;
+    if (rate < 0.0) {
+        double t = up;
+        up = down;
+        down = t;
+    }
+    r = fabs(rate);
+    change = next - x;
+    if (change > up / r) change = up / r;
+    if (change < -down / r) change = -down / r;
+    return x + change;
+}
+
 static double jetid_spool_step(jetid_state *s, double u, int first)
 {
     const jetid_params *p = s->p;
@@ -140,6 +162,7 @@ static double jetid_spool_step(jetid_state *s, double u, int first)
     } else {
         next = re * s->x + (1.0 - re) * s->prev;
     }
+    if (p->has_rate_limit) next = jetid_limit_state(s, s->x, next);
     s->x_old = s->x;
     s->x = next;
     s->prev_old = s->prev;
@@ -227,6 +250,28 @@ static double jetid_map_polynomial(const jetid_params *p, double x)
     return value + (end * slope * t + 0.5 * curvature * t * t);
 }
 
+/* static_map.rs StaticMap::slope with the kink: df/dv. */
+static double jetid_map_slope(const jetid_params *p, double v)
+{
+    double x = (v - p->v_center) / p->v_scale, dx, end, slope, curvature, t;
+    if (!p->end_trend || (x <= 1.0 && x >= -1.0)) {
+        dx = jetid_poly(p, x, 1);
+    } else {
+        end = x > 0.0 ? 1.0 : -1.0;
+        slope = jetid_poly(p, end, 1);
+        curvature = jetid_poly(p, end, 2);
+        t = end * (x - end);
+        if (end * slope * curvature < 0.0) {
+            dx = slope * exp(-t / fabs(slope / curvature));
+        } else {
+            dx = slope + end * curvature * t;
+        }
+    }
+    dx /= p->v_scale;
+    if (p->has_kink && v > p->knot_v) dx += p->slope_change;
+    return dx;
+}
+
 /* f(v): the map in x = (v - v_center)/v_scale, plus the kink of static_map_order. */
 static double jetid_static_map(const jetid_params *p, double v)
 {
@@ -278,15 +323,6 @@ static double jetid_step(jetid_state *s, double u, double temp_c, double pressur
         v = v + p->soak_gain * (s->soak_s - v);
     }
     v += p->offset;
-    if (p->has_rate_limit) {
-        double change, up = p->rise_per_s * s->dt, down = p->fall_per_s * s->dt;
-        if (first) s->rate_v = v;
-        change = v - s->rate_v;
-        if (change > up) change = up;
-        if (change < -down) change = -down;
-        s->rate_v += change;
-        v = s->rate_v;
-    }
     y = jetid_static_map(p, v);
     for (i = 0; i < p->n_output_steps; i++) {
         const jetid_output_step *st = &p->output_steps[i];

@@ -62,12 +62,27 @@ class _Spool:
     """The linear block split into its spool root and the rest: the spool's time constant scaled by
     the operating point it is heading for (schedule) and while falling (decel)."""
 
-    def __init__(self, s):
+    def __init__(self, s, output, offset, limit, dt):
         self.dead = _Delay(s["dead_time"], 0.0)
         self.rest = _Filter(s["rest"]) if s["rest"] is not None else None
         self.ln_re, self.ln_im = s["ln_root"]
         self.pair, self.gain, self.decel, self.schedule = s["pair"], s["gain"], s["decel"], s["schedule"]
+        self.output, self.offset = output, offset
+        # The rate limit on the spool's state, per sample (rate_limit.rs StateLimit).
+        self.limit = (limit[0] * dt, limit[1] * dt, limit[2] != 0) if limit is not None else None
         self.started = False
+
+    def _clamp(self, nxt):
+        """rate_limit.rs StateLimit::clamp: the state's change limited in the limited quantity's units."""
+        up, down, through = self.limit
+        v = self.gain * self.x + self.offset
+        rate = self.gain * (static_map_slope(self.output, v) if through else 1.0)
+        if not math.isfinite(rate) or abs(rate) <= _MIN_POSITIVE:
+            return nxt
+        if rate < 0.0:
+            up, down = down, up
+        r = abs(rate)
+        return self.x + min(max(nxt - self.x, -down / r), up / r)
 
     def step(self, u):
         u = self.dead.step(u)
@@ -89,6 +104,8 @@ class _Spool:
             nxt = a1 * self.x - a2 * self.x_old + (1.0 - a1 + a2) * self.prev_old
         else:
             nxt = root_re * self.x + (1.0 - root_re) * self.prev
+        if self.limit is not None:
+            nxt = self._clamp(nxt)
         self.x_old, self.x = self.x, nxt
         self.prev_old, self.prev = self.prev, r
         return self.gain * self.x
@@ -106,20 +123,6 @@ class _Soak:
             self.s = v
         self.s = self.a * self.s + (1.0 - self.a) * v
         return v + self.gain * (self.s - v)
-
-
-class _RateLimit:
-    """Slew-rate limit on v: it rises by at most rise*dt and falls by at most fall*dt a sample."""
-
-    def __init__(self, rise_per_s, fall_per_s, dt):
-        self.up, self.down = rise_per_s * dt, fall_per_s * dt
-        self.v = None
-
-    def step(self, v):
-        if self.v is None:
-            self.v = v
-        self.v += min(max(v - self.v, -self.down), self.up)
-        return self.v
 
 
 class _Sensor:
@@ -243,10 +246,11 @@ class Model:
         p = OUTPUTS[output]
         self.output, self.p, self.offset = output, p, calibration_offset
         self.input_steps = [_Delay(s[1], s[2]) if s[0] == "delay" else None for s in p["input_steps"]]
-        self.linear = _Spool(p["split"]) if p["split"] is not None else _Filter(p["tf"])
+        if p["split"] is not None:
+            self.linear = _Spool(p["split"], output, p["offset"], p.get("rate_limit"), dt)
+        else:
+            self.linear = _Filter(p["tf"])
         self.soak = _Soak(p["soak"][0], p["soak"][1], dt) if p["soak"] is not None else None
-        limit = p.get("rate_limit")
-        self.rate_limit = _RateLimit(limit[0], limit[1], dt) if limit is not None else None
         self.output_steps = [_Sensor(s[1], s[2], s[3], dt) if s[0] == "sensor" else None for s in p["output_steps"]]
 
     def input_stage(self, u, temp_c=None, pressure_kpa=None):
@@ -266,8 +270,6 @@ class Model:
         if self.soak is not None:
             v = self.soak.step(v)
         v += self.p["offset"]
-        if self.rate_limit is not None:
-            v = self.rate_limit.step(v)
         y = static_map(self.output, v)
         for spec, sensor in zip(self.p["output_steps"], self.output_steps):
             if sensor is not None:

@@ -281,19 +281,26 @@ fn the_jetcat_project_with_its_loop_gives_the_same_model_in_the_batch_and_the_ap
     assert_close(&batch, &app, 1e-9, "model.json");
 }
 
-/// The JetCat project's text without its `steps_from` line, its run paths made absolute, written to
-/// `dir`: a closed-loop log whose set-point the user has not named.
+/// The JetCat project's text (which names no `steps_from`) with its run paths made absolute,
+/// written to `dir`: a closed-loop log whose set-point the user has not named.
 fn jetcat_without_steps_from(dir: &Path) -> PathBuf {
+    jetcat_with_steps_from(dir, None)
+}
+
+/// [`jetcat_without_steps_from`], with `steps_from = CHANNEL` when given.
+fn jetcat_with_steps_from(dir: &Path, channel: Option<&str>) -> PathBuf {
     let project = sample("jetcat_p300/project.toml");
     let folder = project.parent().unwrap().to_str().unwrap().to_owned();
     let text = std::fs::read_to_string(&project).unwrap();
-    let text: String = text
+    assert!(!text.contains("steps_from ="), "the bundled project names no set-point");
+    let mut text: String = text
         .lines()
-        .filter(|line| !line.starts_with("steps_from"))
         .map(|line| format!("{}\n", line.replace("path = \"../", &format!("path = \"{folder}/../"))))
         .collect();
-    assert!(!text.contains("steps_from ="), "the line is gone");
-    let path = dir.join("jetcat_unnamed.toml");
+    if let Some(channel) = channel {
+        text = text.replacen("[load]", &format!("steps_from = \"{channel}\"\n\n[load]"), 1);
+    }
+    let path = dir.join(format!("jetcat_{}.toml", channel.unwrap_or("unnamed")));
     std::fs::write(&path, text).unwrap();
     path
 }
@@ -306,7 +313,8 @@ fn a_set_point_in_a_closed_loop_log_is_found_and_split_on() {
     use jetid::io::project::load_project;
     use jetid::workflow::runs::{StepsFrom, load_runs, segments};
     let dir = tempfile::tempdir().unwrap();
-    let named = load_project(&sample("jetcat_p300/project.toml")).unwrap();
+    let named = load_project(&jetcat_with_steps_from(dir.path(), Some("rpm_setpoint"))).unwrap();
+    assert_eq!(named.steps_from.as_deref(), Some("rpm_setpoint"));
     let unnamed = load_project(&jetcat_without_steps_from(dir.path())).unwrap();
     assert_eq!(unnamed.steps_from, None);
     let (named_runs, runs) = (load_runs(&named).unwrap(), load_runs(&unnamed).unwrap());

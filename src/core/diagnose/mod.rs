@@ -30,6 +30,15 @@
 //! against the small gains any extra parameter buys on an engine that is not exactly a Wiener
 //! system.
 //!
+//! **The validation runs read two ways.** On a test design whose steps repeat, the loss
+//! differences correlate with themselves a period later, the bandwidth reaches its cap, and a
+//! change concentrated in transients (a rate limit) reads weak however consistently it helps. The
+//! validation runs are therefore also cut into their step responses (`witness::ValidationResponses`)
+//! and read as the held-out responses are, by a signed-rank test over the responses the trial
+//! changes by more than the noise; where at least [`MIN_VALIDATION_RESPONSES`] are changed, the
+//! validation runs' p-value is the smaller of the two, doubled (Bonferroni: valid however the two
+//! readings of the same runs depend on each other).
+//!
 //! **Two witnesses.** A validation run can be short (a minute, a handful of steps) while the
 //! identification data hold many more. Where they have at least six segments, a three-fold
 //! cross-validation over them (see `held_out` and [`FitData::folds`]) refits the current model and
@@ -84,7 +93,7 @@ pub use history::{
     AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects, diagnose_admissible,
 };
 pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, TrialId};
-pub use witness::{Comparison, HeldOutWitness, MIN_WITNESS_RESPONSES, p_text};
+pub use witness::{Comparison, HeldOutWitness, MIN_VALIDATION_RESPONSES, MIN_WITNESS_RESPONSES, p_text};
 use witness::{Judge, Scores, ValidationResponses, Verdict};
 
 /// Largest one-sided p-value of a significant effect: with a dozen trials per diagnosis, the chance

@@ -304,13 +304,16 @@ fn method_hint(ui: &mut egui::Ui) {
             "Each effect and structural refinement (one more pole, pole pair or zero, the map's \
              order, a scheduled time constant) is added to the current model, refitted on the \
              identification run and scored on the validation runs by its error beyond the \
-             measurement noise (in units of σ; the ranking follows it). Significant: a one-sided \
-             Diebold–Mariano test on |error|/σ against the refitted current model, combined \
-             (Stouffer) with a signed-rank test over the identification steps a cross-validation \
-             held out when at least {} of them are changed, gives p < {} and at least {:.0} % of \
-             the error beyond the noise is removed. A physical effect counts only when its own \
+             measurement noise (in units of σ; the ranking follows it). Significant: the validation \
+             runs against the refitted current model (a one-sided Diebold–Mariano test on \
+             |error|/σ, or where at least {} of their steps' responses are changed, the better of it \
+             and a signed-rank test over those responses, doubled), combined (Stouffer) with a \
+             signed-rank test over the identification steps a cross-validation held out when at \
+             least {} of them are changed, give p < {} and at least {:.0} % of the error beyond the \
+             noise is removed. A physical effect counts only when its own \
              evidence shows its signature and the data prefer it to the best refinement; effects \
              before the spool are read on the shaft speed when this output is another.",
+            diagnose::MIN_VALIDATION_RESPONSES,
             diagnose::MIN_WITNESS_RESPONSES,
             diagnose::SIGNIFICANCE_LEVEL,
             100.0 * diagnose::MIN_RELATIVE_REDUCTION

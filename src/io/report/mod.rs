@@ -33,8 +33,10 @@ pub struct DiagnosisEntry {
     #[serde(default)]
     pub beyond_noise_after: Option<f64>,
     pub evidence: String,
-    /// One-sided p-value of "the effect does not reduce the error": the Diebold–Mariano test on the
-    /// validation runs, combined with the held-out identification responses when they witness.
+    /// One-sided p-value of "the effect does not reduce the error": the validation runs' (the
+    /// Diebold–Mariano test, or where enough of their step responses are changed the better of it
+    /// and the responses' signed-rank test, doubled), combined with the held-out identification
+    /// responses when they witness.
     #[serde(default)]
     pub p_value: Option<f64>,
     /// Error of the extension on the identification responses held out by the cross-validation, %.

@@ -432,6 +432,46 @@ mod tests {
         assert!(r.with_free_params(&[f64::NAN, 0.0]).is_none());
     }
 
+    /// A large step through a model of the shaft speed whose spool (pole 0.9) follows a fuel pole
+    /// (0.3): the speed ramps at the limit until the spool's own free change falls below it, where
+    /// the gap to the final value is about `rise·dt / (1 − 0.9)`, and from there closes by the spool's
+    /// pole each sample, as an engine's speed does once the schedule lets go. A slew limiter on the
+    /// whole block's output would ramp on until it met the unlimited response, nearly at the end.
+    #[test]
+    fn a_limited_spool_ramps_then_settles_at_its_own_time_constant() {
+        use crate::core::effects::{EffectBlock, ExtendedModel};
+        use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
+        use crate::core::run::{Channel, Run};
+        use num_complex::Complex64;
+        let dt = 0.1;
+        let poles = [Complex64::new(0.9, 0.0), Complex64::new(0.3, 0.0)];
+        let tf = unit_gain_tf(&poles, &[], dt).unwrap();
+        let wiener = WienerModel { linear: LinearBlock { tf, offset: 0.0 }, map: StaticMap::identity() };
+        let limit = RateLimit { rise_per_s: 2.0, fall_per_s: 2.0 };
+        let model =
+            ExtendedModel::new("shaft_speed_rpm", wiener).with_effect(EffectBlock::RateLimit(limit)).unwrap();
+        let n = 400;
+        let run = Run {
+            name: "step".into(),
+            dt_secs: dt,
+            t_secs: (0..n).map(|k| k as f64 * dt).collect(),
+            input: Channel::new("fuel_flow_gph", (0..n).map(|k| if k < 5 { 0.0 } else { 10.0 }).collect()),
+            outputs: vec![],
+            aux: vec![],
+        };
+        let y = model.simulate(&run).unwrap();
+        let rates: Vec<f64> = y.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+        assert!(rates.iter().all(|r| *r <= 2.0 + 1e-9), "never faster than the limit");
+        let ramp_end = rates.iter().rposition(|r| (r - 2.0).abs() < 1e-9).unwrap();
+        // The last limited step starts at a gap of at least rise·dt/(1 − 0.9) = 2 and takes 0.2 off.
+        let gap = 10.0 - y[ramp_end + 1];
+        assert!((1.8 - 1e-9..2.0).contains(&gap), "the ramp ends 1.8 to 2 short of the end: {gap}");
+        for k in ramp_end + 5..ramp_end + 40 {
+            let ratio = (10.0 - y[k + 1]) / (10.0 - y[k]);
+            assert!((ratio - 0.9).abs() < 1e-3, "sample {k}: the gap closes by {ratio}");
+        }
+    }
+
     fn trace(y: Vec<f64>, y_hat: Vec<f64>) -> ResidualTrace {
         ResidualTrace { run: "r".into(), dt_secs: 0.1, u: vec![0.0; y.len()], y, y_hat, aux: vec![] }
     }

@@ -228,24 +228,8 @@ pub(super) fn linear_part(s: &Structure, data: &FitData) -> Option<LinearPart> {
 /// [`linear_part`] of several structures, their simulations stepped side by side
 /// ([`linear_stages`]); each the one [`linear_part`] gives alone, bit for bit.
 pub(super) fn linear_parts(structures: &[&Structure], data: &FitData) -> Vec<Option<LinearPart>> {
-    /// A structure's unit-gain block, its input after the input stage, and its spool split.
-    struct Prepared {
-        block: LinearBlock,
-        u: Vec<f64>,
-        conditions: Option<super::ambient_correction::Conditions>,
-        split: Option<super::spool::SplitShape>,
-    }
     let dt = data.dt_secs;
-    let prepare = |s: &Structure| -> Option<Prepared> {
-        let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
-        let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
-        let split = match needs_split(&s.effects) {
-            true => Some(AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?),
-            false => None,
-        };
-        Some(Prepared { block: LinearBlock { tf: unit, offset: 0.0 }, u, conditions, split })
-    };
-    let prepared: Vec<Option<Prepared>> = structures.iter().map(|s| prepare(s)).collect();
+    let prepared: Vec<Option<Prepared>> = structures.iter().map(|s| Prepared::of(s, data)).collect();
     let stages: Vec<StageInput> = structures
         .iter()
         .zip(&prepared)
@@ -269,6 +253,27 @@ pub(super) fn linear_parts(structures: &[&Structure], data: &FitData) -> Vec<Opt
             Some(LinearPart { unit: p.block.tf, conditions: p.conditions, w })
         })
         .collect()
+}
+
+/// A structure's unit-gain block, its input after the input stage, and its spool split.
+struct Prepared {
+    block: LinearBlock,
+    u: Vec<f64>,
+    conditions: Option<super::ambient_correction::Conditions>,
+    split: Option<super::spool::SplitShape>,
+}
+
+impl Prepared {
+    fn of(s: &Structure, data: &FitData) -> Option<Self> {
+        let dt = data.dt_secs;
+        let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
+        let (u, conditions) = input_stage(&s.effects, &data.run).ok()?;
+        let split = match needs_split(&s.effects) {
+            true => Some(AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?),
+            false => None,
+        };
+        Some(Self { block: LinearBlock { tf: unit, offset: 0.0 }, u, conditions, split })
+    }
 }
 
 /// [`assemble`] from the structure's [`LinearPart`] (which must be `s`'s own, or that of a
@@ -297,10 +302,7 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
     }
     let mut w = Cow::Borrowed(part.w.as_slice());
     let (gain, offset) = data.fit_gain_offset(&seen(sensor, &w, dt), &y_c)?;
-    let knot = s.effects.iter().find_map(|e| match e {
-        EffectBlock::StaticMapOrder(k) => Some(k.knot_v),
-        _ => None,
-    });
+    let knot = super::model::kink(&s.effects).map(|k| k.knot_v);
     let steady = |v: &[f64]| -> (Vec<f64>, Vec<f64>) {
         data.steady_windows
             .iter()
@@ -352,12 +354,8 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
 /// The unit-gain response of `s` with its spool's state limited by `limit` (see
 /// [`linear_parts`], whose first pass has no limit).
 fn limited_response(s: &Structure, data: &FitData, limit: super::rate_limit::StateLimit) -> Option<Vec<f64>> {
-    let dt = data.dt_secs;
-    let unit = unit_gain_tf(&s.poles, &s.zeros, dt).ok()?.with_input_delay(s.delay);
-    let (u, _) = input_stage(&s.effects, &data.run).ok()?;
-    let split = AsymmetricDynamics::split(&s.poles, &s.zeros, dt).ok()?;
-    let block = LinearBlock { tf: unit, offset: 0.0 };
-    linear_stage(&s.effects, &block, Some(&split), &u, Some(limit), dt).ok()
+    let p = Prepared::of(s, data)?;
+    linear_stage(&s.effects, &p.block, p.split.as_ref(), &p.u, Some(limit), data.dt_secs).ok()
 }
 
 impl FitData {

@@ -166,10 +166,7 @@ impl ExtendedModel {
 
     /// The static map's kink, when the model has one.
     fn kink(&self) -> Option<&StaticMapOrder> {
-        self.effects.iter().find_map(|e| match e {
-            EffectBlock::StaticMapOrder(k) => Some(k),
-            _ => None,
-        })
+        kink(&self.effects)
     }
 
     /// What the rate limit of a model of this output limits, over a simulation's `v`: the output's
@@ -192,10 +189,7 @@ impl ExtendedModel {
         let (Some(y), Ok(dc)) = (run.output(&self.output), self.wiener.linear.tf.dc_gain()) else {
             return 0.0;
         };
-        let kink = self.effects.iter().find_map(|e| match e {
-            EffectBlock::StaticMapOrder(k) => Some(k),
-            _ => None,
-        });
+        let kink = self.kink();
         let offset = self.wiener.linear.offset;
         let steady = |x: f64| {
             let v = dc * x + offset;
@@ -376,6 +370,14 @@ pub(super) fn rate_limit(effects: &[EffectBlock]) -> Option<&RateLimit> {
     })
 }
 
+/// The static map's kink among the blocks, if any.
+pub(super) fn kink(effects: &[EffectBlock]) -> Option<&StaticMapOrder> {
+    effects.iter().find_map(|e| match e {
+        EffectBlock::StaticMapOrder(k) => Some(k),
+        _ => None,
+    })
+}
+
 /// `y`: the static map (with its kink), back to physical units, through the sensor.
 pub(super) fn output_stage(
     effects: &[EffectBlock],
@@ -384,10 +386,7 @@ pub(super) fn output_stage(
     conditions: Option<&Conditions>,
     dt_secs: f64,
 ) -> Vec<f64> {
-    let kink = effects.iter().find_map(|e| match e {
-        EffectBlock::StaticMapOrder(k) => Some(k),
-        _ => None,
-    });
+    let kink = kink(effects);
     let mut y: Vec<f64> = v.iter().map(|vk| map.eval(*vk) + kink.map_or(0.0, |k| k.eval(*vk))).collect();
     for effect in effects {
         match (effect, conditions) {

@@ -5,6 +5,7 @@
 
 mod common;
 
+mod after_the_loop;
 mod app;
 mod app_compare;
 mod app_control;

@@ -56,39 +56,49 @@ impl CalibrationDrift {
         merged
     }
 
-    /// The input offset that best puts `steady(u + offset)` on the measured holds of `y` (least
-    /// squares over the holds); zero without holds, or when no admissible offset is found.
-    pub fn run_offset(&self, u: &[f64], y: &[f64], dt_secs: f64, steady: impl Fn(f64) -> f64) -> f64 {
-        let holds: Vec<(f64, f64)> = self
+    /// The input offset that best puts the model's response on the measured holds of `y` (least
+    /// squares over the holds' means); zero without holds, or when no admissible offset is found.
+    /// `response(b)` is the model's output over the whole run with the offset `b` added to its input.
+    pub fn run_offset(&self, u: &[f64], y: &[f64], dt_secs: f64, response: impl Fn(f64) -> Vec<f64>) -> f64 {
+        let holds: Vec<(usize, usize, f64)> = self
             .steady_stretches(u, y, dt_secs)
             .into_iter()
-            .filter_map(|(a, b)| Some((mean(u.get(a..b)?), mean(y.get(a..b)?))))
+            .filter_map(|(a, b)| Some((a, b, mean(y.get(a..b)?))))
             .collect();
         let (lo, hi) = u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
         let span = (hi - lo).max(f64::MIN_POSITIVE);
         if holds.is_empty() || !span.is_finite() {
             return 0.0;
         }
-        let cost = |b: f64| holds.iter().map(|(u, y)| (y - steady(u + b)).powi(2)).sum::<f64>();
+        let at_holds = |b: f64| -> Vec<f64> {
+            let r = response(b);
+            holds.iter().map(|&(a, e, _)| r.get(a..e).map_or(f64::NAN, mean)).collect()
+        };
+        let cost = |m: &[f64]| holds.iter().zip(m).map(|(h, m)| (h.2 - m).powi(2)).sum::<f64>();
         let h = 1e-4 * span;
         let mut offset = 0.0;
+        let mut here = at_holds(offset);
         for _ in 0..MAX_ITERATIONS {
+            let (up, down) = (at_holds(offset + h), at_holds(offset - h));
             let (mut jtj, mut jtr) = (0.0, 0.0);
-            for (u, y) in &holds {
-                let r = y - steady(u + offset);
-                let j = (steady(u + offset + h) - steady(u + offset - h)) / (2.0 * h);
+            for (k, hold) in holds.iter().enumerate() {
+                let j = (up[k] - down[k]) / (2.0 * h);
                 jtj += j * j;
-                jtr += j * r;
+                jtr += j * (hold.2 - here[k]);
             }
-            if jtj <= f64::MIN_POSITIVE {
+            if jtj.is_nan() || jtj <= f64::MIN_POSITIVE {
                 break;
             }
             let mut step = (jtr / jtj).clamp(-0.1 * span, 0.1 * span);
+            let mut next = at_holds(offset + step);
             // Halve a step that does not lower the cost (the map may bend back at its ends).
-            while step.abs() > 1e-12 * span && cost(offset + step) > cost(offset) {
+            let worse = |next: &[f64]| cost(next).is_nan() || cost(next) > cost(&here);
+            while step.abs() > 1e-12 * span && worse(&next) {
                 step *= 0.5;
+                next = at_holds(offset + step);
             }
             offset += step;
+            here = next;
             if step.abs() <= 1e-9 * span {
                 break;
             }
@@ -196,6 +206,7 @@ block_impl!(
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+    use crate::core::effects::stats::low_pass;
 
     #[test]
     fn the_offset_puts_the_steady_states_on_the_holds() {
@@ -205,11 +216,33 @@ mod tests {
         let u: Vec<f64> = (0..600).map(|k| 1.0 + (k / 200) as f64).collect();
         let y: Vec<f64> = u.iter().map(|u| steady(u + 0.2)).collect();
         let block = CalibrationDrift { hold_s: 5.0 };
-        let offset = block.run_offset(&u, &y, 0.1, steady);
+        let response = |b: f64| u.iter().map(|u| steady(u + b)).collect::<Vec<_>>();
+        let offset = block.run_offset(&u, &y, 0.1, response);
         assert!((offset - 0.2).abs() < 1e-6, "{offset}");
         // No hold (a ramp): no calibration.
         let ramp: Vec<f64> = (0..600).map(|k| k as f64 * 0.01).collect();
         let y_ramp: Vec<f64> = ramp.iter().map(|u| steady(*u)).collect();
-        assert!(block.run_offset(&ramp, &y_ramp, 0.1, steady).abs() < 1e-12);
+        let response = |b: f64| ramp.iter().map(|u| steady(u + b)).collect::<Vec<_>>();
+        assert!(block.run_offset(&ramp, &y_ramp, 0.1, response).abs() < 1e-12);
+    }
+
+    #[test]
+    fn holds_that_have_not_settled_are_read_through_the_models_own_response() {
+        // A slow spool (τ = 3 s) held 10 s at each level: the input's holds count after 7.5 s, when
+        // the response is still e^(−7.5/3) ≈ 8 % of the step short of its steady state. More rises
+        // than falls, so the shortfalls do not cancel in the mean.
+        let (dt, tau) = (0.1, 3.0);
+        let u: Vec<f64> = [1.0, 3.0, 2.0, 2.5, 3.0].iter().flat_map(|&level| [level; 100]).collect();
+        let lag = |b: f64| low_pass(&u.iter().map(|x| x + b).collect::<Vec<_>>(), dt, tau);
+        let y = lag(0.2);
+        let block = CalibrationDrift { hold_s: 5.0 };
+        assert!(!block.steady_stretches(&u, &y, dt).is_empty(), "the run has holds");
+        let offset = block.run_offset(&u, &y, dt, lag);
+        assert!((offset - 0.2).abs() < 1e-6, "{offset}");
+        // Read against the steady state instead, the same holds give another offset: the holds
+        // really are unsettled, so the test would catch a steady-state calibration.
+        let steady = |b: f64| u.iter().map(|x| x + b).collect::<Vec<_>>();
+        let biased = block.run_offset(&u, &y, dt, steady);
+        assert!((biased - 0.2).abs() > 0.01, "{biased}");
     }
 }

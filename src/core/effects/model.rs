@@ -138,10 +138,6 @@ impl ExtendedModel {
     /// Simulate and also return the linear block's output `v` (what the static map reads).
     pub fn simulate_with_v(&self, run: &Run) -> Result<(Vec<f64>, Vec<f64>), EffectError> {
         let (mut u, conditions) = input_stage(&self.effects, run)?;
-        let offset = self.calibration_offset(run, &u);
-        if offset != 0.0 {
-            u.iter_mut().for_each(|x| *x += offset);
-        }
         let split = if needs_split(&self.effects) {
             let (poles, zeros) = self.roots()?;
             Some(AsymmetricDynamics::split(&poles, &zeros, run.dt_secs)?)
@@ -149,7 +145,15 @@ impl ExtendedModel {
             None
         };
         let limit = self.state_limit(run.dt_secs)?;
-        let v = linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), &u, limit, run.dt_secs)?;
+        let linear = |u: &[f64]| {
+            linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), u, limit.clone(), run.dt_secs)
+        };
+        let mut v = linear(&u)?;
+        let offset = self.calibration_offset(run, &u, &v, conditions.as_ref());
+        if offset != 0.0 {
+            u.iter_mut().for_each(|x| *x += offset);
+            v = linear(&u)?;
+        }
         let y = output_stage(&self.effects, &self.wiener.map, &v, conditions.as_ref(), run.dt_secs);
         Ok((v, y))
     }
@@ -182,20 +186,25 @@ impl ExtendedModel {
 
     /// The input offset a [`CalibrationDrift`](super::CalibrationDrift) block gives this run (from the run's own steady
     /// holds of the measured output); zero without the block, the output or a usable linear block.
-    pub fn calibration_offset(&self, run: &Run, u: &[f64]) -> f64 {
+    /// `u` is the input as the linear block sees it and `v` the linear block's response to it.
+    pub fn calibration_offset(
+        &self,
+        run: &Run,
+        u: &[f64],
+        v: &[f64],
+        conditions: Option<&Conditions>,
+    ) -> f64 {
         let Some(EffectBlock::CalibrationDrift(block)) = self.effect(EffectId::CalibrationDrift) else {
             return 0.0;
         };
         let (Some(y), Ok(dc)) = (run.output(&self.output), self.wiener.linear.tf.dc_gain()) else {
             return 0.0;
         };
-        let kink = self.kink();
-        let offset = self.wiener.linear.offset;
-        let steady = |x: f64| {
-            let v = dc * x + offset;
-            self.wiener.map.eval(v) + kink.map_or(0.0, |k| k.eval(v))
+        let response = |b: f64| {
+            let shifted: Vec<f64> = v.iter().map(|x| x + dc * b).collect();
+            output_stage(&self.effects, &self.wiener.map, &shifted, conditions, run.dt_secs)
         };
-        block.run_offset(u, &y.values, run.dt_secs, steady)
+        block.run_offset(u, &y.values, run.dt_secs, response)
     }
 }
 

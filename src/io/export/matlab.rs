@@ -176,11 +176,11 @@ out = struct();
 for i = 1:numel(m.outputs)
     o = m.outputs{i};
     [us, theta, delta] = input_stage(o, u, aux);
-    offset = 0;
+    v = linear_stage(o, us, dt);
     if ~isempty(o.calibration) && isstruct(measured) && isfield(measured, o.ident)
-        offset = calibration_offset(o, us, measured.(o.ident)(:)', dt);
+        offset = calibration_offset(o, us, v, theta, delta, measured.(o.ident)(:)', dt);
+        if offset ~= 0, v = linear_stage(o, us + offset, dt); end
     end
-    v = linear_stage(o, us + offset, dt);
     out.(o.ident) = output_stage(o, v, theta, delta, dt);
 end
 end
@@ -438,17 +438,17 @@ for k = 2:n + 1
 end
 end
 
-function offset = calibration_offset(o, u, y, dt)
-% calibration_drift: the input offset that puts the steady states on the run's own steady stretches:
-% the last half of every hold of the measured output longer than hold_s, and the last hold_s / 2 of
-% every hold of the input after hold_s of settling, merged where they overlap.
+function offset = calibration_offset(o, u, v, theta, delta, y, dt)
+% calibration_drift: the input offset that puts the model's response on the run's own steady
+% stretches (the last half of every hold of the measured output longer than hold_s, and the last
+% hold_s / 2 of every hold of the input after hold_s of settling, merged where they overlap), compared
+% by their means. The response to u + b is the output stage of v + G(1) b, v the linear block's
+% response to u.
 hold_s = o.calibration(1);
 dc = o.calibration(2);
-steady = @(x) static_map(o, dc * x + o.offset);
 tail_s = 0.5 * hold_s;
 found = [plateaus(y, dt, hold_s, tail_s); plateaus(u, dt, hold_s + tail_s, tail_s)];
-hu = [];
-hy = [];
+merged = zeros(0, 2);
 if ~isempty(found)
     found = sortrows(found);
     merged = found(1, :);
@@ -459,32 +459,40 @@ if ~isempty(found)
             merged(end + 1, :) = found(k, :); %#ok<AGROW>
         end
     end
-    for k = 1:size(merged, 1)
-        a = merged(k, 1);
-        b = merged(k, 2);
-        hu(end + 1) = sum(u(a + 1:b)) / (b - a); %#ok<AGROW>
-        hy(end + 1) = sum(y(a + 1:b)) / (b - a); %#ok<AGROW>
-    end
 end
+hy = hold_means(y, merged);
 span = max(max(u) - min(u), realmin);
 offset = 0;
-if isempty(hu) || ~isfinite(span), return; end
-cost = @(b) sum((hy - steady(hu + b)) .^ 2);
+if isempty(hy) || ~isfinite(span), return; end
+at_holds = @(b) hold_means(output_stage(o, v + dc * b, theta, delta, dt), merged);
 h = 1e-4 * span;
+here = at_holds(offset);
 for it = 1:30
-    r = hy - steady(hu + offset);
-    j = (steady(hu + offset + h) - steady(hu + offset - h)) / (2 * h);
+    j = (at_holds(offset + h) - at_holds(offset - h)) / (2 * h);
     jtj = sum(j .* j);
-    jtr = sum(j .* r);
-    if jtj <= realmin, break; end
+    jtr = sum(j .* (hy - here));
+    if ~(jtj > realmin), break; end
     step = min(max(jtr / jtj, -0.1 * span), 0.1 * span);
-    while abs(step) > 1e-12 * span && cost(offset + step) > cost(offset)
+    next = at_holds(offset + step);
+    while abs(step) > 1e-12 * span && ~(sum((hy - next) .^ 2) <= sum((hy - here) .^ 2))
         step = step * 0.5;
+        next = at_holds(offset + step);
     end
     offset = offset + step;
+    here = next;
     if abs(step) <= 1e-9 * span, break; end
 end
 if ~(isfinite(offset) && abs(offset) <= 0.5 * span), offset = 0; end
+end
+
+function m = hold_means(x, windows)
+% The mean of x over each window [a, b) (0-based a).
+m = zeros(1, size(windows, 1));
+for k = 1:size(windows, 1)
+    a = windows(k, 1);
+    b = windows(k, 2);
+    m(k) = sum(x(a + 1:b)) / (b - a);
+end
 end
 
 function run_csv(m, in_file, out_file, calibrate)

@@ -79,11 +79,12 @@ pub enum OutputStep {
 }
 
 /// The per-run input offset of `calibration_drift`, found from the run's own steady holds of the
-/// measured output (`CalibrationDrift::run_offset`); it needs the whole run before the first step.
+/// measured output (`CalibrationDrift::run_offset`); it needs the whole run, simulated once without
+/// the offset, before the first step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Calibration {
     pub hold_s: f64,
-    /// G(1) of the linear block: the steady state is `f(G(1)·u + offset)`.
+    /// G(1) of the linear block: an input offset b moves the linear block's response by `G(1)·b`.
     pub dc_gain: f64,
 }
 

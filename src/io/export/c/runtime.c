@@ -310,29 +310,45 @@ static double jetid_input_stage(jetid_state *s, double u, double temp_c, double 
     return u;
 }
 
-static double jetid_step(jetid_state *s, double u, double temp_c, double pressure_kpa)
+/* The static map's argument v from the next input-stage sample (calibration offset added). */
+static double jetid_linear_step(jetid_state *s, double u, int first)
 {
     const jetid_params *p = s->p;
-    int first = !s->started, i;
-    double v, y;
-    u = jetid_input_stage(s, u, temp_c, pressure_kpa) + s->calibration_offset;
+    double v;
+    u += s->calibration_offset;
     v = p->split ? jetid_spool_step(s, u, first) : jetid_filter_step(&p->tf, &s->linear, u, first);
     if (p->has_soak) {
         if (first) s->soak_s = v;
         s->soak_s = s->soak_a * s->soak_s + (1.0 - s->soak_a) * v;
         v = v + p->soak_gain * (s->soak_s - v);
     }
-    v += p->offset;
-    y = jetid_static_map(p, v);
+    return v + p->offset;
+}
+
+/* The output from v: the static map, then the sensors (their state in sensor) and the inlet
+ * conditions' factor. */
+static double jetid_output_stage(const jetid_params *p, jetid_sensor_state *sensor, double dt, double v, double temp_c,
+                                 double pressure_kpa, int first)
+{
+    int i;
+    double y = jetid_static_map(p, v);
     for (i = 0; i < p->n_output_steps; i++) {
         const jetid_output_step *st = &p->output_steps[i];
         if (st->kind == JETID_STEP_SENSOR) {
-            y = jetid_sensor_step(&s->sensor[i], st, s->dt, y, first);
+            y = jetid_sensor_step(&sensor[i], st, dt, y, first);
         } else {
             double theta = (temp_c + JETID_KELVIN_FROM_CELSIUS) / JETID_T_STD_K, delta = pressure_kpa / JETID_P_STD_KPA;
             y *= pow(theta, st->theta_exp) * pow(delta, st->delta_exp);
         }
     }
+    return y;
+}
+
+static double jetid_step(jetid_state *s, double u, double temp_c, double pressure_kpa)
+{
+    int first = !s->started;
+    double v = jetid_linear_step(s, jetid_input_stage(s, u, temp_c, pressure_kpa), first);
+    double y = jetid_output_stage(s->p, s->sensor, s->dt, v, temp_c, pressure_kpa, first);
     s->started = 1;
     return y;
 }
@@ -345,17 +361,34 @@ static double jetid_mean(const double *x, size_t n)
     return n ? s / (double)n : 0.0;
 }
 
-static double jetid_steady(const jetid_params *p, double x)
+/* The holds' means of the model's response to the input offset b: the output stage of v + G(1)·b,
+ * v the linear block's response without the offset; into out[0 .. n_holds). */
+static void jetid_response_at_holds(const jetid_params *p, const double *v, const double *temp_c,
+                                    const double *pressure_kpa, size_t n, double dt, double b, const size_t *wa,
+                                    const size_t *wb, size_t n_holds, double *out)
 {
-    return jetid_static_map(p, p->calibration_dc_gain * x + p->offset);
+    jetid_state s;
+    size_t k, h = 0;
+    double sum = 0.0;
+    jetid_init(&s, p, dt, 0.0);
+    for (k = 0; k < n && h < n_holds; k++) {
+        double y = jetid_output_stage(p, s.sensor, dt, v[k] + p->calibration_dc_gain * b, temp_c ? temp_c[k] : 0.0,
+                                     pressure_kpa ? pressure_kpa[k] : 0.0, k == 0);
+        if (k >= wa[h]) sum += y;
+        if (k + 1 == wb[h]) {
+            out[h] = sum / (double)(wb[h] - wa[h]);
+            sum = 0.0;
+            h++;
+        }
+    }
 }
 
-static double jetid_holds_cost(const jetid_params *p, const double *hu, const double *hy, size_t n, double b)
+static double jetid_holds_cost(const double *hy, const double *m, size_t n_holds)
 {
     double c = 0.0, r;
     size_t i;
-    for (i = 0; i < n; i++) {
-        r = hy[i] - jetid_steady(p, hu[i] + b);
+    for (i = 0; i < n_holds; i++) {
+        r = hy[i] - m[i];
         c += r * r;
     }
     return c;
@@ -389,7 +422,7 @@ static size_t jetid_plateaus(const double *x, size_t n, double dt, double hold_s
     return count;
 }
 
-/* calibration_drift: the input offset that puts the model's steady states on the run's own steady
+/* calibration_drift: the input offset that puts the model's response on the run's own steady
  * stretches, by Gauss-Newton on their means. A steady stretch is the last half of a hold of the
  * measured output longer than hold_s, or the last hold_s / 2 of a hold of the input after hold_s of
  * settling, merged where the two overlap. u: the raw input; it goes through the input stage first. */
@@ -397,19 +430,21 @@ static double jetid_calibration_offset(const jetid_params *p, const double *u, c
                                        const double *pressure_kpa, const double *y, size_t n, double dt)
 {
     jetid_state s;
-    double *us, *hu, *hy, lo, hi, span, h, offset = 0.0, tail_s;
+    double *us, *v, *hy, *m, lo, hi, span, h, offset = 0.0, tail_s;
     size_t k, i, n_found, n_holds = 0, *wa, *wb, ta, tb;
     int it;
     if (!p->has_calibration || n == 0) return 0.0;
     us = malloc(n * sizeof *us);
-    hu = malloc(n * sizeof *hu);
+    v = malloc(n * sizeof *v);
     hy = malloc(n * sizeof *hy);
+    m = malloc(4 * n * sizeof *m);
     wa = malloc(2 * n * sizeof *wa);
     wb = malloc(2 * n * sizeof *wb);
-    if (!us || !hu || !hy || !wa || !wb) {
+    if (!us || !v || !hy || !m || !wa || !wb) {
         free(us);
-        free(hu);
+        free(v);
         free(hy);
+        free(m);
         free(wa);
         free(wb);
         return 0.0;
@@ -417,6 +452,7 @@ static double jetid_calibration_offset(const jetid_params *p, const double *u, c
     jetid_init(&s, p, dt, 0.0);
     for (k = 0; k < n; k++) {
         us[k] = jetid_input_stage(&s, u[k], temp_c ? temp_c[k] : 0.0, pressure_kpa ? pressure_kpa[k] : 0.0);
+        v[k] = jetid_linear_step(&s, us[k], k == 0);
         s.started = 1;
     }
     tail_s = 0.5 * p->hold_s;
@@ -443,12 +479,7 @@ static double jetid_calibration_offset(const jetid_params *p, const double *u, c
             n_holds++;
         }
     }
-    for (k = 0; k < n_holds; k++) {
-        hu[k] = jetid_mean(us + wa[k], wb[k] - wa[k]);
-        hy[k] = jetid_mean(y + wa[k], wb[k] - wa[k]);
-    }
-    free(wa);
-    free(wb);
+    for (k = 0; k < n_holds; k++) hy[k] = jetid_mean(y + wa[k], wb[k] - wa[k]);
     lo = hi = us[0];
     for (k = 1; k < n; k++) {
         if (us[k] < lo) lo = us[k];
@@ -456,26 +487,40 @@ static double jetid_calibration_offset(const jetid_params *p, const double *u, c
     }
     span = hi - lo > DBL_MIN ? hi - lo : DBL_MIN;
     h = 1e-4 * span;
-    for (it = 0; n_holds > 0 && isfinite(span) && it < 30; it++) {
-        double jtj = 0.0, jtr = 0.0, step;
-        for (k = 0; k < n_holds; k++) {
-            double r = hy[k] - jetid_steady(p, hu[k] + offset);
-            double j = (jetid_steady(p, hu[k] + offset + h) - jetid_steady(p, hu[k] + offset - h)) / (2.0 * h);
-            jtj += j * j;
-            jtr += j * r;
+    {
+        /* The response's hold means: here, offset + h, offset - h, and the trial step. */
+        double *here = m, *up = m + n, *down = m + 2 * n, *next = m + 3 * n, *swap;
+        if (n_holds > 0) jetid_response_at_holds(p, v, temp_c, pressure_kpa, n, dt, offset, wa, wb, n_holds, here);
+        for (it = 0; n_holds > 0 && isfinite(span) && it < 30; it++) {
+            double jtj = 0.0, jtr = 0.0, step;
+            jetid_response_at_holds(p, v, temp_c, pressure_kpa, n, dt, offset + h, wa, wb, n_holds, up);
+            jetid_response_at_holds(p, v, temp_c, pressure_kpa, n, dt, offset - h, wa, wb, n_holds, down);
+            for (k = 0; k < n_holds; k++) {
+                double j = (up[k] - down[k]) / (2.0 * h);
+                jtj += j * j;
+                jtr += j * (hy[k] - here[k]);
+            }
+            if (!(jtj > DBL_MIN)) break;
+            step = jtr / jtj;
+            if (step < -0.1 * span) step = -0.1 * span;
+            if (step > 0.1 * span) step = 0.1 * span;
+            jetid_response_at_holds(p, v, temp_c, pressure_kpa, n, dt, offset + step, wa, wb, n_holds, next);
+            while (fabs(step) > 1e-12 * span && !(jetid_holds_cost(hy, next, n_holds) <= jetid_holds_cost(hy, here, n_holds))) {
+                step *= 0.5;
+                jetid_response_at_holds(p, v, temp_c, pressure_kpa, n, dt, offset + step, wa, wb, n_holds, next);
+            }
+            offset += step;
+            swap = here;
+            here = next;
+            next = swap;
+            if (fabs(step) <= 1e-9 * span) break;
         }
-        if (jtj <= DBL_MIN) break;
-        step = jtr / jtj;
-        if (step < -0.1 * span) step = -0.1 * span;
-        if (step > 0.1 * span) step = 0.1 * span;
-        while (fabs(step) > 1e-12 * span &&
-               jetid_holds_cost(p, hu, hy, n_holds, offset + step) > jetid_holds_cost(p, hu, hy, n_holds, offset))
-            step *= 0.5;
-        offset += step;
-        if (fabs(step) <= 1e-9 * span) break;
     }
     free(us);
-    free(hu);
+    free(v);
     free(hy);
+    free(m);
+    free(wa);
+    free(wb);
     return isfinite(offset) && fabs(offset) <= 0.5 * span ? offset : 0.0;
 }

@@ -251,7 +251,12 @@ class Model:
         else:
             self.linear = _Filter(p["tf"])
         self.soak = _Soak(p["soak"][0], p["soak"][1], dt) if p["soak"] is not None else None
-        self.output_steps = [_Sensor(s[1], s[2], s[3], dt) if s[0] == "sensor" else None for s in p["output_steps"]]
+        self.dt = dt
+        self.output_steps = self.fresh_output_steps()
+
+    def fresh_output_steps(self):
+        """The output stage's sensors, at rest until their first sample."""
+        return [_Sensor(s[1], s[2], s[3], self.dt) if s[0] == "sensor" else None for s in self.p["output_steps"]]
 
     def input_stage(self, u, temp_c=None, pressure_kpa=None):
         """The input as the linear block sees it: delayed, corrected for inlet conditions."""
@@ -265,13 +270,20 @@ class Model:
 
     def step(self, u, temp_c=None, pressure_kpa=None):
         """The next output sample from the next input sample (and inlet conditions, when corrected)."""
-        u = self.input_stage(u, temp_c, pressure_kpa) + self.offset
-        v = self.linear.step(u)
+        v = self.linear_step(self.input_stage(u, temp_c, pressure_kpa))
+        return self.output_step(v, temp_c, pressure_kpa, self.output_steps)
+
+    def linear_step(self, u_stage):
+        """The static map's argument v from the next input-stage sample (calibration offset added)."""
+        v = self.linear.step(u_stage + self.offset)
         if self.soak is not None:
             v = self.soak.step(v)
-        v += self.p["offset"]
+        return v + self.p["offset"]
+
+    def output_step(self, v, temp_c, pressure_kpa, sensors):
+        """The output from v: the static map, then the sensors and the inlet-conditions factor."""
         y = static_map(self.output, v)
-        for spec, sensor in zip(self.p["output_steps"], self.output_steps):
+        for spec, sensor in zip(self.p["output_steps"], sensors):
             if sensor is not None:
                 y = sensor.step(y)
             else:
@@ -316,45 +328,51 @@ def _mean(x):
     return s / len(x) if len(x) else 0.0
 
 
-def calibration_offset(output, u_stage, y, dt=DT):
-    """calibration_drift's input offset for one run: the offset that puts the steady states on the
-    run's own steady stretches (holds of the measured output y or of u_stage, the input after the
-    input stage)."""
+def calibration_offset(output, u, temp, pres, y, dt=DT):
+    """calibration_drift's input offset for one run: the offset that puts the model's response on the
+    run's own steady stretches (holds of the measured output y or of the input after the input stage),
+    compared by their means. The response to u + b is the static map and output stage of v + G(1)·b,
+    with v the linear block's response to u."""
     p = OUTPUTS[output]
     if p["calibration"] is None:
         return 0.0
     hold_s, dc = p["calibration"]
-
-    def steady(x):
-        return static_map(output, dc * x + p["offset"])
-
-    holds = [(_mean(u_stage[a:b]), _mean(y[a:b])) for a, b in _steady_stretches(u_stage, y, dt, hold_s)]
+    model = Model(output, dt)
+    u_stage = [model.input_stage(uk, tk, pk) for uk, tk, pk in zip(u, temp, pres)]
+    v = [model.linear_step(us) for us in u_stage]
+    holds = [(a, b, _mean(y[a:b])) for a, b in _steady_stretches(u_stage, y, dt, hold_s)]
     lo, hi = min(u_stage), max(u_stage)
     span = max(hi - lo, _MIN_POSITIVE)
     if not holds or not math.isfinite(span):
         return 0.0
 
-    def cost(b):
-        s = 0.0
-        for uh, yh in holds:
-            s += (yh - steady(uh + b)) ** 2
-        return s
+    def at_holds(b):
+        sensors = model.fresh_output_steps()
+        r = [model.output_step(vk + dc * b, tk, pk, sensors) for vk, tk, pk in zip(v, temp, pres)]
+        return [_mean(r[a:e]) for a, e, _ in holds]
+
+    def cost(m):
+        return sum((hold[2] - mk) ** 2 for hold, mk in zip(holds, m))
 
     h = 1e-4 * span
     offset = 0.0
+    here = at_holds(offset)
     for _ in range(30):
+        up, down = at_holds(offset + h), at_holds(offset - h)
         jtj = jtr = 0.0
-        for uh, yh in holds:
-            r = yh - steady(uh + offset)
-            j = (steady(uh + offset + h) - steady(uh + offset - h)) / (2.0 * h)
+        for hold, mk, uk, dk in zip(holds, here, up, down):
+            j = (uk - dk) / (2.0 * h)
             jtj += j * j
-            jtr += j * r
-        if jtj <= _MIN_POSITIVE:
+            jtr += j * (hold[2] - mk)
+        if not jtj > _MIN_POSITIVE:
             break
         step = min(max(jtr / jtj, -0.1 * span), 0.1 * span)
-        while abs(step) > 1e-12 * span and cost(offset + step) > cost(offset):
+        following = at_holds(offset + step)
+        while abs(step) > 1e-12 * span and not cost(following) <= cost(here):
             step *= 0.5
+            following = at_holds(offset + step)
         offset += step
+        here = following
         if abs(step) <= 1e-9 * span:
             break
     return offset if math.isfinite(offset) and abs(offset) <= 0.5 * span else 0.0
@@ -384,9 +402,7 @@ def simulate(u, aux=None, measured=None, dt=DT):
             temp, pres = [float(x) for x in aux[AMBIENT_CHANNELS[0]]], [float(x) for x in aux[AMBIENT_CHANNELS[1]]]
         offset = 0.0
         if OUTPUTS[name]["calibration"] is not None and name in measured:
-            stage = Model(name, dt)
-            u_stage = [stage.input_stage(uk, tk, pk) for uk, tk, pk in zip(u, temp, pres)]
-            offset = calibration_offset(name, u_stage, [float(y) for y in measured[name]], dt)
+            offset = calibration_offset(name, u, temp, pres, [float(y) for y in measured[name]], dt)
         model = Model(name, dt, offset)
         out[name] = np.array([model.step(uk, tk, pk) for uk, tk, pk in zip(u, temp, pres)])
     return out

@@ -1,12 +1,14 @@
 //! The missing-physics loop on engines of the small-turbojet family, on both outputs: for each
 //! hidden effect (and for effect-free engines), what the loop takes in `ROUNDS` rounds and the
-//! held-out error against the noiseless truth of a third run, before and after the loop, beside the
-//! same engine's error without the effect.
+//! held-out error against the noiseless truth of a third run, before and after the loop (and, on
+//! thrust, the speed model's spool blocks shared, as the batch shares them), beside the same
+//! engine's error without the effect.
 //!
 //! `cargo run --release --no-default-features --example attribution_study -- [effects|free] [ENGINES]`
-//! (`effects`: every hidden effect on engines 3, 7, 11; `free`: effect-free engines 1..=ENGINES).
+//! (`effects`: every hidden effect on engines 3, 7, 11; `free`: effect-free engines 1..=ENGINES;
+//! with `OFFERS=1` set, what each thrust model was offered of the speed's spool blocks).
 use anyhow::{Context, Result};
-use jetid::core::diagnose::{EffectSequence, apply_in_order, auto_effects};
+use jetid::core::diagnose::{EffectSequence, apply_in_order, auto_effects, share_spool_dynamics};
 use jetid::core::effects::ExtendedModel;
 use jetid::core::identification::fits::segments_for;
 use jetid::core::identification::pipeline::identify_output;
@@ -45,8 +47,14 @@ fn bench(seed: u64, first_day: &[Effect], second_day: &[Effect]) -> Result<Bench
     })
 }
 
-/// The loop on one output: what it took, and the scored run's error before and after, %.
-fn loop_on(b: &Bench, output: &str) -> Result<(Vec<String>, f64, f64)> {
+/// The loop on one output, then (for an output other than the speed) the speed model `spool`'s
+/// spool blocks shared, as the batch does: what it took, the scored run's error before and after,
+/// %, and the final model.
+fn loop_on(
+    b: &Bench,
+    output: &str,
+    spool: Option<&ExtendedModel>,
+) -> Result<(Vec<String>, f64, f64, ExtendedModel)> {
     let settings = OutputSettings::for_output(output);
     let segments = segments_for(&b.ident, None, &SegmentSettings::default())?;
     let identified = identify_output(&b.ident, output, &settings, &segments, None)?;
@@ -64,6 +72,17 @@ fn loop_on(b: &Bench, output: &str) -> Result<(Vec<String>, f64, f64)> {
     };
     let mut taken: Vec<String> =
         rounds.iter().map(|r| format!("{}({})", r.added, short(&r.significance))).collect();
+    if let Some(spool) = spool {
+        let (shared, offered) =
+            share_spool_dynamics(&sequence.model, spool, &validation, settings.initial_state)?;
+        taken.extend(offered.iter().filter(|o| o.taken).map(|o| format!("shared:{}", o.id)));
+        if std::env::var("OFFERS").is_ok() {
+            for o in &offered {
+                eprintln!("{} {}", b.ident.name, o.words());
+            }
+        }
+        sequence.model = shared;
+    }
     if let (Ok(id), Some(report)) = (std::env::var("SHOW"), &sequence.final_diagnosis) {
         for d in report.entries.iter().filter(|d| d.effect.name() == id) {
             taken.push(format!(
@@ -78,7 +97,7 @@ fn loop_on(b: &Bench, output: &str) -> Result<(Vec<String>, f64, f64)> {
             ));
         }
     }
-    Ok((taken, score(&base)?, score(&sequence.model)?))
+    Ok((taken, score(&base)?, score(&sequence.model)?, sequence.model))
 }
 
 /// The p-value the decision read: the combined one when the held-out responses witness.
@@ -113,10 +132,17 @@ fn main() -> Result<()> {
         let b = if drift { bench(seed, &[], &effect)? } else { bench(seed, &effect, &effect)? };
         let clean = bench(seed, &[], &[])?;
         let mut line = String::new();
+        let (mut spool, mut clean_spool) = (None, None);
         for output in OUTPUTS {
-            let (taken, before, after) = loop_on(&b, output)?;
-            let (_, _, clean_after) =
-                if spec.is_empty() { (vec![], 0.0, after) } else { loop_on(&clean, output)? };
+            let (taken, before, after, model) = loop_on(&b, output, spool.as_ref())?;
+            let clean_after = if spec.is_empty() {
+                after
+            } else {
+                let (_, _, clean_after, clean_model) = loop_on(&clean, output, clean_spool.as_ref())?;
+                clean_spool.get_or_insert(clean_model);
+                clean_after
+            };
+            spool.get_or_insert(model);
             line += &format!(
                 "| {} | {seed} | {output} | {} | {before:.3} | {after:.3} | {clean_after:.3} | {:.2} |\n",
                 if spec.is_empty() { "none" } else { spec.split(':').next().unwrap_or(spec) },

@@ -270,6 +270,33 @@ fn soak_with_an_effect_and_the_loop_gives_the_same_model_in_the_batch_and_the_ap
     assert_close(&batch, &app, 1e-9, "model.json");
 }
 
+/// The soak runs with both outputs and the missing-physics loop: the shaft speed's spool blocks are
+/// offered to thrust after both loops (`workflow::model::share_spool`), in the app as in the batch.
+#[cfg(feature = "gui")]
+#[test]
+fn shared_spool_blocks_give_the_same_model_in_the_batch_and_the_app() {
+    let dir = tempfile::tempdir().unwrap();
+    let project = dir.path().join("soak.toml");
+    let text = format!(
+        "ident = '{}'\nvalidate = ['{}']\noutputs = ['shaft_speed_rpm', 'thrust_n']\nauto_effects = 3\n",
+        path(&sample("soak/ident.csv")),
+        path(&sample("soak/validation.csv"))
+    );
+    std::fs::write(&project, text).unwrap();
+    let (batch, app) = both_models(&project);
+    // Whatever thrust kept of the speed's spool blocks carries the speed's parameters exactly; the
+    // test needs at least one, or it would not exercise the sharing.
+    let effects = |i: usize| batch["outputs"][i]["effects"].as_array().cloned().unwrap_or_default();
+    let shared = effects(1).into_iter().filter(|e| effects(0).contains(e)).count();
+    assert!(
+        shared > 0,
+        "thrust shares none of the speed's blocks: {:?} against {:?}",
+        effects(1),
+        effects(0)
+    );
+    assert_close(&batch, &app, 1e-9, "model.json");
+}
+
 #[cfg(feature = "gui")]
 #[test]
 #[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]

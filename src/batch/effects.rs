@@ -1,7 +1,8 @@
 //! Stage 2 of the batch: the project's effects (`add_effects`, then the `auto_effects` loop) added
-//! by the workflow, the output built from them as every project's model is
-//! ([`project_model::with_effects`]: checked, its model.json entry and covariance), and the
-//! diagnosis of the final model.
+//! by the workflow ([`effects_of`]); then, once the shaft speed's spool blocks are shared, the
+//! output built from them as every project's model is ([`project_model::with_effects`]: checked,
+//! its model.json entry and covariance), and the diagnosis of the final model
+//! ([`built_and_diagnosed`]).
 use anyhow::Result;
 
 use crate::core::identification::pipeline::Identified;
@@ -21,26 +22,36 @@ pub struct Built {
     pub diagnosis: Vec<DiagnosisEntry>,
     /// The candidates not tried and what the trials were judged on, or why there is no diagnosis.
     pub diagnosis_notes: Vec<String>,
-    /// How much the segmentation channel moves the plain model (filled in beside the baselines).
-    pub preparation: Option<crate::io::report::preparation::SegmentationChoice>,
 }
 
 /// The gray-box model of the plan's output with its effects, each refitted on the identification
-/// data, the validation error after each step, the output built from it (its parameter covariance
-/// timed as the uncertainty stage) and the diagnosis of the result. An effect that cannot be
-/// added, or a loop that fails, fails the batch; a step without a validation error is a note (in
-/// the output's notes, as the loop's rounds are).
-pub fn effects_and_diagnosis(
+/// data, and the validation error after each step (timed as the effects stage). The shaft speed's
+/// spool blocks are shared after this, once every output has its effects.
+pub fn effects_of(
     plan: &OutputPlan,
     runs: &Runs,
     identified: &Identified,
     timings: &mut Timings,
+) -> model::Effects {
+    timings.time_with_fraction(&format!("effects_{}", plan.output), |progress| {
+        model::add_project_effects(plan, runs, identified, progress)
+    })
+}
+
+/// The output built from its effects (its parameter covariance timed as the uncertainty stage)
+/// and the diagnosis of the result. An effect that cannot be added, or a loop that fails, fails
+/// the batch; a step without a validation error is a note (in the output's notes, as the loop's
+/// rounds are).
+pub fn built_and_diagnosed(
+    plan: &OutputPlan,
+    runs: &Runs,
+    identified: &Identified,
+    mut effects: model::Effects,
+    timings: &mut Timings,
 ) -> Result<Built> {
     let output = plan.output.as_str();
-    let mut effects = timings.time_with_fraction(&format!("effects_{output}"), |progress| {
-        model::add_project_effects(plan, runs, identified, progress)
-    });
-    // The loop's last diagnosis is of the final model: it is not computed again.
+    // The loop's last diagnosis is of the final model (unless a shared block changed it since): it
+    // is not computed again.
     let done = effects.sequence.final_diagnosis.take();
     let built = timings.time(&format!("uncertainty_{output}"), || {
         project_model::with_effects(plan.clone(), runs, identified.clone(), effects, Covariance::Estimate)
@@ -52,5 +63,5 @@ pub fn effects_and_diagnosis(
         Ok((entries, skipped)) => (entries, skipped),
         Err(e) => (Vec::new(), vec![format!("diagnosis of '{output}': {e}")]),
     };
-    Ok(Built { output: built, diagnosis, diagnosis_notes, preparation: None })
+    Ok(Built { output: built, diagnosis, diagnosis_notes })
 }

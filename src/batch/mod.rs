@@ -22,7 +22,7 @@ use crate::io::staging::Staging;
 use crate::workflow::model::{self, OutputPlan};
 use crate::workflow::model_file::{new_model_file, take_saved_clusters};
 use crate::workflow::preparation::segmentation_choice;
-use crate::workflow::project_model::BuiltOutput;
+use crate::workflow::project_model::{BuiltOutput, on_own_threads};
 use crate::workflow::runs::{self, Runs};
 
 mod compare;
@@ -82,8 +82,7 @@ pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
         .and_then(|r| r.best().map(|f| f.distribution));
     let batch = Batch { project: &project, runs: &runs, out_dir: staging.path(), input_noise };
     let mut monte_carlo = BTreeMap::new();
-    for part in batch.every_output(&outputs, &timings) {
-        let part = part?;
+    for part in batch.every_output(&outputs, &timings)? {
         model_file.outputs.push(part.entry);
         report.outputs.insert(part.output.clone(), part.report);
         report.figures.extend(part.figures);
@@ -111,34 +110,44 @@ pub fn run(mut project: Project, out_dir: &Path, quiet: bool) -> Result<()> {
     Ok(())
 }
 
+/// One output after its first phase: identified, with its effects (the shaft speed's spool blocks
+/// not yet shared) and its baselines.
+struct Stage {
+    plan: OutputPlan,
+    identified: Identified,
+    effects: model::Effects,
+    models: OutputModels,
+    preparation: Option<crate::io::report::preparation::SegmentationChoice>,
+    baseline_notes: Vec<String>,
+    timings: Timings,
+}
+
 impl Batch<'_> {
-    /// Every output on its own thread, each into its own part of the results, returned in output
-    /// order (so the files are the same as one output after another).
-    fn every_output(&self, outputs: &[String], timings: &Timings) -> Vec<Result<OutputPart>> {
-        std::thread::scope(|scope| {
-            let handles: Vec<_> = outputs
-                .iter()
-                .map(|output| {
-                    let mut part_timings = timings.sibling();
-                    scope.spawn(move || {
-                        let part = self.model_output(output, &mut part_timings);
-                        part.map(|part| OutputPart { timings: part_timings, ..part })
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| {
-                    h.join()
-                        .unwrap_or_else(|_| Err(anyhow::anyhow!("an output's thread stopped unexpectedly")))
-                })
-                .collect()
+    /// Every output in two phases, each output on its own thread in each: identified with its
+    /// effects and baselines; then, once the shaft speed's spool blocks are shared with the others
+    /// (`workflow::project_model::share_the_spool`), built, diagnosed, scored and drawn. Returned in
+    /// output order (so the files are the same as one output after another).
+    fn every_output(&self, outputs: &[String], timings: &Timings) -> Result<Vec<OutputPart>> {
+        let mut stages = on_own_threads(outputs.iter().map(|o| (o, timings.sibling())), |(output, mut t)| {
+            self.first_phase(output, &mut t).map(|stage| Stage { timings: t, ..stage })
         })
+        .into_iter()
+        .collect::<Result<Vec<_>>>()?;
+        let mut shared: Vec<_> = stages.iter_mut().map(|s| (&s.plan, &mut s.effects)).collect();
+        crate::workflow::project_model::share_the_spool(&mut shared, self.runs);
+        on_own_threads(stages, |mut stage| {
+            let mut t = std::mem::take(&mut stage.timings);
+            let part = self.second_phase(stage, &mut t);
+            part.map(|part| OutputPart { timings: t, ..part })
+        })
+        .into_iter()
+        .collect()
     }
 
-    /// Every stage for one output: identify and add the effects (the workflow), fit the baselines,
-    /// diagnose, compare, analyse the residuals and draw the figures.
-    fn model_output(&self, output: &str, timings: &mut Timings) -> Result<OutputPart> {
+    /// The first phase for one output: identify, then the effects (the workflow's loop) while the
+    /// baselines and the segmentation choice's second model, which need only the identified model,
+    /// are fitted on their own thread.
+    fn first_phase(&self, output: &str, timings: &mut Timings) -> Result<Stage> {
         let (project, runs) = (self.project, self.runs);
         let plan = OutputPlan::of_project(project, output).with_steps_from(&runs.steps_from);
         let identified = timings
@@ -146,9 +155,43 @@ impl Batch<'_> {
                 model::identify(&runs.ident, &runs.ident_junctions, &plan)
             })
             .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
-        let (built, mut models, baseline_notes) =
-            self.effects_beside_baselines(&plan, &identified, timings)?;
-        let effects::Built { output: built_output, diagnosis, diagnosis_notes, preparation } = built;
+        let (effects, baselines) = std::thread::scope(|scope| {
+            let mut baseline_timings = timings.sibling();
+            let (plan, identified) = (&plan, &identified);
+            let baselines = scope.spawn(move || {
+                let mut notes = Vec::new();
+                let models = baseline_timings
+                    .time_with_fraction(&format!("baselines_{output}"), |progress| {
+                        fit_baselines(identified, &runs.ident, output, &mut notes, progress)
+                    });
+                let preparation = baseline_timings
+                    .time(&format!("preparation_{output}"), || segmentation_choice(runs, plan, identified));
+                (models, preparation, notes, baseline_timings)
+            });
+            let effects = effects::effects_of(plan, runs, identified, timings);
+            (effects, baselines.join())
+        });
+        let (models, preparation, baseline_notes, baseline_timings) = baselines
+            .map_err(|_| anyhow::anyhow!("fitting the baselines of '{output}' stopped unexpectedly"))?;
+        timings.0.extend(baseline_timings.0);
+        Ok(Stage {
+            plan,
+            identified,
+            effects,
+            models,
+            preparation,
+            baseline_notes,
+            timings: Timings::default(),
+        })
+    }
+
+    /// The second phase for one output: the output built from its effects and diagnosed, compared,
+    /// its residuals analysed and its figures drawn.
+    fn second_phase(&self, stage: Stage, timings: &mut Timings) -> Result<OutputPart> {
+        let Stage { plan, identified, effects, mut models, preparation, baseline_notes, .. } = stage;
+        let output = plan.output.as_str();
+        let built = effects::built_and_diagnosed(&plan, self.runs, &identified, effects, timings)?;
+        let effects::Built { output: built_output, diagnosis, diagnosis_notes } = built;
         let BuiltOutput { effects, entry, mut notes, .. } = built_output;
         let extended = effects.model();
         notes.extend(baseline_notes);
@@ -174,38 +217,6 @@ impl Batch<'_> {
         };
         self.score_and_draw(&identified, &models, extended, &mut part, timings);
         Ok(part)
-    }
-
-    /// The effects (the workflow's loop), the output built from them and the diagnosis of the final
-    /// model, while the baselines and the segmentation choice's second model, which need only the
-    /// identified model, are fitted on their own thread; with the baselines' notes.
-    fn effects_beside_baselines(
-        &self,
-        plan: &OutputPlan,
-        identified: &Identified,
-        timings: &mut Timings,
-    ) -> Result<(effects::Built, OutputModels, Vec<String>)> {
-        let (runs, output) = (self.runs, plan.output.as_str());
-        let (built, baselines) = std::thread::scope(|scope| {
-            let mut baseline_timings = timings.sibling();
-            let baselines = scope.spawn(move || {
-                let mut notes = Vec::new();
-                let models = baseline_timings
-                    .time_with_fraction(&format!("baselines_{output}"), |progress| {
-                        fit_baselines(identified, &runs.ident, output, &mut notes, progress)
-                    });
-                let preparation = baseline_timings
-                    .time(&format!("preparation_{output}"), || segmentation_choice(runs, plan, identified));
-                (models, preparation, notes, baseline_timings)
-            });
-            let built = effects::effects_and_diagnosis(plan, runs, identified, timings);
-            (built, baselines.join())
-        });
-        let (models, preparation, baseline_notes, baseline_timings) = baselines
-            .map_err(|_| anyhow::anyhow!("fitting the baselines of '{output}' stopped unexpectedly"))?;
-        timings.0.extend(baseline_timings.0);
-        let built = built?;
-        Ok((effects::Built { preparation, ..built }, models, baseline_notes))
     }
 
     /// Whether the runs agree on the steady state under the final model (report.json

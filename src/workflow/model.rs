@@ -2,7 +2,7 @@
 //! clusters or the automatic proposal, the polished Wiener model ([`identify`], or its steps
 //! [`fit_segments`], [`propose`] and [`ModelSource::build`] for the app, which caches each), then
 //! the effects added by hand and the missing-physics loop ([`add_effects`]).
-use crate::core::diagnose::{self, AutoRound, DiagnoseError, EffectSequence};
+use crate::core::diagnose::{self, AutoRound, DiagnoseError, EffectSequence, HistoryStep, SharedBlock};
 use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::error::PipelineError;
@@ -11,7 +11,7 @@ use crate::core::identification::pipeline::{self, GrayBoxModel, Identified};
 use crate::core::identification::segment::Segment;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::structure::Proposal;
-use crate::core::run::Run;
+use crate::core::run::{Quantity, Run};
 use crate::io::project::Project;
 
 pub use crate::core::identification::pipeline::ModelSource;
@@ -138,6 +138,11 @@ pub struct Effects {
     pub rounds: Vec<AutoRound>,
     /// Why the loop stopped before its rounds were done, when it failed (or was cancelled).
     pub loop_failed: Option<DiagnoseError>,
+    /// The spool blocks the shaft speed's model offered this one, and what came of each (see
+    /// [`share_spool`]).
+    pub shared: Vec<SharedBlock>,
+    /// Why no spool block could be offered, when the offer failed.
+    pub sharing_failed: Option<String>,
 }
 
 /// Why a model's effects could not all be added.
@@ -208,7 +213,57 @@ impl Effects {
             );
         }
         notes.extend(self.sequence.history_gaps.iter().map(|gap| format!("'{output}': {gap}")));
+        notes.extend(self.shared.iter().map(|b| format!("'{output}': {}", b.words())));
+        notes.extend(
+            self.sharing_failed.iter().map(|e| format!("'{output}': the spool's blocks not shared: {e}")),
+        );
         notes
+    }
+}
+
+/// The output that measures the spool directly, whose model's spool blocks the others share: the
+/// first shaft speed among `outputs`.
+pub fn spool_output(outputs: &[String]) -> Option<&str> {
+    outputs.iter().map(String::as_str).find(|o| Quantity::of(o) == Some(Quantity::ShaftSpeed))
+}
+
+/// `effects` (of an output other than the shaft speed) with the spool blocks of `spool`, the
+/// shaft speed's finished model, shared where this output's validation runs do not refuse them
+/// ([`diagnose::share_spool_dynamics`]): the model, one history step per block kept, and what was
+/// offered (the notes say it). The loop's last diagnosis no longer describes the model when a block
+/// is kept, and is dropped. Nothing happens to a speed model or to effects that failed.
+pub fn share_spool(
+    effects: &mut Effects,
+    spool: &ExtendedModel,
+    settings: &OutputSettings,
+    validation: &[&Run],
+) {
+    let model = effects.model();
+    if model.output == spool.output || effects.check(&model.output).is_err() {
+        return;
+    }
+    match diagnose::share_spool_dynamics(model, spool, validation, settings.initial_state) {
+        Ok((shared_model, offered)) => {
+            // One step per set taken: a set's blocks name each other in `with`.
+            let taken: Vec<&SharedBlock> = offered.iter().filter(|b| b.taken).collect();
+            for (i, block) in taken.iter().enumerate() {
+                if taken[..i].iter().any(|earlier| earlier.with.contains(&block.id)) {
+                    continue;
+                }
+                let names: Vec<&str> =
+                    std::iter::once(block.id.name()).chain(block.with.iter().map(|id| id.name())).collect();
+                effects.sequence.history.push(HistoryStep {
+                    step: format!("+{} (from {})", names.join(", "), block.from),
+                    rmspe_pct: block.rmspe_after_pct,
+                });
+            }
+            if offered.iter().any(|b| b.taken) {
+                effects.sequence.model = shared_model;
+                effects.sequence.final_diagnosis = None;
+            }
+            effects.shared = offered;
+        }
+        Err(err) => effects.sharing_failed = Some(err.to_string()),
     }
 }
 
@@ -256,5 +311,5 @@ pub fn add_effects(
             Err(err) => loop_failed = Some(err),
         }
     }
-    Effects { sequence, rounds, loop_failed }
+    Effects { sequence, rounds, loop_failed, shared: Vec::new(), sharing_failed: None }
 }

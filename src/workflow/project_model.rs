@@ -1,6 +1,7 @@
 //! A project's model file, every output built as the batch builds it: the segment fits, the given
-//! clusters or the proposal, the polish, the project's effects and the missing-physics loop, and
-//! (when asked) the finished model's parameter covariance. A fleet's reference project and the
+//! clusters or the proposal, the polish, the project's effects and the missing-physics loop, the
+//! shaft speed's spool blocks shared with the other outputs, and (when asked) the finished model's
+//! parameter covariance. A fleet's reference project and the
 //! Python package's `identify` build a project's model here; the batch identifies and adds the
 //! effects with its baselines beside them, then builds the output through [`with_effects`] too
 //! (`batch::effects`).
@@ -34,8 +35,10 @@ pub enum Covariance {
 }
 
 /// Every output of `project`, whose runs are loaded: the outputs the project models
-/// ([`runs::outputs_to_model`]), each on its own thread, in output order. `project` takes the
-/// clusters of its saved model first ([`take_saved_clusters`]); what that said heads the notes.
+/// ([`runs::outputs_to_model`]), each identified with its effects on its own thread, the shaft
+/// speed's spool blocks then shared with the others ([`model::share_spool`]), and each output built
+/// from the result, in output order. `project` takes the clusters of its saved model first
+/// ([`take_saved_clusters`]); what that said heads the notes.
 pub fn build_project(
     project: &mut Project,
     runs: &Runs,
@@ -44,36 +47,69 @@ pub fn build_project(
     let outputs = runs::outputs_to_model(project, &runs.ident)?;
     let notes = take_saved_clusters(project, runs.ident.dt_secs, &outputs)?;
     let project = &*project;
-    let built: Vec<Result<BuiltOutput>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = outputs
-            .iter()
-            .map(|output| scope.spawn(move || build_output(project, runs, output, covariance)))
-            .collect();
+    let mut stages = on_own_threads(&outputs, |output| identify_with_effects(project, runs, output))
+        .into_iter()
+        .collect::<Result<Vec<_>>>()?;
+    share_the_spool(
+        &mut stages.iter_mut().map(|(plan, _, effects)| (&*plan, effects)).collect::<Vec<_>>(),
+        runs,
+    );
+    let built = on_own_threads(stages, |(plan, identified, effects)| {
+        with_effects(plan, runs, identified, effects, covariance)
+    })
+    .into_iter()
+    .collect::<Result<Vec<_>>>()?;
+    let mut file = new_model_file(&runs.ident);
+    file.outputs = built.iter().map(|b| b.entry.clone()).collect();
+    Ok((file, built, notes))
+}
+
+/// One output of a project identified with its effects: what [`with_effects`] builds it from.
+pub type WithEffects = (OutputPlan, Identified, Effects);
+
+/// One output of `project` identified, with the project's effects and the missing-physics loop.
+pub fn identify_with_effects(project: &Project, runs: &Runs, output: &str) -> Result<WithEffects> {
+    let plan = OutputPlan::of_project(project, output).with_steps_from(&runs.steps_from);
+    let identified = model::identify(&runs.ident, &runs.ident_junctions, &plan)
+        .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
+    let effects = model::add_project_effects(&plan, runs, &identified, &mut |_| true);
+    Ok((plan, identified, effects))
+}
+
+/// The shaft speed's spool blocks shared with every other output's effects ([`model::share_spool`]),
+/// each judged on that output's validation runs; nothing without a speed output whose effects
+/// were all added. `stages`: each output's plan and effects.
+pub fn share_the_spool(stages: &mut [(&OutputPlan, &mut Effects)], runs: &Runs) {
+    let outputs: Vec<String> = stages.iter().map(|(plan, _)| plan.output.clone()).collect();
+    let Some(speed) = model::spool_output(&outputs) else { return };
+    let Some(spool) = stages
+        .iter()
+        .find(|(plan, effects)| plan.output == speed && effects.check(speed).is_ok())
+        .map(|(_, effects)| effects.model().clone())
+    else {
+        return;
+    };
+    for (plan, effects) in stages.iter_mut() {
+        let validation = runs.validation_of(&plan.output);
+        model::share_spool(effects, &spool, &plan.settings, &validation);
+    }
+}
+
+/// `f` of each item on its own thread, the results in the items' order.
+pub fn on_own_threads<I: Send, R: Send>(
+    items: impl IntoIterator<Item = I>,
+    f: impl Fn(I) -> Result<R> + Sync,
+) -> Vec<Result<R>> {
+    let f = &f;
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items.into_iter().map(|item| scope.spawn(move || f(item))).collect();
         handles
             .into_iter()
             .map(|h| {
                 h.join().unwrap_or_else(|_| Err(anyhow::anyhow!("an output's thread stopped unexpectedly")))
             })
             .collect()
-    });
-    let built = built.into_iter().collect::<Result<Vec<_>>>()?;
-    let mut file = new_model_file(&runs.ident);
-    file.outputs = built.iter().map(|b| b.entry.clone()).collect();
-    Ok((file, built, notes))
-}
-
-/// One output of `project` built as the batch builds it.
-pub fn build_output(
-    project: &Project,
-    runs: &Runs,
-    output: &str,
-    covariance: Covariance,
-) -> Result<BuiltOutput> {
-    let plan = OutputPlan::of_project(project, output).with_steps_from(&runs.steps_from);
-    let identified = model::identify(&runs.ident, &runs.ident_junctions, &plan)
-        .with_context(|| format!("identifying '{output}' from '{}'", runs.ident.name))?;
-    let effects = model::add_project_effects(&plan, runs, &identified, &mut |_| true);
-    with_effects(plan, runs, identified, effects, covariance)
+    })
 }
 
 /// The output of `identified` with `effects` added: checked (an effect that could not be added is

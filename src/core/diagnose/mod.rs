@@ -84,6 +84,7 @@ mod held_out;
 mod history;
 mod loss;
 mod report;
+mod shared_spool;
 mod spool_witness;
 mod witness;
 use decision::{Trials, decide};
@@ -93,6 +94,7 @@ pub use history::{
     AutoRound, EffectSequence, HistoryStep, apply_in_order, auto_effects, diagnose_admissible,
 };
 pub use report::{Diagnosis, DiagnosisKind, DiagnosisReport, SkippedEffect, TrialId};
+pub use shared_spool::{SHARED_SPOOL_BLOCKS, SharedBlock, share_spool_dynamics};
 pub use witness::{Comparison, HeldOutWitness, MIN_VALIDATION_RESPONSES, MIN_WITNESS_RESPONSES, p_text};
 use witness::{Judge, Scores, ValidationResponses, Verdict};
 

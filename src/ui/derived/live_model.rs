@@ -75,6 +75,8 @@ pub struct EffectsOutcome {
     pub admissibility: Vec<String>,
     /// What the loop did, in words (the batch's notes).
     pub notes: Vec<String>,
+    /// The shaft speed's spool blocks offered to this output's model, and what came of each.
+    pub shared: Vec<crate::core::diagnose::SharedBlock>,
     /// What went wrong (an effect that could not be added, a run the model cannot simulate).
     pub problems: Vec<String>,
     /// The model is a drag preview: the effects are left out until the drag is committed.

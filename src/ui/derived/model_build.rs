@@ -13,6 +13,7 @@
 //! the units the gain is fitted in). The effects are refitted once the drag is committed.
 use std::sync::Arc;
 
+use crate::core::effects::ExtendedModel;
 use crate::core::identification::cluster::{self, Cluster, ClusterEval};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::pipeline::{self, LiveResult, live_result};
@@ -33,6 +34,9 @@ pub(super) struct ModelInputs {
     pub(super) scored: Vec<ScoredSource>,
     pub(super) omegas_rad_s: Arc<[f64]>,
     pub(super) effects: EffectPlan,
+    /// The shaft speed's finished model, whose spool blocks this output's model shares (see
+    /// [`model::share_spool`]); `None` for the speed itself or without one.
+    pub(super) spool: Option<Arc<ExtendedModel>>,
 }
 
 impl ModelInputs {
@@ -93,7 +97,7 @@ impl ModelInputs {
     ) {
         let plan = &self.effects;
         let mut outcome = EffectsOutcome { requested: plan.clone(), ..EffectsOutcome::default() };
-        if plan.is_empty() {
+        if plan.is_empty() && self.spool.is_none() {
             if let Some(rmspe_pct) = live.mean_validation_rmspe() {
                 outcome.history.push(crate::core::diagnose::HistoryStep { step: "base".into(), rmspe_pct });
             }
@@ -107,11 +111,16 @@ impl ModelInputs {
             .filter(|scored| scored.role == RunRole::Validation)
             .map(|scored| scored.run.as_ref())
             .collect();
-        let effects = model::add_effects(&live.model, plan, &self.run, fits, settings, &validation, progress);
+        let mut effects =
+            model::add_effects(&live.model, plan, &self.run, fits, settings, &validation, progress);
+        if let Some(spool) = &self.spool {
+            model::share_spool(&mut effects, spool, settings, &validation);
+        }
         outcome.history = effects.sequence.history.clone();
         outcome.rounds = effects.rounds.clone();
         outcome.admissibility = effects.sequence.admissibility.clone();
         outcome.notes = effects.notes(&output, plan);
+        outcome.shared = effects.shared.clone();
         if let Err(err) = effects.check(&output) {
             outcome.problems.push(err.to_string());
             live.effects = outcome;

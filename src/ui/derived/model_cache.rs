@@ -11,6 +11,7 @@
 //! preview every frame — is in [`model_build`](super::model_build).
 use std::sync::Arc;
 
+use crate::core::effects::ExtendedModel;
 use crate::core::identification::cluster::{Cluster, ClusterEval};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::segment::Segment;
@@ -124,7 +125,7 @@ impl IdentCache {
                 cache
             })
             .collect();
-        Some(Self {
+        let mut cache = Self {
             run_index,
             run,
             sources,
@@ -138,7 +139,9 @@ impl IdentCache {
             steps_from,
             segments,
             outputs,
-        })
+        };
+        cache.share_the_spool();
+        Some(cache)
     }
 
     pub fn output(&self, name: &str) -> Option<&OutputCache> {
@@ -169,15 +172,43 @@ impl IdentCache {
             any |= output.poll_proposal();
             any |= output.poll_finished();
         }
+        if any {
+            self.share_the_spool();
+        }
         any
     }
 
     /// Block until every automatic proposal and every model being finished has ended (tests,
-    /// screenshots and the headless paths, never in a frame).
+    /// screenshots and the headless paths, never in a frame), the shaft speed's spool blocks shared
+    /// with the others as the batch shares them.
     pub fn wait_for_jobs(&mut self) {
-        for output in &mut self.outputs {
-            output.wait_for_proposal();
-            output.wait_for_finished();
+        loop {
+            for output in &mut self.outputs {
+                output.wait_for_proposal();
+                output.wait_for_finished();
+            }
+            self.share_the_spool();
+            if !self.is_busy() {
+                break;
+            }
+        }
+    }
+
+    /// Give every output other than the shaft speed the speed's finished model, whose spool blocks
+    /// its model shares (`workflow::model::share_spool`, as the batch does); each rebuilds when what
+    /// it shares changes. While the speed's model is being finished the others keep theirs.
+    fn share_the_spool(&mut self) {
+        let names: Vec<String> = self.outputs.iter().map(|o| o.name.clone()).collect();
+        let speed = model::spool_output(&names).map(str::to_owned);
+        let spool = match &speed {
+            Some(speed) => match self.output(speed).and_then(OutputCache::finished_spool) {
+                Some(spool) => spool,
+                None => return,
+            },
+            None => None,
+        };
+        for output in self.outputs.iter_mut().filter(|o| Some(&o.name) != speed.as_ref()) {
+            output.set_spool(spool.clone());
         }
     }
 
@@ -283,6 +314,9 @@ pub struct OutputCache {
     pub empirical_bode: EmpiricalBode,
     /// Runs that were not scored, and why.
     pub notes: Vec<String>,
+    /// The shaft speed's finished model this output's model shares the spool blocks of (see
+    /// [`IdentCache::share_the_spool`]).
+    spool: Option<Arc<ExtendedModel>>,
 }
 
 impl OutputCache {
@@ -304,6 +338,7 @@ impl OutputCache {
             finishing: None,
             empirical_bode: EmpiricalBode::default(),
             notes: Vec::new(),
+            spool: None,
         }
     }
 
@@ -434,6 +469,27 @@ impl OutputCache {
             scored: self.scored.clone(),
             omegas_rad_s: Arc::clone(&self.omegas_rad_s),
             effects: EffectPlan { by_hand: self.setup.effects.clone(), auto_rounds: self.setup.auto_effects },
+            spool: self.spool.clone(),
+        }
+    }
+
+    /// The model whose spool blocks the other outputs share, when this is a shaft speed whose model
+    /// is finished: `Some(None)` when it has no effects model (nothing to share), `None` while it is
+    /// being finished (the others keep what they share until it is).
+    fn finished_spool(&self) -> Option<Option<Arc<ExtendedModel>>> {
+        match &self.live {
+            Ok(live) if live.finishing => None,
+            Ok(live) => Some(live.effects.model.clone().map(Arc::new)),
+            Err(_) if self.finishing.is_some() => None,
+            Err(_) => Some(None),
+        }
+    }
+
+    /// Share the spool blocks of `spool` from now on: rebuild when that changes what is shared.
+    fn set_spool(&mut self, spool: Option<Arc<ExtendedModel>>) {
+        if self.spool.as_deref() != spool.as_deref() {
+            self.spool = spool;
+            self.rebuild();
         }
     }
 

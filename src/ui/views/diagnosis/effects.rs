@@ -31,6 +31,7 @@ pub(super) fn effects_panel_ui(
         ui.vertical(|ui| {
             commands.extend(effects_list_ui(ui, output, live));
             commands.extend(loop_ui(ui, output, cache, live));
+            shared_ui(ui, live);
             if let Some(model) = &live.effects.model {
                 for effect in &model.effects {
                     let params: Vec<String> =
@@ -48,7 +49,7 @@ fn effects_list_ui(ui: &mut egui::Ui, output: &str, live: &LiveModel) -> Vec<Com
     let mut commands = Vec::new();
     ui.label(RichText::new("Effects in the model").strong());
     let requested = &live.effects.requested;
-    if requested.is_empty() {
+    if requested.is_empty() && !live.effects.shared.iter().any(|b| b.taken) {
         hint(ui, "None yet: the model is the paper's gray-box Wiener model.");
     }
     for &id in &requested.by_hand {
@@ -105,6 +106,29 @@ fn loop_ui(ui: &mut egui::Ui, output: &str, cache: &OutputCache, live: &LiveMode
         hint(ui, &format!("{words}."));
     }
     commands
+}
+
+/// The shaft speed's spool blocks offered to this output's model: each with the validation error
+/// without and with it, shared or not, and why.
+fn shared_ui(ui: &mut egui::Ui, live: &LiveModel) {
+    let Some(first) = live.effects.shared.first() else { return };
+    ui.label(RichText::new(format!("Spool blocks from {}", first.from)).strong()).on_hover_text(
+        "The spool's time-constant schedule, asymmetry and soak are the same numbers on every output; they \
+         are fitted on the shaft speed, which measures the spool, and shared unless this output's own \
+         validation runs show the model worse with them beyond noise",
+    );
+    for block in &live.effects.shared {
+        let (mark, color) = if block.taken { ("shared", theme::OK) } else { ("not shared", theme::HINT) };
+        ui.label(
+            RichText::new(format!(
+                "{} ({mark}): {:.3} % → {:.3} %",
+                block.id, block.rmspe_before_pct, block.rmspe_after_pct
+            ))
+            .monospace()
+            .color(color),
+        );
+        hint(ui, &format!("{}.", block.words()));
+    }
 }
 
 /// Bars of the validation RMSPE after each step, each labelled with its value.

@@ -8,7 +8,6 @@
 //! (`effects`: every hidden effect on engines 3, 7, 11; `free`: effect-free engines 1..=ENGINES;
 //! with `OFFERS=1` set, what each thrust model was offered of the speed's spool blocks).
 use anyhow::{Context, Result};
-use jetid::core::diagnose::{EffectSequence, apply_in_order, auto_effects, share_spool_dynamics};
 use jetid::core::effects::ExtendedModel;
 use jetid::core::identification::fits::segments_for;
 use jetid::core::identification::pipeline::identify_output;
@@ -18,6 +17,7 @@ use jetid::core::numerics::metrics::metrics;
 use jetid::core::parallel::on_two_threads;
 use jetid::core::run::Run;
 use jetid::sim::{Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};
+use jetid::workflow::model::{EffectPlan, add_effects, share_spool};
 
 const ROUNDS: usize = 3;
 const OUTPUTS: [&str; 2] = ["shaft_speed_rpm", "thrust_n"];
@@ -60,29 +60,32 @@ fn loop_on(
     let identified = identify_output(&b.ident, output, &settings, &segments, None)?;
     let base = ExtendedModel::from_gray_box(&identified.model);
     let validation = [&b.validation, &b.chirp];
-    let mut sequence: EffectSequence =
-        apply_in_order(&base, &[], &b.ident, &identified.fits, &settings, &validation);
-    let rounds =
-        auto_effects(&mut sequence, ROUNDS, &b.ident, &identified.fits, &settings, &validation, &mut |_| {
-            true
-        })?;
+    let plan = EffectPlan { by_hand: Vec::new(), auto_rounds: ROUNDS };
+    let mut effects = add_effects(
+        &identified.model,
+        &plan,
+        &b.ident,
+        &identified.fits,
+        &settings,
+        &validation,
+        &mut |_| true,
+    );
+    if let Some(spool) = spool {
+        share_spool(&mut effects, spool, &settings, &validation);
+    }
     let truth = &b.scored.truth.output(output).context("truth")?.values;
     let score = |m: &ExtendedModel| -> Result<f64> {
         Ok(metrics(truth, &m.simulate_scored(&b.scored.measured, settings.initial_state)?)?.rmspe_pct)
     };
     let mut taken: Vec<String> =
-        rounds.iter().map(|r| format!("{}({})", r.added, short(&r.significance))).collect();
-    if let Some(spool) = spool {
-        let (shared, offered) =
-            share_spool_dynamics(&sequence.model, spool, &validation, settings.initial_state)?;
-        taken.extend(offered.iter().filter(|o| o.taken).map(|o| format!("shared:{}", o.id)));
-        if std::env::var("OFFERS").is_ok() {
-            for o in &offered {
-                eprintln!("{} {}", b.ident.name, o.words());
-            }
+        effects.rounds.iter().map(|r| format!("{}({})", r.added, short(&r.significance))).collect();
+    taken.extend(effects.shared.iter().filter(|o| o.taken).map(|o| format!("shared:{}", o.id)));
+    if std::env::var("OFFERS").is_ok() {
+        for o in &effects.shared {
+            eprintln!("{} {}", b.ident.name, o.words());
         }
-        sequence.model = shared;
     }
+    let sequence = effects.sequence;
     if let (Ok(id), Some(report)) = (std::env::var("SHOW"), &sequence.final_diagnosis) {
         for d in report.entries.iter().filter(|d| d.effect.name() == id) {
             taken.push(format!(

@@ -6,7 +6,8 @@
 //! The loop is never told what is hidden: it chooses from the whole catalog, structure and physics.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use jetid::core::diagnose::{EffectSequence, apply_in_order, auto_effects, share_spool_dynamics};
+use crate::engine_family::family_run;
+use jetid::core::diagnose::share_spool_dynamics;
 use jetid::core::effects::{EffectBlock, ExtendedModel, ThermalSoak};
 use jetid::core::identification::fits::segments_for;
 use jetid::core::identification::pipeline::identify_output;
@@ -15,7 +16,8 @@ use jetid::core::identification::settings::OutputSettings;
 use jetid::core::numerics::metrics::metrics;
 use jetid::core::parallel::on_two_threads;
 use jetid::core::run::Run;
-use jetid::sim::{Effect, EngineFamily, SimConfig, SimOutput, TestKind, simulate};
+use jetid::sim::{Effect, EngineFamily, SimOutput, TestKind};
+use jetid::workflow::model::{EffectPlan, add_effects};
 
 /// Rounds of the loop, as `--auto-effects 3`.
 const ROUNDS: usize = 3;
@@ -37,13 +39,8 @@ struct Bench {
 
 fn bench(seed: u64, first_day: &[Effect], second_day: &[Effect]) -> Bench {
     let engine = EngineFamily::small_turbojets().draw(seed);
-    let run = |kind: TestKind, noise_seed: u64, effects: &[Effect]| {
-        let cfg = SimConfig::for_test(kind.name(), kind, noise_seed)
-            .unwrap()
-            .on_engine(&engine)
-            .with_effects(effects.to_vec());
-        simulate(&cfg).unwrap()
-    };
+    let run =
+        |kind: TestKind, noise_seed: u64, effects: &[Effect]| family_run(&engine, kind, noise_seed, effects);
     Bench {
         ident: run(TestKind::Ident, seed, first_day).measured,
         validation: run(TestKind::Validation, seed + 1000, second_day).measured,
@@ -71,17 +68,20 @@ fn loop_model(b: &Bench, output: &str) -> (Vec<String>, ExtendedModel) {
     let settings = OutputSettings::for_output(output);
     let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
     let identified = identify_output(&b.ident, output, &settings, &segments, None).unwrap();
-    let base = ExtendedModel::from_gray_box(&identified.model);
     let validation = [&b.validation, &b.chirp];
-    let mut sequence: EffectSequence =
-        apply_in_order(&base, &[], &b.ident, &identified.fits, &settings, &validation);
-    let rounds =
-        auto_effects(&mut sequence, ROUNDS, &b.ident, &identified.fits, &settings, &validation, &mut |_| {
-            true
-        })
-        .unwrap();
-    let taken = rounds.iter().map(|r| r.added.to_string()).collect();
-    (taken, sequence.model)
+    let plan = EffectPlan { by_hand: Vec::new(), auto_rounds: ROUNDS };
+    let effects = add_effects(
+        &identified.model,
+        &plan,
+        &b.ident,
+        &identified.fits,
+        &settings,
+        &validation,
+        &mut |_| true,
+    );
+    effects.check(output).unwrap();
+    let taken = effects.rounds.iter().map(|r| r.added.to_string()).collect();
+    (taken, effects.sequence.model)
 }
 
 /// For each engine and output: (engine, output, taken, error with the effect, error without), and

@@ -52,17 +52,26 @@ fn bench(engine_seed: u64, effects: &[Effect]) -> Bench {
     bench_days(engine_seed, effects, effects)
 }
 
+/// One test of `engine` with `effects`, its noise drawn from `noise_seed`.
+pub(crate) fn family_run(
+    engine: &DrawnEngine,
+    kind: TestKind,
+    noise_seed: u64,
+    effects: &[Effect],
+) -> SimOutput {
+    let cfg = SimConfig::for_test(kind.name(), kind, noise_seed)
+        .unwrap()
+        .on_engine(engine)
+        .with_effects(effects.to_vec());
+    simulate(&cfg).unwrap()
+}
+
 /// A bench session over two test days: the identification and chirp runs on the first (with
 /// `first_day` effects), the validation run on the second (with `second_day` effects).
 fn bench_days(engine_seed: u64, first_day: &[Effect], second_day: &[Effect]) -> Bench {
     let engine = EngineFamily::small_turbojets().draw(engine_seed);
-    let run = |kind: TestKind, noise_seed: u64, effects: &[Effect]| {
-        let cfg = SimConfig::for_test(kind.name(), kind, noise_seed)
-            .unwrap()
-            .on_engine(&engine)
-            .with_effects(effects.to_vec());
-        simulate(&cfg).unwrap()
-    };
+    let run =
+        |kind: TestKind, noise_seed: u64, effects: &[Effect]| family_run(&engine, kind, noise_seed, effects);
     Bench {
         ident: run(TestKind::Ident, engine_seed, first_day).measured,
         validation: run(TestKind::Validation, engine_seed + 1000, second_day),

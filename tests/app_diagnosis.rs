@@ -64,7 +64,9 @@ fn hot_day_ambient_correction_is_found_applied_and_removed() {
         assert!(best.significant, "{best:?}");
         assert!((best.rmspe_before_pct - before).abs() < 1e-9 * before.max(1.0));
     }
-    harness.get_by_label("significant");
+    // The best effect's verdict is shown (the calibration drift, which a day's steady offset also
+    // explains, may be significant too).
+    assert!(harness.get_all_by_label("significant").next().is_some(), "no verdict 'significant' shown");
 
     // The first Apply button is the best-ranked effect's.
     let apply = harness.get_all_by_role_and_label(A11yRole::Button, "Apply").next().expect("Apply buttons");

@@ -222,9 +222,16 @@ impl Effects {
 }
 
 /// The output that measures the spool directly, whose model's spool blocks the others share: the
-/// first shaft speed among `outputs`.
+/// shaft speed among `outputs`, when there is exactly one. With two (a gas generator and a free
+/// power turbine, N1 and N2) the engine has two spools, and which one another output follows is not
+/// known: nothing is shared.
 pub fn spool_output(outputs: &[String]) -> Option<&str> {
-    outputs.iter().map(String::as_str).find(|o| Quantity::of(o) == Some(Quantity::ShaftSpeed))
+    let mut speeds =
+        outputs.iter().map(String::as_str).filter(|o| Quantity::of(o) == Some(Quantity::ShaftSpeed));
+    match (speeds.next(), speeds.next()) {
+        (Some(speed), None) => Some(speed),
+        _ => None,
+    }
 }
 
 /// `effects` (of an output other than the shaft speed) with the spool blocks of `spool`, the
@@ -312,4 +319,17 @@ pub fn add_effects(
         }
     }
     Effects { sequence, rounds, loop_failed, shared: Vec::new(), sharing_failed: None }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spool_output;
+
+    #[test]
+    fn the_spool_is_the_one_shaft_speed_and_two_speeds_share_nothing() {
+        let names = |n: &[&str]| n.iter().map(|s| (*s).to_owned()).collect::<Vec<_>>();
+        assert_eq!(spool_output(&names(&["thrust_n", "shaft_speed_rpm"])), Some("shaft_speed_rpm"));
+        assert_eq!(spool_output(&names(&["N1_krpm", "N2_krpm", "power_kW"])), None);
+        assert_eq!(spool_output(&names(&["thrust_n", "egt_c"])), None);
+    }
 }

@@ -13,6 +13,7 @@ pub mod jobs;
 pub mod live_model;
 mod model_build;
 pub mod model_cache;
+mod proposed;
 pub mod residuals;
 pub mod uncertainty;
 use std::sync::Arc;

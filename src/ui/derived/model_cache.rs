@@ -16,7 +16,6 @@ use crate::core::identification::cluster::{Cluster, ClusterEval};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::segment::Segment;
 use crate::core::identification::settings::OutputSettings;
-use crate::core::identification::structure::Proposal;
 use crate::core::numerics::tf::BodePoint;
 use crate::core::run::{Run, RunRole};
 
@@ -29,6 +28,7 @@ use crate::ui::derived::jobs::{Job, JobResult};
 pub use crate::ui::derived::live_model::{LiveModel, ScoredRun, Unavailable};
 pub use crate::ui::derived::model_build::Preview;
 use crate::ui::derived::model_build::{Built, ModelInputs};
+pub use crate::ui::derived::proposed::Proposed;
 use crate::ui::state::session::{Session, SessionRun};
 use crate::ui::state::setup::OutputSetup;
 use crate::workflow::model::{self, EffectPlan, ModelSource};
@@ -235,50 +235,6 @@ impl IdentCache {
     /// True when the segments were detected (the user has not moved them).
     pub fn segments_are_automatic(&self) -> bool {
         self.given_segments.is_none()
-    }
-}
-
-/// The automatic proposal of one output: the structure search's result, or its job while it runs.
-pub enum Proposed {
-    Running(Job<Arc<Proposal>>),
-    Ready(Arc<Proposal>),
-    Failed(String),
-}
-
-impl Proposed {
-    /// Start the structure search for `fits` on a worker thread.
-    fn start(fits: &Arc<SegmentFits>, run: &Arc<Run>, settings: &OutputSettings) -> Self {
-        let (fits, run, settings) = (Arc::clone(fits), Arc::clone(run), settings.clone());
-        Self::Running(Job::spawn(
-            format!("Proposing clusters for {}", fits.output),
-            || {},
-            move |_| model::propose(&fits, &run, &settings).map(Arc::new).map_err(|e| e.to_string().into()),
-        ))
-    }
-
-    pub fn proposal(&self) -> Option<&Proposal> {
-        match self {
-            Self::Ready(p) => Some(p),
-            _ => None,
-        }
-    }
-
-    pub fn is_running(&self) -> bool {
-        matches!(self, Self::Running(_))
-    }
-
-    /// The job, while it runs (for its label and elapsed time).
-    pub fn job(&self) -> Option<&Job<Arc<Proposal>>> {
-        match self {
-            Self::Running(job) => Some(job),
-            _ => None,
-        }
-    }
-
-    /// The input dead time the proposal's model carries, samples (`None`: no proposal, or its model
-    /// was fitted directly).
-    pub fn dead_time_samples(&self) -> Option<usize> {
-        self.proposal().filter(|p| p.direct.is_none()).map(|p| p.dead_time.in_model())
     }
 }
 

@@ -200,6 +200,7 @@ impl Batch<'_> {
         let mut out = report::output_report(&identified, &models, entry.unit.clone());
         out.effects_applied = extended.effect_ids();
         out.error_history = effects.sequence.history.clone();
+        out.shared_spool = effects.shared.clone();
         if !extended.effects.is_empty() {
             models.extended = Some(extended.clone());
         }

@@ -55,6 +55,7 @@ pub fn output_report(identified: &Identified, models: &OutputModels, unit: Strin
         parameter_intervals: Vec::new(),
         continuous: None,
         preparation: None,
+        shared_spool: Vec::new(),
     }
 }
 

@@ -30,8 +30,9 @@ use crate::core::run::{Quantity, Run};
 pub const SHARED_SPOOL_BLOCKS: [EffectId; 3] =
     [EffectId::ScheduledTimeConstant, EffectId::AsymmetricDynamics, EffectId::ThermalSoak];
 
-/// One spool block offered to another output's model, and what that output's validation runs said.
-#[derive(Clone, Debug, PartialEq)]
+/// One spool block offered to another output's model, and what that output's validation runs said
+/// (report.json `outputs.<o>.shared_spool`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SharedBlock {
     pub id: EffectId,
     /// The output the block was fitted on (the shaft speed).

@@ -104,6 +104,9 @@ pub struct OutputReport {
     /// from a channel other than the input.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preparation: Option<preparation::SegmentationChoice>,
+    /// The shaft speed's spool blocks offered to this output's model, and what came of each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shared_spool: Vec<crate::core::diagnose::SharedBlock>,
 }
 
 /// The residual analysis of one output's final model on one run, as the report keeps it (the

@@ -180,3 +180,22 @@ fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
     assert!(!offered[0].taken && offered[0].p_worse < 0.5, "{}", offered[0].words());
     assert_eq!(shared, thrust);
 }
+
+/// Nothing is shared into a speed model, from a model of another output, or without validation runs.
+#[test]
+fn nothing_is_shared_into_a_speed_model_or_without_validation_runs() {
+    let b = bench(3, &[], &[]);
+    let (_, thrust) = loop_model(&b, "thrust_n");
+    let mut speed = thrust.clone();
+    speed.output = "shaft_speed_rpm".to_owned();
+    speed.effects = vec![EffectBlock::ThermalSoak(ThermalSoak { gain: 0.1, tau_s: 30.0 })];
+    let validation = [&b.validation, &b.chirp];
+    let initial = OutputSettings::for_output("thrust_n").initial_state;
+    let unchanged = |(model, offered): (ExtendedModel, Vec<_>), from: &ExtendedModel| {
+        assert_eq!(&model, from);
+        assert!(offered.is_empty(), "{offered:?}");
+    };
+    unchanged(share_spool_dynamics(&speed, &speed, &validation, initial).unwrap(), &speed);
+    unchanged(share_spool_dynamics(&thrust, &thrust, &validation, initial).unwrap(), &thrust);
+    unchanged(share_spool_dynamics(&thrust, &speed, &[], initial).unwrap(), &thrust);
+}

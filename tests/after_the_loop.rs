@@ -163,19 +163,25 @@ fn the_speeds_spool_blocks_lower_thrusts_held_out_error() {
     );
 }
 
-/// A spool block that does not fit thrust is refused on thrust's own validation runs: a soak far
-/// stronger and faster than any engine's, pretended to come from the speed.
-#[test]
-fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
+/// Engine 3's session, its thrust model after the loop, and a speed model pretended to carry only
+/// the soak `soak`.
+fn thrust_and_a_speed_with(soak: ThermalSoak) -> (Bench, ExtendedModel, ExtendedModel) {
     let b = bench(3, &[], &[]);
     let (_, thrust) = loop_model(&b, "thrust_n");
     let mut speed = thrust.clone();
     speed.output = "shaft_speed_rpm".to_owned();
-    speed.effects = vec![EffectBlock::ThermalSoak(ThermalSoak { gain: 0.6, tau_s: 3.0 })];
+    speed.effects = vec![EffectBlock::ThermalSoak(soak)];
+    (b, thrust, speed)
+}
+
+/// A spool block that does not fit thrust is refused on thrust's own validation runs: a soak far
+/// stronger and faster than any engine's, pretended to come from the speed.
+#[test]
+fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
+    let (b, thrust, speed) = thrust_and_a_speed_with(ThermalSoak { gain: 0.6, tau_s: 3.0 });
     let validation = [&b.validation, &b.chirp];
-    let settings = OutputSettings::for_output("thrust_n");
-    let (shared, offered) =
-        share_spool_dynamics(&thrust, &speed, &validation, settings.initial_state).unwrap();
+    let initial = OutputSettings::for_output("thrust_n").initial_state;
+    let (shared, offered) = share_spool_dynamics(&thrust, &speed, &validation, initial).unwrap();
     assert_eq!(offered.len(), 1, "{offered:?}");
     assert!(!offered[0].taken && offered[0].p_worse < 0.5, "{}", offered[0].words());
     assert_eq!(shared, thrust);
@@ -184,11 +190,7 @@ fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
 /// Nothing is shared into a speed model, from a model of another output, or without validation runs.
 #[test]
 fn nothing_is_shared_into_a_speed_model_or_without_validation_runs() {
-    let b = bench(3, &[], &[]);
-    let (_, thrust) = loop_model(&b, "thrust_n");
-    let mut speed = thrust.clone();
-    speed.output = "shaft_speed_rpm".to_owned();
-    speed.effects = vec![EffectBlock::ThermalSoak(ThermalSoak { gain: 0.1, tau_s: 30.0 })];
+    let (b, thrust, speed) = thrust_and_a_speed_with(ThermalSoak { gain: 0.1, tau_s: 30.0 });
     let validation = [&b.validation, &b.chirp];
     let initial = OutputSettings::for_output("thrust_n").initial_state;
     let unchanged = |(model, offered): (ExtendedModel, Vec<_>), from: &ExtendedModel| {

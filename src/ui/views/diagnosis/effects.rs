@@ -14,12 +14,14 @@ use crate::ui::widgets::model::hint;
 /// on long runs), and more than a handful of effects on one engine is a sign the structure is wrong.
 const MAX_ROUNDS: usize = 5;
 
-/// The error history beside the effects in the model and the loop.
+/// The error history beside the effects in the model and the loop; `shared_with`: what the other
+/// outputs' models took of this one's spool blocks, in words.
 pub(super) fn effects_panel_ui(
     ui: &mut egui::Ui,
     output: &str,
     cache: &OutputCache,
     live: &LiveModel,
+    shared_with: &[String],
 ) -> Vec<Command> {
     let mut commands = Vec::new();
     ui.horizontal_top(|ui| {
@@ -32,6 +34,15 @@ pub(super) fn effects_panel_ui(
             commands.extend(effects_list_ui(ui, output, live));
             commands.extend(loop_ui(ui, output, cache, live));
             shared_ui(ui, live);
+            if !shared_with.is_empty() {
+                ui.label(RichText::new("Its spool blocks, shared").strong()).on_hover_text(
+                    "The other outputs' models took these blocks of this model with its parameters: the \
+                     spool is measured here",
+                );
+                for words in shared_with {
+                    hint(ui, words);
+                }
+            }
             if let Some(model) = &live.effects.model {
                 for effect in &model.effects {
                     let params: Vec<String> =

@@ -146,11 +146,34 @@ pub fn diagnosis_ui(
     });
     ui.separator();
     match state.section {
-        Section::WhichEffect => which_effect_ui(ui, output, state, view.output, live, view.is_preview),
+        Section::WhichEffect => {
+            let shared_with = taken_from(output, cache);
+            which_effect_ui(ui, output, state, view.output, live, view.is_preview, &shared_with)
+        }
         Section::WhereItFails => {
             diagnosis_residuals_ui::where_it_fails_ui(ui, output, &mut state.residuals, session, live)
         }
     }
+}
+
+/// What the other outputs' models took of `output`'s spool blocks: "thrust_n: scheduled_time_constant".
+fn taken_from(output: &str, cache: &Derived) -> Vec<String> {
+    cache
+        .output_names()
+        .into_iter()
+        .filter(|other| *other != output)
+        .filter_map(|other| {
+            let live = cache.output(other)?.live.as_ref().ok()?;
+            let taken: Vec<&str> = live
+                .effects
+                .shared
+                .iter()
+                .filter(|b| b.taken && b.from == output)
+                .map(|b| b.id.name())
+                .collect();
+            (!taken.is_empty()).then(|| format!("{other}: {}", taken.join(", ")))
+        })
+        .collect()
 }
 
 fn which_effect_ui(
@@ -160,8 +183,9 @@ fn which_effect_ui(
     cache: &crate::ui::derived::model_cache::OutputCache,
     live: &crate::ui::derived::model_cache::LiveModel,
     is_preview: bool,
+    shared_with: &[String],
 ) -> Vec<Command> {
-    let mut commands = effects::effects_panel_ui(ui, output, cache, live);
+    let mut commands = effects::effects_panel_ui(ui, output, cache, live, shared_with);
     ui.separator();
     job_status_ui(ui, output, state, cache, &live.key(), is_preview, live.finishing);
     let Some(finished) = state.result(output) else { return commands };

@@ -22,7 +22,7 @@ use jetid::io::csv_run::{LoadNotes, LoadOptions, RunFileError, load_run_with_not
 use jetid::io::model_file::{ModelFile, parse_model, read_model, write_model};
 use jetid::io::project::{Project, ProjectFile, RunSource, project_of};
 use jetid::workflow::model::add_project_effects;
-use jetid::workflow::project_model::{BuiltOutput, Covariance, build_project, with_effects};
+use jetid::workflow::project_model::{BuiltOutput, Covariance, build_project, share_the_spool, with_effects};
 use jetid::workflow::runs::{Runs, load_runs_with, load_scored_runs};
 
 mod fleet;
@@ -178,14 +178,27 @@ impl Session {
             let old = &self.inner;
             let mut project = old.project.clone();
             project.add_effects.push(id);
-            let mut built = Vec::with_capacity(old.built.len());
-            for output in &old.built {
-                let mut plan = output.plan.clone();
-                plan.effects.by_hand.push(id);
-                let effects = add_project_effects(&plan, &old.runs, &output.identified, &mut |_| true);
-                let identified = output.identified.clone();
-                built.push(with_effects(plan, &old.runs, identified, effects, Covariance::Estimate)?);
-            }
+            let mut stages: Vec<_> = old
+                .built
+                .iter()
+                .map(|output| {
+                    let mut plan = output.plan.clone();
+                    plan.effects.by_hand.push(id);
+                    let effects = add_project_effects(&plan, &old.runs, &output.identified, &mut |_| true);
+                    (plan, output.identified.clone(), effects)
+                })
+                .collect();
+            // The shaft speed's spool blocks shared with the other outputs, as the batch does.
+            share_the_spool(
+                &mut stages.iter_mut().map(|(plan, _, effects)| (&*plan, effects)).collect::<Vec<_>>(),
+                &old.runs,
+            );
+            let built = stages
+                .into_iter()
+                .map(|(plan, identified, effects)| {
+                    with_effects(plan, &old.runs, identified, effects, Covariance::Estimate)
+                })
+                .collect::<anyhow::Result<Vec<_>>>()?;
             let mut file = old.file.clone();
             file.outputs = built.iter().map(|b| b.entry.clone()).collect();
             let mut notes = old.notes.clone();

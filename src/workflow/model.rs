@@ -234,6 +234,15 @@ pub fn spool_output(outputs: &[String]) -> Option<&str> {
     }
 }
 
+/// What of the shaft speed's finished `model` the other outputs can share: the model with only its
+/// spool blocks ([`diagnose::SHARED_SPOOL_BLOCKS`], all [`share_spool`] reads), or `None` when it has
+/// none. A cache keyed on it rebuilds another output only when what it would share changes.
+pub fn spool_part(model: &ExtendedModel) -> Option<ExtendedModel> {
+    let mut part = model.clone();
+    part.effects.retain(|e| diagnose::SHARED_SPOOL_BLOCKS.contains(&e.id()));
+    (!part.effects.is_empty()).then_some(part)
+}
+
 /// `effects` (of an output other than the shaft speed) with the spool blocks of `spool`, the
 /// shaft speed's finished model, shared where this output's validation runs do not refuse them
 /// ([`diagnose::share_spool_dynamics`]): the model, one history step per block kept, and what was

@@ -429,13 +429,13 @@ impl OutputCache {
         }
     }
 
-    /// The model whose spool blocks the other outputs share, when this is a shaft speed whose model
-    /// is finished: `Some(None)` when it has no effects model (nothing to share), `None` while it is
-    /// being finished (the others keep what they share until it is).
+    /// What the other outputs share of this model, when this is a shaft speed whose model is
+    /// finished ([`model::spool_part`]): `Some(None)` when it has no spool block (nothing to share),
+    /// `None` while it is being finished (the others keep what they share until it is).
     fn finished_spool(&self) -> Option<Option<Arc<ExtendedModel>>> {
         match &self.live {
             Ok(live) if live.finishing => None,
-            Ok(live) => Some(live.effects.model.clone().map(Arc::new)),
+            Ok(live) => Some(live.effects.model.as_ref().and_then(model::spool_part).map(Arc::new)),
             Err(_) if self.finishing.is_some() => None,
             Err(_) => Some(None),
         }

@@ -178,7 +178,8 @@ fn thrust_and_a_speed_with(soak: ThermalSoak) -> (Bench, ExtendedModel, Extended
 /// stronger and faster than any engine's, pretended to come from the speed.
 #[test]
 fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
-    let (b, thrust, speed) = thrust_and_a_speed_with(ThermalSoak { gain: 0.6, tau_s: 3.0 });
+    let (b, thrust, speed) =
+        thrust_and_a_speed_with(ThermalSoak { gain: 0.6, tau_s: 3.0, power_exponent: 3.0 });
     let validation = [&b.validation, &b.chirp];
     let initial = OutputSettings::for_output("thrust_n").initial_state;
     let (shared, offered) = share_spool_dynamics(&thrust, &speed, &validation, initial).unwrap();
@@ -190,7 +191,8 @@ fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
 /// Nothing is shared into a speed model, from a model of another output, or without validation runs.
 #[test]
 fn nothing_is_shared_into_a_speed_model_or_without_validation_runs() {
-    let (b, thrust, speed) = thrust_and_a_speed_with(ThermalSoak { gain: 0.1, tau_s: 30.0 });
+    let (b, thrust, speed) =
+        thrust_and_a_speed_with(ThermalSoak { gain: 0.1, tau_s: 30.0, power_exponent: 3.0 });
     let validation = [&b.validation, &b.chirp];
     let initial = OutputSettings::for_output("thrust_n").initial_state;
     let unchanged = |(model, offered): (ExtendedModel, Vec<_>), from: &ExtendedModel| {

@@ -46,7 +46,7 @@ fn effects() -> Vec<EffectBlock> {
     scheduled.state_log_ratio = 0.4;
     vec![
         EffectBlock::TransportDelay(TransportDelay { delay_samples: 2.4 }),
-        EffectBlock::ThermalSoak(ThermalSoak { gain: 0.15, tau_s: 8.0 }),
+        EffectBlock::ThermalSoak(ThermalSoak { gain: 0.15, tau_s: 8.0, power_exponent: 1.5 }),
         EffectBlock::ScheduledTimeConstant(scheduled),
         EffectBlock::SensorDynamics(SensorDynamics { freq_hz: 1.5, zeta: 0.35, lag_s: 0.05 }),
         EffectBlock::StaticMapOrder(StaticMapOrder { knot_v: 26.5, slope_change: -0.8 }),

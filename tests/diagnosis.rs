@@ -443,7 +443,8 @@ fn effect_records_are_checked() {
     ));
     assert!(matches!(
         EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1), ("tau", 40.0)])),
-        Err(EffectError::UnknownParameter { param, known, .. }) if param == "tau" && known == ["gain", "tau_s"]
+        Err(EffectError::UnknownParameter { param, known, .. })
+            if param == "tau" && known == ["gain", "tau_s", "power_exponent"]
     ));
     assert!(matches!(
         EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1)])),
@@ -457,8 +458,15 @@ fn effect_records_are_checked() {
         EffectBlock::from_params(id("transport_delay"), &params(&[("delay_samples", f64::NAN)])),
         Err(EffectError::ParameterOutOfRange { .. })
     ));
+    assert!(matches!(
+        EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1), ("tau_s", 40.0), ("power_exponent", -1.0)])),
+        Err(EffectError::ParameterOutOfRange { param, .. }) if param == "power_exponent"
+    ));
     let soak =
         EffectBlock::from_params(id("thermal_soak"), &params(&[("gain", 0.1), ("tau_s", 40.0)])).unwrap();
+    assert_eq!(EffectBlock::from_record(&soak.record()).unwrap(), soak);
+    let on_power = params(&[("gain", 0.1), ("tau_s", 40.0), ("power_exponent", 3.0)]);
+    let soak = EffectBlock::from_params(id("thermal_soak"), &on_power).unwrap();
     assert_eq!(EffectBlock::from_record(&soak.record()).unwrap(), soak);
 }
 

@@ -385,15 +385,25 @@ fn static_map_order_is_found_on_engines_of_the_family() {
 /// or found by the diagnosis.
 #[test]
 fn transport_delay_is_found_on_engines_of_the_family() {
+    assert_delay_found_on_two(SPEED);
+}
+
+/// The fuel line's dead time acts before the spool, so thrust carries it too.
+#[test]
+fn transport_delay_is_found_on_thrust_too() {
+    assert_delay_found_on_two(THRUST);
+}
+
+fn assert_delay_found_on_two(output: &str) {
     let delay_s = 0.9;
     let spec = format!("transport_delay:delay_s={delay_s}");
-    let (count, log) = found_on(&spec, SPEED, |b, identified, report| {
+    let (count, log) = found_on(&spec, output, |b, identified, report| {
         let timed =
             identified.proposal.as_ref().map_or(0, |p| p.dead_time.in_model()) as f64 * b.ident.dt_secs;
         (timed - delay_s).abs() <= 3.0 * b.ident.dt_secs || first_physics_is(report, "transport_delay")
     });
-    eprintln!("{spec}:\n{log}");
-    assert!(count >= 2, "{spec} found on {count} engines:\n{log}");
+    eprintln!("{spec} on {output}:\n{log}");
+    assert!(count >= 2, "{spec} found on {output} on {count} engines:\n{log}");
 }
 
 /// A stand resonance excited by random buffeting cannot be predicted from the input; its evidence

@@ -370,8 +370,9 @@ fn matlab_file_holds_the_transfer_functions_and_a_simulation() {
         assert!(section.contains(&format!("o.tf.den = [{}];", row(&tf.den_zinv))), "{}", out.name);
         assert!(section.contains(&format!("o.coeffs = [{}];", row(&out.wiener.map.coeffs_scaled))));
         let soak = &out.effects[0].params;
+        let exponent = soak["power_exponent"];
         assert!(
-            section.contains(&format!("o.soak = [{:?}, {:?}];", soak["gain"], soak["tau_s"])),
+            section.contains(&format!("o.soak = [{:?}, {:?}, {exponent:?}];", soak["gain"], soak["tau_s"])),
             "{}",
             out.name
         );

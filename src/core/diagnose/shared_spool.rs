@@ -15,7 +15,8 @@
 //! validation runs can only speak against them.
 use super::witness::{Comparison, Scores, ValidationResponses, p_text};
 use super::{DiagnoseError, RIVAL_LEVEL, measured};
-use crate::core::effects::{EffectBlock, EffectId, ExtendedModel};
+use crate::core::effects::thermal_soak::power_exponent_for;
+use crate::core::effects::{EffectBlock, EffectId, ExtendedModel, ThermalSoak};
 use crate::core::identification::initial_state::InitialState;
 use crate::core::run::{Quantity, Run};
 
@@ -23,7 +24,7 @@ use crate::core::run::{Quantity, Run};
 /// constant (its schedule is written in units of the input, which the unit-gain spool state of
 /// every output's linear block shares), asymmetric dynamics (a ratio of time constants) and the
 /// thermal soak (a share of every power change and a time constant, applied to the unit-gain
-/// response). Not shared, although they act before the spool too: the rate limit (a speed model
+/// response; each output soaks its own power, see `with_block`). Not shared, although they act before the spool too: the rate limit (a speed model
 /// states it in rpm/s through its own map, another output in units of its own `v`), the dead time
 /// (each output's linear block carries its own; adding the speed's would count it twice) and the
 /// calibration drift (each output calibrates a run on its own holds).
@@ -142,11 +143,24 @@ pub fn share_spool_dynamics(
     Ok((current, offered))
 }
 
-/// `model` with `block` in place of its own of the kind (or added), the blocks in catalog order.
+/// `model` with `block` in place of its own of the kind (or added), the blocks in catalog order. A
+/// soak keeps the share and time constant of the speed's, and acts on this output's own power: the
+/// exponent of the model's own soak, or where it has none the one a soak of its output starts from
+/// (the speed's power is N³; thrust's, about F^(3/5): see `ThermalSoak`).
 fn with_block(model: &ExtendedModel, block: &EffectBlock) -> ExtendedModel {
     let mut m = model.clone();
+    let block = match (block, model.effect(EffectId::ThermalSoak)) {
+        (EffectBlock::ThermalSoak(soak), own) => {
+            let power_exponent = match own {
+                Some(EffectBlock::ThermalSoak(own)) => own.power_exponent,
+                _ => power_exponent_for(&model.output),
+            };
+            EffectBlock::ThermalSoak(ThermalSoak { power_exponent, ..soak.clone() })
+        }
+        _ => block.clone(),
+    };
     m.effects.retain(|e| e.id() != block.id());
-    m.effects.push(block.clone());
+    m.effects.push(block);
     m.effects.sort_by_key(EffectBlock::rank);
     m
 }

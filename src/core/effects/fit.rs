@@ -289,6 +289,15 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
         Some(f) => data.y.iter().zip(f).map(|(y, f)| y / f).collect(),
         None => Cow::Borrowed(&data.y),
     };
+    // A soak on the output's power, after the map, is undone before the gain, offset and map are
+    // fitted: they read `v`, which does not carry it.
+    let y_c: Cow<[f64]> = match s.effects.iter().find_map(|e| match e {
+        EffectBlock::ThermalSoak(soak) if soak.on_output() => Some(soak),
+        _ => None,
+    }) {
+        Some(soak) => Cow::Owned(soak.undo_on_power(&y_c, dt)),
+        None => y_c,
+    };
     let sensor = s.effects.iter().find_map(|e| match e {
         EffectBlock::SensorDynamics(sd) => Some(sd),
         _ => None,

@@ -56,7 +56,7 @@ mod spool;
 mod static_map_order;
 pub mod stats;
 mod structural;
-mod thermal_soak;
+pub(crate) mod thermal_soak;
 pub mod transport_delay;
 mod wording;
 
@@ -74,7 +74,7 @@ pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
 pub use static_map_order::StaticMapOrder;
 pub use structural::{StructuralChange, refine_structure};
-pub use thermal_soak::ThermalSoak;
+pub use thermal_soak::{FAN_LAW_EXPONENT, ThermalSoak};
 pub use transport_delay::TransportDelay;
 
 /// One parameter of an effect block: its name (with unit suffix) and admissible range.
@@ -86,11 +86,19 @@ pub struct ParamSpec {
     pub min: f64,
     /// Largest admissible value.
     pub max: f64,
+    /// The value a record without the parameter reads as: set for a parameter added after model
+    /// files were first written, so that such a file predicts as it always did.
+    pub absent: Option<f64>,
 }
 
 impl ParamSpec {
     const fn real(name: &'static str, min: f64, max: f64) -> Self {
-        Self { name, min, max }
+        Self { name, min, max, absent: None }
+    }
+
+    /// A parameter that model files written before it existed lack, read as `absent`.
+    const fn added_later(name: &'static str, min: f64, max: f64, absent: f64) -> Self {
+        Self { name, min, max, absent: Some(absent) }
     }
 }
 
@@ -294,7 +302,7 @@ fn checked_values(id: EffectId, params: &BTreeMap<String, f64>) -> Result<Vec<f6
 }
 
 fn check_value(id: EffectId, spec: &ParamSpec, value: Option<f64>) -> Result<f64, EffectError> {
-    let Some(value) = value else {
+    let Some(value) = value.or(spec.absent) else {
         return Err(EffectError::MissingParameter {
             effect: id.name().to_owned(),
             param: spec.name.to_owned(),
@@ -428,7 +436,7 @@ mod tests {
     fn every_effect_round_trips_through_its_record() {
         let blocks = [
             EffectBlock::TransportDelay(TransportDelay { delay_samples: 4.0 }),
-            EffectBlock::ThermalSoak(ThermalSoak { gain: 0.1, tau_s: 40.0 }),
+            EffectBlock::ThermalSoak(ThermalSoak { gain: 0.1, tau_s: 40.0, power_exponent: 0.6 }),
             EffectBlock::AmbientCorrection(AmbientCorrection {
                 output_theta_exp: 0.5,
                 output_delta_exp: 0.0,

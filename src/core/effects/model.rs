@@ -335,7 +335,9 @@ pub(super) fn linear_stages(stages: &[StageInput], dt_secs: f64) -> Vec<Result<V
                 }
             };
             for effect in stage.effects {
-                if let EffectBlock::ThermalSoak(soak) = effect {
+                if let EffectBlock::ThermalSoak(soak) = effect
+                    && !soak.on_output()
+                {
                     v = soak.apply(&v, dt_secs);
                 }
             }
@@ -399,6 +401,7 @@ pub(super) fn output_stage(
     let mut y: Vec<f64> = v.iter().map(|vk| map.eval(*vk) + kink.map_or(0.0, |k| k.eval(*vk))).collect();
     for effect in effects {
         match (effect, conditions) {
+            (EffectBlock::ThermalSoak(soak), _) if soak.on_output() => y = soak.apply_to_power(&y, dt_secs),
             (EffectBlock::AmbientCorrection(a), Some(c)) => {
                 for (yk, f) in y.iter_mut().zip(a.output_factor(c)) {
                     *yk *= f;
@@ -442,7 +445,9 @@ mod tests {
         let r = run(100);
         let plain = m.simulate(&r).unwrap();
         assert_eq!(plain, m.wiener.simulate(&r.input.values).1);
-        let soaked = m.with_effect(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.2, tau_s: 5.0 })).unwrap();
+        let soaked = m
+            .with_effect(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.2, tau_s: 5.0, power_exponent: 0.0 }))
+            .unwrap();
         let both =
             soaked.with_effect(EffectBlock::TransportDelay(TransportDelay { delay_samples: 3.0 })).unwrap();
         assert_eq!(both.effect_ids(), vec![EffectId::CATALOG[0], EffectId::CATALOG[1]]);

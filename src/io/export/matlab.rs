@@ -243,15 +243,20 @@ if isempty(o.split)
 else
     v = o.split.gain * spool(o.split, delay(u, o.split.dead_time, 0), o, dt);
 end
-if ~isempty(o.soak)
-    a = exp(-dt / max(o.soak(2), realmin));
-    s = v(1);
-    for k = 1:numel(v)
-        s = a * s + (1 - a) * v(k);
-        v(k) = v(k) + o.soak(1) * (s - v(k));
-    end
+if ~isempty(o.soak) && ~(o.soak(3) > 0)
+    v = soak(o.soak, v, dt);
 end
 v = v + o.offset;
+end
+
+function x = soak(sk, x, dt)
+% The soak branch: x + g (S_tau(z) x - x), S_tau a unit-gain first-order lag from x's first value.
+a = exp(-dt / max(sk(2), realmin));
+s = x(1);
+for k = 1:numel(x)
+    s = a * s + (1 - a) * x(k);
+    x(k) = x(k) + sk(1) * (s - x(k));
+end
 end
 
 function out = spool(sp, u, o, dt)
@@ -369,6 +374,12 @@ end
 
 function y = output_stage(o, v, theta, delta, dt)
 y = static_map(o, v);
+if ~isempty(o.soak) && o.soak(3) > 0
+    % A soak with an exponent k > 0 acts on the output's power y^k.
+    k = o.soak(3);
+    p = soak(o.soak, sign(y) .* abs(y) .^ k, dt);
+    y = sign(p) .* abs(p) .^ (1 / k);
+end
 for i = 1:numel(o.output_steps)
     s = o.output_steps{i};
     if strcmp(s.kind, 'ambient')

@@ -70,14 +70,21 @@ pub(super) fn map_blocks(o: &OutputPlan) -> [Block; 2] {
     ]
 }
 
-/// The blocks acting on `v` (the soak after the linear block, the rate limit on the split block's
+/// The blocks acting on `v` (the soak after the linear block, or on the output's power after the
+/// map when its `soak_power_exponent` k is positive; the rate limit on the split block's
 /// spool state with whether it reads the limit through the map's slope), which every rendering lists
 /// after the linear block.
 pub(super) fn v_blocks(o: &OutputPlan) -> [Block; 2] {
     [
         Block {
             key: "soak",
-            fields: o.soak.as_ref().map(|s| vec![("soak_gain", num(s.gain)), ("soak_tau_s", num(s.tau_s))]),
+            fields: o.soak.as_ref().map(|s| {
+                vec![
+                    ("soak_gain", num(s.gain)),
+                    ("soak_tau_s", num(s.tau_s)),
+                    ("soak_power_exponent", num(s.power_exponent)),
+                ]
+            }),
         },
         Block {
             key: "rate_limit",

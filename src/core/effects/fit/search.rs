@@ -6,6 +6,7 @@ use super::memo::LinearMemo;
 use super::{Assembled, FitData, REFINED_STARTS, Structure, assemble, check_channels, refine};
 use crate::core::effects::model::ExtendedModel;
 use crate::core::effects::stats::mean;
+use crate::core::effects::thermal_soak::power_exponent_for;
 use crate::core::effects::{
     AmbientCorrection, AsymmetricDynamics, CalibrationDrift, EffectBlock, EffectError, EffectId, RateLimit,
     ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
@@ -158,7 +159,11 @@ fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Optio
             let (v, _) = current.simulate_with_v(&data.run).ok()?;
             RateLimit::neutral(&current.rate_limited_quantity(&v), data.dt_secs).map(EffectBlock::RateLimit)
         }
-        EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak { gain: 0.0, tau_s: 20.0 })),
+        EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak {
+            gain: 0.0,
+            tau_s: 20.0,
+            power_exponent: power_exponent_for(&data.output),
+        })),
         EffectId::AsymmetricDynamics => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
         }
@@ -188,7 +193,10 @@ fn starting_points(
         EffectId::TransportDelay => {
             TransportDelay::guesses(data.dt_secs).into_iter().map(EffectBlock::TransportDelay).collect()
         }
-        EffectId::ThermalSoak => ThermalSoak::guesses().into_iter().map(EffectBlock::ThermalSoak).collect(),
+        EffectId::ThermalSoak => {
+            let power_exponent = power_exponent_for(&data.output);
+            ThermalSoak::guesses(power_exponent).into_iter().map(EffectBlock::ThermalSoak).collect()
+        }
         EffectId::AmbientCorrection => {
             vec![EffectBlock::AmbientCorrection(AmbientCorrection::for_output(&data.output)?)]
         }

@@ -54,6 +54,7 @@ typedef struct {
     double log_ratio, state_log_ratio, ref_input, input_span;
     int has_soak;
     double soak_gain, soak_tau_s;
+    double soak_power_exponent; /* > 0: the soak acts on y^k after the static map; 0: on v */
     int has_rate_limit;
     double rise_per_s, fall_per_s;
     int limit_through_map;
@@ -310,6 +311,22 @@ static double jetid_input_stage(jetid_state *s, double u, double temp_c, double 
     return u;
 }
 
+/* The soak branch on x: x + g (S_tau(z) x - x), S_tau a unit-gain first-order lag from x's first value. */
+static double jetid_soak_step(jetid_state *s, double x, int first)
+{
+    if (first) s->soak_s = x;
+    s->soak_s = s->soak_a * s->soak_s + (1.0 - s->soak_a) * x;
+    return x + s->p->soak_gain * (s->soak_s - x);
+}
+
+/* The soak on the output's power y^k (k = soak_power_exponent), the output given back; signs kept. */
+static double jetid_soak_power_step(jetid_state *s, double y, int first)
+{
+    double k = s->p->soak_power_exponent;
+    double power = jetid_soak_step(s, copysign(pow(fabs(y), k), y), first);
+    return copysign(pow(fabs(power), 1.0 / k), power);
+}
+
 /* The static map's argument v from the next input-stage sample (calibration offset added). */
 static double jetid_linear_step(jetid_state *s, double u, int first)
 {
@@ -317,21 +334,20 @@ static double jetid_linear_step(jetid_state *s, double u, int first)
     double v;
     u += s->calibration_offset;
     v = p->split ? jetid_spool_step(s, u, first) : jetid_filter_step(&p->tf, &s->linear, u, first);
-    if (p->has_soak) {
-        if (first) s->soak_s = v;
-        s->soak_s = s->soak_a * s->soak_s + (1.0 - s->soak_a) * v;
-        v = v + p->soak_gain * (s->soak_s - v);
-    }
+    if (p->has_soak && !(p->soak_power_exponent > 0.0)) v = jetid_soak_step(s, v, first);
     return v + p->offset;
 }
 
 /* The output from v: the static map, then the sensors (their state in sensor) and the inlet
  * conditions' factor. */
-static double jetid_output_stage(const jetid_params *p, jetid_sensor_state *sensor, double dt, double v, double temp_c,
-                                 double pressure_kpa, int first)
+static double jetid_output_stage(jetid_state *s, double v, double temp_c, double pressure_kpa, int first)
 {
+    const jetid_params *p = s->p;
+    jetid_sensor_state *sensor = s->sensor;
+    double dt = s->dt;
     int i;
     double y = jetid_static_map(p, v);
+    if (p->has_soak && p->soak_power_exponent > 0.0) y = jetid_soak_power_step(s, y, first);
     for (i = 0; i < p->n_output_steps; i++) {
         const jetid_output_step *st = &p->output_steps[i];
         if (st->kind == JETID_STEP_SENSOR) {
@@ -348,7 +364,7 @@ static double jetid_step(jetid_state *s, double u, double temp_c, double pressur
 {
     int first = !s->started;
     double v = jetid_linear_step(s, jetid_input_stage(s, u, temp_c, pressure_kpa), first);
-    double y = jetid_output_stage(s->p, s->sensor, s->dt, v, temp_c, pressure_kpa, first);
+    double y = jetid_output_stage(s, v, temp_c, pressure_kpa, first);
     s->started = 1;
     return y;
 }
@@ -372,7 +388,7 @@ static void jetid_response_at_holds(const jetid_params *p, const double *v, cons
     double sum = 0.0;
     jetid_init(&s, p, dt, 0.0);
     for (k = 0; k < n && h < n_holds; k++) {
-        double y = jetid_output_stage(p, s.sensor, dt, v[k] + p->calibration_dc_gain * b, temp_c ? temp_c[k] : 0.0,
+        double y = jetid_output_stage(&s, v[k] + p->calibration_dc_gain * b, temp_c ? temp_c[k] : 0.0,
                                      pressure_kpa ? pressure_kpa[k] : 0.0, k == 0);
         if (k >= wa[h]) sum += y;
         if (k + 1 == wb[h]) {

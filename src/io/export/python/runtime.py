@@ -251,11 +251,16 @@ class Model:
         else:
             self.linear = _Filter(p["tf"])
         self.soak = _Soak(p["soak"][0], p["soak"][1], dt) if p["soak"] is not None else None
+        # A soak with an exponent k > 0 acts on the output's power y**k after the static map.
+        self.soak_on_power = p["soak"] is not None and p["soak"][2] > 0.0
         self.dt = dt
         self.output_steps = self.fresh_output_steps()
 
     def fresh_output_steps(self):
-        """The output stage's sensors, at rest until their first sample."""
+        """The output stage's sensors (and the soak on the speed's power), at rest until their first
+        sample."""
+        if self.soak_on_power:
+            self.soak = _Soak(self.p["soak"][0], self.p["soak"][1], self.dt)
         return [_Sensor(s[1], s[2], s[3], self.dt) if s[0] == "sensor" else None for s in self.p["output_steps"]]
 
     def input_stage(self, u, temp_c=None, pressure_kpa=None):
@@ -276,13 +281,17 @@ class Model:
     def linear_step(self, u_stage):
         """The static map's argument v from the next input-stage sample (calibration offset added)."""
         v = self.linear.step(u_stage + self.offset)
-        if self.soak is not None:
+        if self.soak is not None and not self.soak_on_power:
             v = self.soak.step(v)
         return v + self.p["offset"]
 
     def output_step(self, v, temp_c, pressure_kpa, sensors):
         """The output from v: the static map, then the sensors and the inlet-conditions factor."""
         y = static_map(self.output, v)
+        if self.soak_on_power:
+            k = self.p["soak"][2]
+            power = self.soak.step(math.copysign(abs(y) ** k, y))
+            y = math.copysign(abs(power) ** (1.0 / k), power)
         for spec, sensor in zip(self.p["output_steps"], sensors):
             if sensor is not None:
                 y = sensor.step(y)

@@ -15,7 +15,7 @@
 //! validation runs can only speak against them.
 use super::witness::{Comparison, Scores, ValidationResponses, p_text};
 use super::{DiagnoseError, RIVAL_LEVEL, measured};
-use crate::core::effects::thermal_soak::power_exponent_for;
+use crate::core::effects::thermal_soak::{exponent_affine_in_power, power_exponent_without_speed};
 use crate::core::effects::{EffectBlock, EffectId, ExtendedModel, ThermalSoak};
 use crate::core::identification::initial_state::InitialState;
 use crate::core::run::{Quantity, Run};
@@ -119,7 +119,7 @@ pub fn share_spool_dynamics(
         if set.iter().all(|b| offered.iter().any(|o: &SharedBlock| o.taken && o.id == b.id())) {
             continue;
         }
-        let candidate = set.iter().fold(current.clone(), |m, b| with_block(&m, b));
+        let candidate = set.iter().fold(current.clone(), |m, b| with_block(&m, b, spool));
         // Blocks the output's model cannot run (no spool root to schedule) are not offered.
         let Ok(after) = Scores::of(&candidate, validation, initial, &responses) else { continue };
         let worse = Comparison::of(&after, &scores, &after);
@@ -144,19 +144,15 @@ pub fn share_spool_dynamics(
 }
 
 /// `model` with `block` in place of its own of the kind (or added), the blocks in catalog order. A
-/// soak keeps the share and time constant of the speed's, and acts on this output's own power: the
-/// exponent of the model's own soak, or where it has none the one a soak of its output starts from
-/// (the speed's power is N³; thrust's, about F^(3/5): see `ThermalSoak`).
-fn with_block(model: &ExtendedModel, block: &EffectBlock) -> ExtendedModel {
+/// soak keeps the share and time constant of the speed's model `spool`, and acts on this output's
+/// own power ([`own_power_exponent`]).
+fn with_block(model: &ExtendedModel, block: &EffectBlock, spool: &ExtendedModel) -> ExtendedModel {
     let mut m = model.clone();
-    let block = match (block, model.effect(EffectId::ThermalSoak)) {
-        (EffectBlock::ThermalSoak(soak), own) => {
-            let power_exponent = match own {
-                Some(EffectBlock::ThermalSoak(own)) => own.power_exponent,
-                _ => power_exponent_for(&model.output),
-            };
-            EffectBlock::ThermalSoak(ThermalSoak { power_exponent, ..soak.clone() })
-        }
+    let block = match block {
+        EffectBlock::ThermalSoak(soak) => EffectBlock::ThermalSoak(ThermalSoak {
+            power_exponent: own_power_exponent(model, spool),
+            ..soak.clone()
+        }),
         _ => block.clone(),
     };
     m.effects.retain(|e| e.id() != block.id());
@@ -164,3 +160,26 @@ fn with_block(model: &ExtendedModel, block: &EffectBlock) -> ExtendedModel {
     m.effects.sort_by_key(EffectBlock::rank);
     m
 }
+
+/// The power of `model`'s output a soak acts on: its own soak's exponent (fitted where the run
+/// measured the speed beside it), or else the power of its output most nearly affine in N³ over
+/// the two models' steady states across the range its map was identified on
+/// ([`exponent_affine_in_power`]), or where that cannot be read the exponent for a run without
+/// the speed.
+fn own_power_exponent(model: &ExtendedModel, spool: &ExtendedModel) -> f64 {
+    if let Some(EffectBlock::ThermalSoak(own)) = model.effect(EffectId::ThermalSoak) {
+        return own.power_exponent;
+    }
+    let steady = model.identified_inputs().map(|(lo, hi)| {
+        (0..=STEADY_POINTS)
+            .map(|i| lo + (hi - lo) * i as f64 / STEADY_POINTS as f64)
+            .filter_map(|u| Some((spool.steady_output(u)?, model.steady_output(u)?)))
+            .unzip::<_, _, Vec<f64>, Vec<f64>>()
+    });
+    steady
+        .and_then(|(n, y)| exponent_affine_in_power(&n, &y))
+        .unwrap_or_else(|| power_exponent_without_speed(&model.output))
+}
+
+/// Steady states sampled across the identified range: a smooth map's power law needs no more.
+const STEADY_POINTS: usize = 50;

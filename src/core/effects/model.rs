@@ -168,6 +168,24 @@ impl ExtendedModel {
         Ok(Some(limit.on_state(&self.output, dt_secs, gain, linear.offset, &self.wiener.map, self.kink())))
     }
 
+    /// The output at the steady state of a constant input `u` (as the input stage leaves it): the
+    /// static map and its kink at the linear block's steady `v`; `None` without a steady state.
+    pub fn steady_output(&self, u: f64) -> Option<f64> {
+        let linear = &self.wiener.linear;
+        let v = linear.tf.dc_gain().ok()? * u + linear.offset;
+        Some(self.wiener.map.eval(v) + self.kink().map_or(0.0, |k| k.eval(v)))
+    }
+
+    /// The inputs (as the input stage leaves them) whose steady states span the range the static
+    /// map was identified on, lowest first; `None` for a map without one or no steady state.
+    pub fn identified_inputs(&self) -> Option<(f64, f64)> {
+        let (lo, hi) = self.wiener.map.identified_range()?;
+        let linear = &self.wiener.linear;
+        let gain = linear.tf.dc_gain().ok().filter(|g| g.is_finite() && *g != 0.0)?;
+        let (a, b) = ((lo - linear.offset) / gain, (hi - linear.offset) / gain);
+        Some((a.min(b), a.max(b)))
+    }
+
     /// The static map's kink, when the model has one.
     fn kink(&self) -> Option<&StaticMapOrder> {
         kink(&self.effects)

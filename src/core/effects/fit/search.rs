@@ -162,7 +162,7 @@ fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Optio
         EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak {
             gain: 0.0,
             tau_s: 20.0,
-            power_exponent: power_exponent_for(&data.output),
+            power_exponent: power_exponent_for(&data.output, &data.run),
         })),
         EffectId::AsymmetricDynamics => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
@@ -194,7 +194,7 @@ fn starting_points(
             TransportDelay::guesses(data.dt_secs).into_iter().map(EffectBlock::TransportDelay).collect()
         }
         EffectId::ThermalSoak => {
-            let power_exponent = power_exponent_for(&data.output);
+            let power_exponent = power_exponent_for(&data.output, &data.run);
             ThermalSoak::guesses(power_exponent).into_iter().map(EffectBlock::ThermalSoak).collect()
         }
         EffectId::AmbientCorrection => {

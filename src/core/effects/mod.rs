@@ -74,7 +74,7 @@ pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
 pub use static_map_order::StaticMapOrder;
 pub use structural::{StructuralChange, refine_structure};
-pub use thermal_soak::{FAN_LAW_EXPONENT, ThermalSoak};
+pub use thermal_soak::{FAN_LAW_EXPONENT, ThermalSoak, exponent_affine_in_power};
 pub use transport_delay::TransportDelay;
 
 /// One parameter of an effect block: its name (with unit suffix) and admissible range.

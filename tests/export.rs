@@ -228,6 +228,12 @@ fn thermal_soak() {
     exports_reproduce_predict(Some("thermal_soak"), Some("shaft_speed_rpm"));
 }
 
+/// Thrust's soak acts on a power of thrust that is not the speed's cube (`powf` in every runtime).
+#[test]
+fn thermal_soak_on_thrust() {
+    exports_reproduce_predict(Some("thermal_soak"), Some("thrust_n"));
+}
+
 #[test]
 fn ambient_correction() {
     exports_reproduce_predict(Some("ambient_correction"), Some("thrust_n"));

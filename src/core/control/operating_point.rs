@@ -208,7 +208,7 @@ fn operating_point(
         _ => None,
     });
     let v = g1 * u + linear.offset;
-    let y = model.wiener.map.eval(v) + kink.map_or(0.0, |k| k.eval(v));
+    let y = model.map_with_kink(v);
     let slope =
         model.wiener.map.slope(v) + kink.map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 });
     let gain = slope * g1;

@@ -19,6 +19,7 @@ use super::model::{
 };
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
+use super::thermal_soak::power_exponent_for;
 use super::{AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::settings::OutputSettings;
@@ -60,6 +61,9 @@ pub struct FitData {
     /// Samples `(start, end)` of `run` left out of the fit (see [`FitData::folds`]): their error is
     /// not in the cost, and the steady windows they touch are not in the static map.
     pub held_out: Vec<(usize, usize)>,
+    /// [`FitData::soak_power_exponent`], read from the run the first time it is asked for (and
+    /// kept by a cross-validation's folds, which share the run).
+    soak_power_exponent: std::sync::OnceLock<f64>,
 }
 
 impl FitData {
@@ -108,6 +112,7 @@ impl FitData {
             max_static_order: settings.max_static_order,
             responses,
             held_out: Vec::new(),
+            soak_power_exponent: std::sync::OnceLock::new(),
         })
     }
 
@@ -117,6 +122,11 @@ impl FitData {
         let touches = |&(a, b): &(usize, usize)| ranges.iter().any(|&(s, e)| s < b && a < e);
         let steady_windows = self.steady_windows.iter().copied().filter(|w| !touches(w)).collect();
         Self { steady_windows, held_out: ranges, ..self.clone() }
+    }
+
+    /// The power of the output a soak fitted on this data acts on ([`power_exponent_for`]).
+    pub fn soak_power_exponent(&self) -> f64 {
+        *self.soak_power_exponent.get_or_init(|| power_exponent_for(&self.output, &self.run))
     }
 
     /// Whether sample `k` of `run` is in the fit.
@@ -276,11 +286,14 @@ impl Prepared {
     }
 }
 
-/// [`assemble`] from the structure's [`LinearPart`] (which must be `s`'s own, or that of a
-/// structure with the same roots, dead time and blocks that shape it).
-pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) -> Option<Assembled> {
-    let dt = data.dt_secs;
-    let (unit, conditions) = (&part.unit, &part.conditions);
+/// The measured output as the static map gives it, before the blocks after the map: the inlet
+/// conditions' factor divided out, and a soak on the output's power undone (the gain, offset and
+/// map read `v`, which carries neither).
+fn what_the_map_gives<'y>(
+    s: &Structure,
+    data: &'y FitData,
+    conditions: Option<&super::ambient_correction::Conditions>,
+) -> Cow<'y, [f64]> {
     let factor: Option<Vec<f64>> = s.effects.iter().find_map(|e| match (e, conditions) {
         (EffectBlock::AmbientCorrection(a), Some(c)) => Some(a.output_factor(c)),
         _ => None,
@@ -289,15 +302,22 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
         Some(f) => data.y.iter().zip(f).map(|(y, f)| y / f).collect(),
         None => Cow::Borrowed(&data.y),
     };
-    // A soak on the output's power, after the map, is undone before the gain, offset and map are
-    // fitted: they read `v`, which does not carry it.
-    let y_c: Cow<[f64]> = match s.effects.iter().find_map(|e| match e {
+    let soak = s.effects.iter().find_map(|e| match e {
         EffectBlock::ThermalSoak(soak) if soak.on_output() => Some(soak),
         _ => None,
-    }) {
-        Some(soak) => Cow::Owned(soak.undo_on_power(&y_c, dt)),
+    });
+    match soak {
+        Some(soak) => Cow::Owned(soak.undo_on_power(&y_c, data.dt_secs)),
         None => y_c,
-    };
+    }
+}
+
+/// [`assemble`] from the structure's [`LinearPart`] (which must be `s`'s own, or that of a
+/// structure with the same roots, dead time and blocks that shape it).
+pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) -> Option<Assembled> {
+    let dt = data.dt_secs;
+    let (unit, conditions) = (&part.unit, &part.conditions);
+    let y_c = what_the_map_gives(s, data, conditions.as_ref());
     let sensor = s.effects.iter().find_map(|e| match e {
         EffectBlock::SensorDynamics(sd) => Some(sd),
         _ => None,

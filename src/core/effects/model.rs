@@ -172,8 +172,12 @@ impl ExtendedModel {
     /// static map and its kink at the linear block's steady `v`; `None` without a steady state.
     pub fn steady_output(&self, u: f64) -> Option<f64> {
         let linear = &self.wiener.linear;
-        let v = linear.tf.dc_gain().ok()? * u + linear.offset;
-        Some(self.wiener.map.eval(v) + self.kink().map_or(0.0, |k| k.eval(v)))
+        Some(self.map_with_kink(linear.tf.dc_gain().ok()? * u + linear.offset))
+    }
+
+    /// The static map and its kink, when the model has one, at `v`.
+    pub fn map_with_kink(&self, v: f64) -> f64 {
+        self.wiener.map.eval(v) + self.kink().map_or(0.0, |k| k.eval(v))
     }
 
     /// The inputs (as the input stage leaves them) whose steady states span the range the static
@@ -198,8 +202,7 @@ impl ExtendedModel {
         if !super::rate_limit::limits_own_rate(&self.output) {
             return v.to_vec();
         }
-        let kink = self.kink();
-        v.iter().map(|x| self.wiener.map.eval(*x) + kink.map_or(0.0, |k| k.eval(*x))).collect()
+        v.iter().map(|x| self.map_with_kink(*x)).collect()
     }
 
     /// The input offset a [`CalibrationDrift`](super::CalibrationDrift) block gives this run (from the run's own steady

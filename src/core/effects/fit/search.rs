@@ -6,7 +6,6 @@ use super::memo::LinearMemo;
 use super::{Assembled, FitData, REFINED_STARTS, Structure, assemble, check_channels, refine};
 use crate::core::effects::model::ExtendedModel;
 use crate::core::effects::stats::mean;
-use crate::core::effects::thermal_soak::power_exponent_for;
 use crate::core::effects::{
     AmbientCorrection, AsymmetricDynamics, CalibrationDrift, EffectBlock, EffectError, EffectId, RateLimit,
     ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak, TransportDelay,
@@ -162,7 +161,7 @@ fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Optio
         EffectId::ThermalSoak => Some(EffectBlock::ThermalSoak(ThermalSoak {
             gain: 0.0,
             tau_s: 20.0,
-            power_exponent: power_exponent_for(&data.output, &data.run),
+            power_exponent: data.soak_power_exponent(),
         })),
         EffectId::AsymmetricDynamics => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
@@ -193,10 +192,10 @@ fn starting_points(
         EffectId::TransportDelay => {
             TransportDelay::guesses(data.dt_secs).into_iter().map(EffectBlock::TransportDelay).collect()
         }
-        EffectId::ThermalSoak => {
-            let power_exponent = power_exponent_for(&data.output, &data.run);
-            ThermalSoak::guesses(power_exponent).into_iter().map(EffectBlock::ThermalSoak).collect()
-        }
+        EffectId::ThermalSoak => ThermalSoak::guesses(data.soak_power_exponent())
+            .into_iter()
+            .map(EffectBlock::ThermalSoak)
+            .collect(),
         EffectId::AmbientCorrection => {
             vec![EffectBlock::AmbientCorrection(AmbientCorrection::for_output(&data.output)?)]
         }

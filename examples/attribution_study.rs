@@ -73,7 +73,7 @@ fn loop_on(
         &mut |_| true,
     );
     if let Some(spool) = spool {
-        share_spool(&mut effects, spool, &settings, &validation);
+        share_spool(&mut effects, spool, &settings, &b.ident, &validation);
     }
     let truth = &b.scored.truth.output(output).context("truth")?.values;
     let score = |m: &ExtendedModel| -> Result<f64> {

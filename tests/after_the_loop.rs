@@ -9,7 +9,7 @@
 use crate::engine_family::family_run;
 use jetid::core::diagnose::share_spool_dynamics;
 use jetid::core::effects::{
-    EffectBlock, ExtendedModel, FAN_LAW_EXPONENT, ThermalSoak, exponent_affine_in_power,
+    EffectBlock, EffectId, ExtendedModel, FAN_LAW_EXPONENT, ThermalSoak, exponent_affine_in_power,
 };
 use jetid::core::identification::fits::segments_for;
 use jetid::core::identification::pipeline::identify_output;
@@ -51,10 +51,18 @@ fn bench(seed: u64, first_day: &[Effect], second_day: &[Effect]) -> Bench {
     }
 }
 
-/// The loop on one output of a session: what it took, and the scored run's RMSPE against the truth.
-fn after_the_loop(b: &Bench, output: &str) -> (Vec<String>, f64) {
-    let (taken, model) = loop_model(b, output);
-    (taken, scored(b, &model))
+/// The loop on both outputs of a session, then the speed's spool shared with thrust (its blocks,
+/// and thrust read off the speed's model, each kept where thrust's validation runs do not lean
+/// against it), as the batch and the app do: per output, what it took and the scored run's RMSPE
+/// against the truth.
+fn after_the_loop(b: &Bench) -> [(&'static str, Vec<String>, f64); 2] {
+    let (taken_speed, speed) = loop_model(b, "shaft_speed_rpm");
+    let (mut taken_thrust, thrust) = loop_model(b, "thrust_n");
+    let validation = [&b.validation, &b.chirp];
+    let initial = OutputSettings::for_output("thrust_n").initial_state;
+    let (thrust, offered) = share_spool_dynamics(&thrust, &speed, &b.ident, &validation, initial).unwrap();
+    taken_thrust.extend(offered.iter().filter(|o| o.taken).map(|o| format!("shared:{}", o.id)));
+    [("shaft_speed_rpm", taken_speed, scored(b, &speed)), ("thrust_n", taken_thrust, scored(b, &thrust))]
 }
 
 /// The scored run's RMSPE against the truth, %.
@@ -90,14 +98,13 @@ fn loop_model(b: &Bench, output: &str) -> (Vec<String>, ExtendedModel) {
 /// the lines that say so.
 fn ratios(first_day: &[Effect], second_day: &[Effect]) -> Vec<(u64, &'static str, f64, String)> {
     let rows = on_two_threads(&ENGINES, |&seed| {
-        let with = bench(seed, first_day, second_day);
-        let without = bench(seed, &[], &[]);
-        ["shaft_speed_rpm", "thrust_n"].map(|output| {
-            let (taken, after) = after_the_loop(&with, output);
-            let (_, floor) = after_the_loop(&without, output);
+        let with = after_the_loop(&bench(seed, first_day, second_day));
+        let without = after_the_loop(&bench(seed, &[], &[]));
+        let rows = with.into_iter().zip(without).map(|((output, taken, after), (_, _, floor))| {
             let line = format!("engine {seed} {output}: {after:.3} % against {floor:.3} % (took {taken:?})");
             (seed, output, after / floor, line)
-        })
+        });
+        rows.collect::<Vec<_>>()
     });
     rows.into_iter().flatten().collect()
 }
@@ -112,6 +119,23 @@ fn a_calibration_drift_costs_no_more_than_the_bound_on_either_output() {
     let log: Vec<&str> = rows.iter().map(|r| r.3.as_str()).collect();
     eprintln!("{}", log.join("\n"));
     for (seed, output, ratio, line) in &rows {
+        assert!(*ratio <= MAX_RATIO, "engine {seed} {output}: ratio {ratio:.2} > {MAX_RATIO}: {line}");
+    }
+}
+
+/// An ECU that limits the spool's acceleration and deceleration (the simulator's limits, in rpm/s).
+/// The speed model finds the limit where it acts, on the speed; thrust, read off the speed's model,
+/// follows it. Fitted on thrust's own data the limit is in units of thrust's `v` and follows the
+/// load cell's noise (2.96 and 3.62 % on engines 7 and 11 against 0.61 and 1.29 % without the
+/// effect). Only thrust is held to the bound here: the speed's own ratio on engine 3 (1.42) is the
+/// speed model's, not the sharing's.
+#[test]
+fn thrust_read_off_a_rate_limited_speed_costs_no_more_than_the_bound() {
+    let limit: Effect = "rate_limit".parse().unwrap();
+    let rows = ratios(std::slice::from_ref(&limit), std::slice::from_ref(&limit));
+    let log: Vec<&str> = rows.iter().map(|r| r.3.as_str()).collect();
+    eprintln!("{}", log.join("\n"));
+    for (seed, output, ratio, line) in rows.iter().filter(|r| r.1 == "thrust_n") {
         assert!(*ratio <= MAX_RATIO, "engine {seed} {output}: ratio {ratio:.2} > {MAX_RATIO}: {line}");
     }
 }
@@ -144,7 +168,7 @@ fn the_speeds_spool_blocks_lower_thrusts_held_out_error() {
         let validation = [&b.validation, &b.chirp];
         let settings = OutputSettings::for_output("thrust_n");
         let (shared, offered) =
-            share_spool_dynamics(&thrust, &speed, &validation, settings.initial_state).unwrap();
+            share_spool_dynamics(&thrust, &speed, &b.ident, &validation, settings.initial_state).unwrap();
         let kept: Vec<String> = offered.iter().filter(|o| o.taken).map(|o| o.id.to_string()).collect();
         (seed, scored(&b, &thrust), scored(&b, &shared), kept)
     });
@@ -184,9 +208,14 @@ fn a_spool_block_that_makes_thrust_worse_is_not_shared() {
         thrust_and_a_speed_with(ThermalSoak { gain: 0.6, tau_s: 3.0, power_exponent: 3.0 });
     let validation = [&b.validation, &b.chirp];
     let initial = OutputSettings::for_output("thrust_n").initial_state;
-    let (shared, offered) = share_spool_dynamics(&thrust, &speed, &validation, initial).unwrap();
-    assert_eq!(offered.len(), 1, "{offered:?}");
-    assert!(!offered[0].taken && offered[0].p_worse < 0.5, "{}", offered[0].words());
+    let (shared, offered) = share_spool_dynamics(&thrust, &speed, &b.ident, &validation, initial).unwrap();
+    // The soak, then thrust read off the pretended speed model (thrust's own, renamed: read off
+    // through a quartic of the measured speed, it is no model of thrust at all).
+    let ids: Vec<EffectId> = offered.iter().map(|o| o.id).collect();
+    assert_eq!(ids, [EffectId::ThermalSoak, EffectId::ReadOffSpeed], "{offered:?}");
+    for o in &offered {
+        assert!(!o.taken && o.p_worse < 0.5, "{}", o.words());
+    }
     assert_eq!(shared, thrust);
 }
 
@@ -201,9 +230,9 @@ fn nothing_is_shared_into_a_speed_model_or_without_validation_runs() {
         assert_eq!(&model, from);
         assert!(offered.is_empty(), "{offered:?}");
     };
-    unchanged(share_spool_dynamics(&speed, &speed, &validation, initial).unwrap(), &speed);
-    unchanged(share_spool_dynamics(&thrust, &thrust, &validation, initial).unwrap(), &thrust);
-    unchanged(share_spool_dynamics(&thrust, &speed, &[], initial).unwrap(), &thrust);
+    unchanged(share_spool_dynamics(&speed, &speed, &b.ident, &validation, initial).unwrap(), &speed);
+    unchanged(share_spool_dynamics(&thrust, &thrust, &b.ident, &validation, initial).unwrap(), &thrust);
+    unchanged(share_spool_dynamics(&thrust, &speed, &b.ident, &[], initial).unwrap(), &thrust);
 }
 
 /// The soak block has the simulator's shape. The simulator's soak (its defaults: a share of 0.10
@@ -242,4 +271,35 @@ fn the_soak_block_takes_its_share_of_the_power_as_the_simulators_soak_does() {
         }
     }
     eprintln!("{}", log.join("\n"));
+}
+
+/// Thrust read off the speed's model holds the speed's parameters, fitted on the speed: their
+/// covariance is the one the speed's own fit gives, estimated on the speed, so the bands of thrust
+/// carry the speed's uncertainty through the read-off. A run without the shaft speed is refused,
+/// and so is a diagnosis of it (its candidates would be fitted into the speed's blocks).
+#[test]
+fn thrust_read_off_the_speed_has_the_speeds_parameter_covariance_and_no_diagnosis_of_its_own() {
+    use jetid::core::control::{CovarianceError, covariance::estimate};
+    use jetid::core::diagnose::{DiagnoseError, diagnose_admissible};
+    use jetid::core::effects::ReadOffSpeed;
+    let b = bench(7, &[], &[]);
+    let (_, speed) = loop_model(&b, "shaft_speed_rpm");
+    let measured = |o: &str| &b.ident.output(o).unwrap().values;
+    let block = ReadOffSpeed::fit(measured("shaft_speed_rpm"), measured("thrust_n"), None).unwrap();
+    let mut read_off = speed.clone();
+    read_off.output = "thrust_n".to_owned();
+    let read_off = read_off.with_effect(EffectBlock::ReadOffSpeed(block)).unwrap();
+    assert_eq!(estimate(&read_off, &b.ident, &[]).unwrap(), estimate(&speed, &b.ident, &[]).unwrap());
+    let mut without_speed = b.ident.clone();
+    without_speed.outputs.retain(|c| c.name != "shaft_speed_rpm");
+    assert_eq!(
+        estimate(&read_off, &without_speed, &[]),
+        Err(CovarianceError::ReadOff { output: "thrust_n".into(), run: b.ident.name.clone() })
+    );
+    let settings = OutputSettings::for_output("thrust_n");
+    let segments = segments_for(&b.ident, None, &SegmentSettings::default()).unwrap();
+    let fits = identify_output(&b.ident, "thrust_n", &settings, &segments, None).unwrap().fits;
+    let validation = [&b.validation, &b.chirp];
+    let diagnosis = diagnose_admissible(&read_off, &b.ident, &fits, &validation, &settings, &mut |_| true);
+    assert_eq!(diagnosis.map(|_| ()), Err(DiagnoseError::ReadOff { output: "thrust_n".into() }));
 }

@@ -41,11 +41,15 @@ fn the_control_view_schedules_the_model_and_follows_it() {
     harness.get_by_label("grid 5").click();
     harness.run();
     assert_eq!(harness.state().view.views.control.selected, 4);
-    // A linear static map makes the gain the same everywhere: the view follows the model.
+    // A linear static map makes the gain the same everywhere: the view follows the model. (On the
+    // speed: thrust with a linear map of its own is no longer its own model but read off the
+    // speed's, whose validation runs prefer it.)
+    let speed = "shaft_speed_rpm";
     let settings =
-        harness.state().cache.output("thrust_n").expect("thrust is identified").setup.settings.clone();
+        harness.state().cache.output(speed).expect("the speed is identified").setup.settings.clone();
     let linear = jetid::core::identification::settings::OutputSettings { static_order: Some(1), ..settings };
-    harness.state_mut().apply(Command::SetOutputSettings { output: "thrust_n".into(), settings: linear });
+    harness.state_mut().apply(Command::SelectOutput(speed.into()));
+    harness.state_mut().apply(Command::SetOutputSettings { output: speed.into(), settings: linear });
     harness.state_mut().settle();
     harness.run();
     let after = harness.state().view.views.control.points().expect("operating points").to_vec();

@@ -477,6 +477,12 @@ fn effect_errors_name_what_is_wrong() {
         &["--batch", project.to_str().unwrap(), "--add-effect", "warp_drive"],
         &["warp_drive", "thermal_soak"],
     );
+    // Reading an output off the speed's model is the spool sharing's to offer, not an effect fitted
+    // on one output: asked for by hand, it is refused with the reason.
+    expect_error(
+        &["--batch", project.to_str().unwrap(), "--output", "thrust_n", "--add-effect", "read_off_speed"],
+        &["read_off_speed", "'thrust_n'", "not fitted on the output alone", "spool sharing"],
+    );
     // A model that needs the inlet channels cannot predict a run without them.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");

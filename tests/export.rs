@@ -10,6 +10,7 @@ use crate::common::{build_model, have_cc, have_python, jetid, python3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use jetid::core::effects::{AmbientCorrection, EffectBlock, ExtendedModel, ReadOffSpeed};
 use jetid::io::model_file::read_model;
 
 fn ok(o: &Output, what: &str) -> String {
@@ -302,6 +303,64 @@ fn static_map_order_and_the_local_linear_model() {
         );
         assert!(numbers[1] < 1e-12, "the local model has G's poles: {line}");
     }
+}
+
+/// An output read off the shaft speed's model (`read_off_speed`, offered by the spool sharing): the
+/// speed's whole path, with a rate limit read through its map, then the quartic in the speed, in
+/// every runtime; and the local gain of the exported operating point carries the quartic's slope.
+#[test]
+fn read_off_speed_through_a_rate_limited_speed_model() {
+    read_off_reproduces_predict("rate_limit", None);
+}
+
+/// Read off a speed model corrected for the inlet conditions: in corrected quantities, the speed's
+/// correction undone and the output's own (`F/δ`) applied, in every runtime.
+#[test]
+fn read_off_speed_through_a_corrected_speed_model() {
+    let thrust = AmbientCorrection { output_theta_exp: 0.0, output_delta_exp: 1.0 };
+    read_off_reproduces_predict("ambient_correction", Some(&thrust));
+}
+
+/// A speed model with `effect`, and thrust read off it (its own correction `correction`, when the
+/// speed's model is corrected): the exports reproduce `jetid predict`, and Python's operating point
+/// has the local gain through the quartic's slope.
+fn read_off_reproduces_predict(effect: &str, correction: Option<&AmbientCorrection>) {
+    let dir = tempfile::tempdir().unwrap();
+    let (model, run) = fit(dir.path(), Some(effect), Some("shaft_speed_rpm"));
+    let mut file = read_model(&model).unwrap();
+    let (header, columns) = read_csv(&dir.path().join("ident.csv"));
+    let column = |name: &str| &columns[header.iter().position(|h| h == name).unwrap()];
+    let block = ReadOffSpeed::fit(column("shaft_speed_rpm"), column("thrust_n"), correction).unwrap();
+    let mut thrust = file.outputs[0].clone();
+    (thrust.name, thrust.unit, thrust.covariance) = ("thrust_n".into(), "N".into(), None);
+    thrust.effects.push(EffectBlock::ReadOffSpeed(block.clone()).record());
+    file.outputs.push(thrust.clone());
+    let read_off_dir = dir.path().join("read_off");
+    std::fs::create_dir_all(&read_off_dir).unwrap();
+    let read_off_model = read_off_dir.join("model.json");
+    jetid::io::model_file::write_model(&read_off_model, &file).unwrap();
+    reproduce(dir.path(), &read_off_model, &run, &[], &[]);
+    if !have_python() {
+        return;
+    }
+    let extended = ExtendedModel::from_records("thrust_n", thrust.wiener.clone(), &thrust.effects).unwrap();
+    let (g1, offset) = (thrust.wiener.linear.tf.dc_gain().unwrap(), thrust.wiener.linear.offset);
+    let u_star = 3.0;
+    let v_star = g1 * u_star + offset;
+    let expected = thrust.wiener.map.slope(v_star) * block.slope(extended.map_with_kink(v_star)) * g1;
+    let program = dir.path().join("jetid_read_off.py");
+    ok(
+        &jetid(&["export", "--model", s(&read_off_model), "--format", "python", "--out", s(&program)]),
+        "export python",
+    );
+    let script = format!(
+        "import sys; sys.path.insert(0, {dir:?}); import jetid_read_off as m\n\
+         print(repr(float(m.operating_point('thrust_n', {u_star}).dcgain())))",
+        dir = s(dir.path()),
+    );
+    let printed = ok(&python3().args(["-c", &script]).output().unwrap(), "operating_point");
+    let k: f64 = printed.trim().parse().unwrap();
+    assert!(expected > 0.0 && (k - expected).abs() <= 1e-9 * expected, "K = {k}, expected {expected}");
 }
 
 #[test]

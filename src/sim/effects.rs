@@ -121,7 +121,7 @@ impl Effect {
             EffectId::CalibrationDrift => Ok(CALIBRATION_DRIFT),
             EffectId::RateLimit => Ok(RATE_LIMIT),
             // Not simulated: the scheduled time constant is the engine's own behaviour (always on).
-            EffectId::ScheduledTimeConstant => Err(unknown_effect(id.name())),
+            EffectId::ScheduledTimeConstant | EffectId::ReadOffSpeed => Err(unknown_effect(id.name())),
         }
     }
 
@@ -153,7 +153,7 @@ impl Effect {
             }
             EffectId::CalibrationDrift => Self::CalibrationDrift { offset_gph: at(0) },
             EffectId::RateLimit => Self::RateLimit { rise_rpm_s: at(0), fall_rpm_s: at(1) },
-            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant => {
+            EffectId::StaticMapOrder | EffectId::ScheduledTimeConstant | EffectId::ReadOffSpeed => {
                 Self::StaticMapOrder { bleed_rpm: at(0), gain: at(1) }
             }
         }

@@ -234,13 +234,12 @@ pub fn spool_output(outputs: &[String]) -> Option<&str> {
     }
 }
 
-/// What of the shaft speed's finished `model` the other outputs can share: the model with only its
-/// spool blocks ([`diagnose::SHARED_SPOOL_BLOCKS`], all [`share_spool`] reads), or `None` when it has
-/// none. A cache keyed on it rebuilds another output only when what it would share changes.
+/// What of the shaft speed's finished `model` the other outputs can share: all of it, since besides
+/// its spool blocks ([`diagnose::SHARED_SPOOL_BLOCKS`]) another output may be read off the whole
+/// model ([`share_spool`]). `None` for a model read off another (nothing of its own to share). A
+/// cache keyed on it rebuilds another output when the speed's model changes.
 pub fn spool_part(model: &ExtendedModel) -> Option<ExtendedModel> {
-    let mut part = model.clone();
-    part.effects.retain(|e| diagnose::SHARED_SPOOL_BLOCKS.contains(&e.id()));
-    (!part.effects.is_empty()).then_some(part)
+    model.read_off().is_none().then(|| model.clone())
 }
 
 /// `effects` (of an output other than the shaft speed) with the spool blocks of `spool`, the
@@ -252,13 +251,14 @@ pub fn share_spool(
     effects: &mut Effects,
     spool: &ExtendedModel,
     settings: &OutputSettings,
+    ident: &Run,
     validation: &[&Run],
 ) {
     let model = effects.model();
     if model.output == spool.output || effects.check(&model.output).is_err() {
         return;
     }
-    match diagnose::share_spool_dynamics(model, spool, validation, settings.initial_state) {
+    match diagnose::share_spool_dynamics(model, spool, ident, validation, settings.initial_state) {
         Ok((shared_model, offered)) => {
             // One step per set taken: a set's blocks name each other in `with`.
             let taken: Vec<&SharedBlock> = offered.iter().filter(|b| b.taken).collect();

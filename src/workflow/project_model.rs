@@ -91,7 +91,7 @@ pub fn share_the_spool(stages: &mut [(&OutputPlan, &mut Effects)], runs: &Runs) 
     };
     for (plan, effects) in stages.iter_mut() {
         let validation = runs.validation_of(&plan.output);
-        model::share_spool(effects, &spool, &plan.settings, &validation);
+        model::share_spool(effects, &spool, &plan.settings, &runs.ident, &validation);
     }
 }
 

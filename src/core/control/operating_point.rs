@@ -14,7 +14,8 @@
 //! - `sensor_dynamics`: lag and resonance as the simulation discretises them;
 //! - `ambient_correction`: taken at ISA sea-level conditions (θ = δ = 1), where corrected and
 //!   physical quantities coincide;
-//! - `calibration_drift`: a per-run input offset, no part of the dynamics (u* is the logged input).
+//! - `calibration_drift`: a per-run input offset, no part of the dynamics (u* is the logged input);
+//! - `read_off_speed`: the polynomial's slope at the steady speed, `P′(F(v*))`, multiplies K.
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
@@ -208,10 +209,12 @@ fn operating_point(
         _ => None,
     });
     let v = g1 * u + linear.offset;
-    let y = model.map_with_kink(v);
+    let y = model.static_output(v);
     let slope =
         model.wiener.map.slope(v) + kink.map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 });
-    let gain = slope * g1;
+    // Read off the speed: the chain rule through P at the steady speed.
+    let read_off = model.read_off().map_or(1.0, |r| r.slope(model.map_with_kink(v)));
+    let gain = slope * read_off * g1;
     let unit = local_dynamics(model, u).map_err(|reason| OperatingPointError::LocalModel {
         output: output.clone(),
         u,

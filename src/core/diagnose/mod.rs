@@ -135,6 +135,13 @@ pub enum DiagnoseError {
     /// The caller's progress callback asked to stop.
     #[error("the diagnosis was cancelled")]
     Cancelled,
+    /// The model is read off the shaft speed's model: every candidate would be fitted on this
+    /// output's data into the speed's blocks, which are fitted on the speed.
+    #[error(
+        "not run: '{output}' is read off the shaft speed's model, and the speed's diagnosis is the spool's \
+         (its candidates would be fitted on this output into the speed's blocks)"
+    )]
+    ReadOff { output: String },
     /// An effect could not be built, applied, removed or fitted.
     #[error(transparent)]
     Effect(#[from] EffectError),
@@ -242,6 +249,9 @@ pub fn diagnose_with_progress(
     settings: &OutputSettings,
     progress: &mut dyn FnMut(f64) -> bool,
 ) -> Result<DiagnosisReport, DiagnoseError> {
+    if current.read_off().is_some() {
+        return Err(DiagnoseError::ReadOff { output: current.output.clone() });
+    }
     let steps = (EffectId::CATALOG.len() + StructuralChange::ALL.len()) as f64 + 1.0;
     if !progress(0.0) {
         return Err(DiagnoseError::Cancelled);

@@ -69,6 +69,9 @@ impl TrialId {
                 "equal small steps at low and high power (a scheduled spool is slower at the low end)"
             }
             Self::Structure(_) => "a chirp across the model's band (a missing root shows at one frequency)",
+            Self::Effect(EffectId::ReadOffSpeed) => {
+                "fast steps of several sizes with speed and thrust logged (thrust follows the speed it is read off)"
+            }
         }
     }
 }

@@ -20,7 +20,7 @@ use super::model::{
 use super::static_map_order::fit_map_with_knot;
 use super::stats::mean;
 use super::thermal_soak::power_exponent_for;
-use super::{AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics};
+use super::{AsymmetricDynamics, EffectBlock, EffectError, SensorDynamics, limits_own_rate};
 use crate::core::identification::fits::SegmentFits;
 use crate::core::identification::settings::OutputSettings;
 use crate::core::identification::wiener::{LinearBlock, WienerModel, unit_gain_tf};
@@ -196,7 +196,19 @@ pub(super) struct Assembled {
 }
 
 impl Structure {
+    /// The structure of `model`, to be fitted on its output's data. A model read off the shaft
+    /// speed's model is the speed's, fitted where the speed is measured: it is refused.
     pub(super) fn of(model: &ExtendedModel) -> Result<Self, EffectError> {
+        if model.read_off().is_some() {
+            return Err(EffectError::NotApplicable {
+                effect: super::EffectId::ReadOffSpeed.name().to_owned(),
+                reason: format!(
+                    "'{}' is read off the shaft speed's model, whose blocks are fitted on the speed: it \
+                     changes with the speed's model",
+                    model.output
+                ),
+            });
+        }
         let (poles, zeros) = model.roots()?;
         Ok(Self {
             poles,
@@ -348,7 +360,7 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
         let (vs, ys) = steady(&v);
         let (map, slope_change) = fit_map_with_knot(&vs, &ys, s.map_order, knot)?;
         let kink = knot.map(|knot_v| super::StaticMapOrder { knot_v, slope_change });
-        let state = limit.on_state(&data.output, dt, gain, offset, &map, kink.as_ref());
+        let state = limit.on_state(limits_own_rate(&data.output), dt, gain, offset, &map, kink.as_ref());
         w = Cow::Owned(limited_response(s, data, state)?);
     }
     let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();

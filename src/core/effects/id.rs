@@ -5,8 +5,9 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::EffectError;
 
-/// A block of the model: an effect of METHOD.md's catalog, or the scheduled spool time constant (a
-/// refinement of the model's own structure that the diagnosis tries as structure).
+/// A block of the model: an effect of METHOD.md's catalog, the scheduled spool time constant (a
+/// refinement of the model's own structure that the diagnosis tries as structure), or an output
+/// read off the shaft speed's model (a form the spool sharing offers).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum EffectId {
     CalibrationDrift,
@@ -18,11 +19,12 @@ pub enum EffectId {
     RateLimit,
     SensorDynamics,
     StaticMapOrder,
+    ReadOffSpeed,
 }
 
 impl EffectId {
     /// Every block, in signal-path order.
-    pub const ALL: [Self; 9] = [
+    pub const ALL: [Self; 10] = [
         Self::CalibrationDrift,
         Self::TransportDelay,
         Self::ThermalSoak,
@@ -32,6 +34,7 @@ impl EffectId {
         Self::RateLimit,
         Self::SensorDynamics,
         Self::StaticMapOrder,
+        Self::ReadOffSpeed,
     ];
 
     /// The physics the diagnosis tries, in the order of METHOD.md's catalog.
@@ -58,6 +61,7 @@ impl EffectId {
             Self::RateLimit => "rate_limit",
             Self::SensorDynamics => "sensor_dynamics",
             Self::StaticMapOrder => "static_map_order",
+            Self::ReadOffSpeed => "read_off_speed",
         }
     }
 

@@ -10,6 +10,9 @@
 //!   ─▶ thermal soak branch ─▶ rate limit ─▶ v ─▶ f(v) (+ static-map kink) ─ambient: ·√θ or ·δ─▶ sensor ─▶ y
 //! ```
 //!
+//! An output read off the shaft speed's model ([`ReadOffSpeed`]) holds the speed's whole path, `y`
+//! being the speed, and one more stage at its end: `P(y)`.
+//!
 //! Every block has a stable serialisable form, [`EffectRecord`] `{ id, params }`, with
 //! [`EffectBlock::params`] and [`EffectBlock::from_params`] as the two directions (parameters are
 //! checked there). [`ExtendedModel`] is the base model with its effects; the fitting of a block on
@@ -50,6 +53,7 @@ mod fit;
 mod id;
 mod model;
 mod rate_limit;
+mod read_off_speed;
 mod scheduled_time_constant;
 mod sensor_dynamics;
 mod spool;
@@ -70,6 +74,7 @@ pub use fit::{
 pub use id::EffectId;
 pub use model::ExtendedModel;
 pub use rate_limit::{RateLimit, limits_own_rate};
+pub use read_off_speed::ReadOffSpeed;
 pub use scheduled_time_constant::ScheduledTimeConstant;
 pub use sensor_dynamics::SensorDynamics;
 pub use static_map_order::StaticMapOrder;
@@ -210,6 +215,7 @@ impl EffectId {
             Self::RateLimit => BlockInfo::of::<RateLimit>(),
             Self::SensorDynamics => BlockInfo::of::<SensorDynamics>(),
             Self::StaticMapOrder => BlockInfo::of::<StaticMapOrder>(),
+            Self::ReadOffSpeed => BlockInfo::of::<ReadOffSpeed>(),
         }
     }
 
@@ -268,6 +274,8 @@ pub enum EffectBlock {
     ScheduledTimeConstant(ScheduledTimeConstant),
     /// See [`RateLimit`].
     RateLimit(RateLimit),
+    /// See [`ReadOffSpeed`].
+    ReadOffSpeed(ReadOffSpeed),
 }
 
 /// What the current model's residuals say about an effect: one sentence, and whether it shows the
@@ -337,15 +345,19 @@ impl EffectBlock {
             Self::RateLimit(b) => b,
             Self::SensorDynamics(b) => b,
             Self::StaticMapOrder(b) => b,
+            Self::ReadOffSpeed(b) => b,
         }
     }
 
     /// Whether the block shapes the linear part of a fit's simulation (see `fit::LinearPart`): it
-    /// acts on the input or the spool. A rate limit, the stand's dynamics and the map's kink act
-    /// after it. A calibration drift and the ambient correction count as shaping it (the drift's
+    /// acts on the input or the spool. A rate limit, the stand's dynamics, the map's kink and a read-off
+    /// of the speed act after it. A calibration drift and the ambient correction count as shaping it (the drift's
     /// offset and the correction's factors reach the input).
     pub(crate) fn shapes_linear_part(&self) -> bool {
-        !matches!(self, Self::RateLimit(_) | Self::SensorDynamics(_) | Self::StaticMapOrder(_))
+        !matches!(
+            self,
+            Self::RateLimit(_) | Self::SensorDynamics(_) | Self::StaticMapOrder(_) | Self::ReadOffSpeed(_)
+        )
     }
 
     /// Position in the signal path.
@@ -377,6 +389,7 @@ impl EffectBlock {
             EffectId::RateLimit => Self::RateLimit(Block::from_values(&v)),
             EffectId::SensorDynamics => Self::SensorDynamics(Block::from_values(&v)),
             EffectId::StaticMapOrder => Self::StaticMapOrder(Block::from_values(&v)),
+            EffectId::ReadOffSpeed => Self::ReadOffSpeed(Block::from_values(&v)),
         })
     }
 
@@ -408,7 +421,7 @@ impl EffectBlock {
             Self::StaticMapOrder(b) => b.free_params(),
             Self::ScheduledTimeConstant(b) => b.free_params(),
             Self::RateLimit(b) => b.free_params(),
-            Self::AmbientCorrection(_) | Self::CalibrationDrift(_) => Vec::new(),
+            Self::AmbientCorrection(_) | Self::CalibrationDrift(_) | Self::ReadOffSpeed(_) => Vec::new(),
         }
     }
 
@@ -422,7 +435,7 @@ impl EffectBlock {
             Self::StaticMapOrder(b) => Self::StaticMapOrder(b.with_free_params(theta)?),
             Self::ScheduledTimeConstant(b) => Self::ScheduledTimeConstant(b.with_free_params(theta)?),
             Self::RateLimit(b) => Self::RateLimit(b.with_free_params(theta)?),
-            Self::AmbientCorrection(_) | Self::CalibrationDrift(_) => self.clone(),
+            Self::AmbientCorrection(_) | Self::CalibrationDrift(_) | Self::ReadOffSpeed(_) => self.clone(),
         })
     }
 }

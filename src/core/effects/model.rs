@@ -7,7 +7,7 @@ use super::scheduled_time_constant::{ScheduledTimeConstant, Section};
 use super::spool::SplitShape;
 use super::{
     AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, RateLimit,
-    SensorDynamics, StaticMapOrder, TransportDelay,
+    ReadOffSpeed, SensorDynamics, StaticMapOrder, TransportDelay,
 };
 use crate::core::identification::initial_state::{InitialState, fit_free_response};
 use crate::core::identification::pipeline::GrayBoxModel;
@@ -165,19 +165,44 @@ impl ExtendedModel {
         let Some(limit) = rate_limit(&self.effects) else { return Ok(None) };
         let linear = &self.wiener.linear;
         let gain = linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
-        Ok(Some(limit.on_state(&self.output, dt_secs, gain, linear.offset, &self.wiener.map, self.kink())))
+        let through_map = self.limits_own_rate();
+        Ok(Some(limit.on_state(through_map, dt_secs, gain, linear.offset, &self.wiener.map, self.kink())))
+    }
+
+    /// Whether the model's rate limit is read through its static map (a limit on the shaft speed's
+    /// own rate, [`super::rate_limit::limits_own_rate`]): a speed model's, and the speed model's
+    /// path that an output read off the speed holds.
+    pub fn limits_own_rate(&self) -> bool {
+        super::rate_limit::limits_own_rate(&self.output) || self.read_off().is_some()
     }
 
     /// The output at the steady state of a constant input `u` (as the input stage leaves it): the
-    /// static map and its kink at the linear block's steady `v`; `None` without a steady state.
+    /// static map and its kink at the linear block's steady `v`, read off the speed where the model
+    /// is; `None` without a steady state.
     pub fn steady_output(&self, u: f64) -> Option<f64> {
         let linear = &self.wiener.linear;
-        Some(self.map_with_kink(linear.tf.dc_gain().ok()? * u + linear.offset))
+        Some(self.static_output(linear.tf.dc_gain().ok()? * u + linear.offset))
     }
 
-    /// The static map and its kink, when the model has one, at `v`.
+    /// The static map and its kink, when the model has one, at `v` (for a model read off the speed,
+    /// the speed).
     pub fn map_with_kink(&self, v: f64) -> f64 {
         self.wiener.map.eval(v) + self.kink().map_or(0.0, |k| k.eval(v))
+    }
+
+    /// The output in steady state at `v`: [`Self::map_with_kink`], then read off the speed where the
+    /// model is.
+    pub fn static_output(&self, v: f64) -> f64 {
+        let y = self.map_with_kink(v);
+        self.read_off().map_or(y, |r| r.eval(y))
+    }
+
+    /// The read-off of the speed, when the output is read off the shaft speed's model.
+    pub fn read_off(&self) -> Option<&ReadOffSpeed> {
+        self.effects.iter().find_map(|e| match e {
+            EffectBlock::ReadOffSpeed(r) => Some(r),
+            _ => None,
+        })
     }
 
     /// The inputs (as the input stage leaves them) whose steady states span the range the static
@@ -199,7 +224,7 @@ impl ExtendedModel {
     /// static map (with its kink) for the shaft speed, `v` itself otherwise (see
     /// [`super::rate_limit::limits_own_rate`]).
     pub(super) fn rate_limited_quantity(&self, v: &[f64]) -> Vec<f64> {
-        if !super::rate_limit::limits_own_rate(&self.output) {
+        if !self.limits_own_rate() {
             return v.to_vec();
         }
         v.iter().map(|x| self.map_with_kink(*x)).collect()
@@ -402,6 +427,14 @@ pub(super) fn rate_limit(effects: &[EffectBlock]) -> Option<&RateLimit> {
     })
 }
 
+/// The ambient correction among the blocks, if any.
+fn ambient(effects: &[EffectBlock]) -> Option<&AmbientCorrection> {
+    effects.iter().find_map(|e| match e {
+        EffectBlock::AmbientCorrection(a) => Some(a),
+        _ => None,
+    })
+}
+
 /// The static map's kink among the blocks, if any.
 pub(super) fn kink(effects: &[EffectBlock]) -> Option<&StaticMapOrder> {
     effects.iter().find_map(|e| match e {
@@ -410,7 +443,8 @@ pub(super) fn kink(effects: &[EffectBlock]) -> Option<&StaticMapOrder> {
     })
 }
 
-/// `y`: the static map (with its kink), back to physical units, through the sensor.
+/// `y`: the static map (with its kink), back to physical units, through the sensor (and read off
+/// the speed, for a model that is).
 pub(super) fn output_stage(
     effects: &[EffectBlock],
     map: &StaticMap,
@@ -429,6 +463,7 @@ pub(super) fn output_stage(
                 }
             }
             (EffectBlock::SensorDynamics(s), _) => y = s.apply(&y, dt_secs),
+            (EffectBlock::ReadOffSpeed(r), c) => r.apply(&mut y, ambient(effects).zip(c)),
             _ => {}
         }
     }

@@ -85,6 +85,7 @@ fn output(o: &OutputPlan) -> String {
     }
     fields.extend(parts::v_blocks(o).iter().filter_map(block_field));
     fields.extend(steps_field("output", &OUTPUT_SLOTS, o.output_steps.iter().map(parts::output_step)));
+    fields.extend(block_field(&parts::read_off(o)));
     text.push_str(&format!(
         "static const jetid_params {p}_params = {{\n    {}\n}};\n",
         fields.join(",\n    ")

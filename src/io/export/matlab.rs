@@ -74,8 +74,9 @@ fn output(o: &OutputPlan) -> String {
         t.push_str(&assign_block("o", &block));
     }
     t.push_str(&format!(
-        "o.output_steps = {};\nm.outputs{{end + 1}} = o;\n",
-        steps(o.output_steps.iter().map(parts::output_step))
+        "o.output_steps = {};\n{}m.outputs{{end + 1}} = o;\n",
+        steps(o.output_steps.iter().map(parts::output_step)),
+        assign_block("o", &parts::read_off(o))
     ));
     t
 }
@@ -126,7 +127,8 @@ const USAGE: &str = r"%
 %   outputs corrected for inlet conditions), or []; measured: struct of measured outputs (fields as in the result), used only
 %   by calibration_drift's per-run offset, or []; dt: the run's sample time (default: the model's).
 % NAME('tf') -> struct with one tf object G(z) per output (tf(num, den, Ts)).
-% NAME('operating_point', output, u_star) -> the local linear model K G(z)/G(1), K = f'(v*) G(1).
+% NAME('operating_point', output, u_star) -> the local linear model K G(z)/G(1), K = f'(v*) G(1)
+%   (times P'(f(v*)) for an output read off the shaft speed).
 % NAME('csv', 'IN.csv', 'OUT.csv' [, 'calibrate']) -> what `jetid predict` writes for IN.csv.
 % tf objects need the Control System Toolbox (Octave: pkg load control); the simulation does not.
 ";
@@ -147,6 +149,10 @@ switch command
         g1 = o.tf.steady_gain;
         v_star = g1 * varargin{2} + o.offset;
         k = static_map_slope(o, v_star) * g1;
+        if ~isempty(o.read_off)
+            [~, slope] = read_off(o, static_map(o, v_star));
+            k = k * slope;
+        end
         varargout{1} = tf(o.tf_num_z, o.tf_den_z, m.dt) * (k / g1);
     case 'csv'
         run_csv(m, varargin{:});
@@ -380,14 +386,30 @@ if ~isempty(o.soak) && o.soak(3) > 0
     p = soak(o.soak, sign(y) .* abs(y) .^ k, dt);
     y = sign(p) .* abs(p) .^ (1 / k);
 end
+factor = [];
 for i = 1:numel(o.output_steps)
     s = o.output_steps{i};
     if strcmp(s.kind, 'ambient')
-        y = y .* (theta .^ s.theta_exp .* delta .^ s.delta_exp);
+        factor = theta .^ s.theta_exp .* delta .^ s.delta_exp;
+        y = y .* factor;
     else
         y = sensor(s, y, dt);
     end
 end
+if ~isempty(o.read_off) && ~isempty(factor)
+    % Read off in corrected quantities: y/(theta^a delta^b) = P(N/sqrt(theta)).
+    y = read_off(o, y ./ factor) .* theta .^ o.read_off(8) .* delta .^ o.read_off(9);
+elseif ~isempty(o.read_off)
+    y = read_off(o, y);
+end
+end
+
+function [y, d] = read_off(o, n)
+% read_off_speed.rs ReadOffSpeed: the output at shaft speed n and its slope d/dN (a quartic in the
+% scaled speed, with its end trend).
+r = struct('coeffs', o.read_off(3:7), 'end_trend', true);
+[y, d] = map_polynomial(r, (n - o.read_off(1)) / o.read_off(2));
+d = d / o.read_off(2);
 end
 
 function out = sensor(s, y, dt)

@@ -99,6 +99,28 @@ pub(super) fn v_blocks(o: &OutputPlan) -> [Block; 2] {
     ]
 }
 
+/// The output read off the shaft speed (`core::effects::ReadOffSpeed`), which every rendering lists
+/// after the output steps: the speed's scaling, the polynomial's coefficients and the output's own
+/// inlet-correction exponents (used when the speed's model is corrected: `y/(θ^a δ^b) = P(N/√θ)`).
+pub(super) fn read_off(o: &OutputPlan) -> Block {
+    Block {
+        key: "read_off",
+        fields: o.read_off.as_ref().map(|r| {
+            vec![
+                ("read_off_center", num(r.speed_center)),
+                ("read_off_scale", num(r.speed_scale)),
+                ("read_off_c0", num(r.c0)),
+                ("read_off_c1", num(r.c1)),
+                ("read_off_c2", num(r.c2)),
+                ("read_off_c3", num(r.c3)),
+                ("read_off_c4", num(r.c4)),
+                ("read_off_theta_exp", num(r.theta_exp)),
+                ("read_off_delta_exp", num(r.delta_exp)),
+            ]
+        }),
+    }
+}
+
 /// The time-constant schedule of a split linear block.
 pub(super) fn schedule(s: &Spool) -> Block {
     Block {

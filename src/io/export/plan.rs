@@ -6,7 +6,7 @@ use num_complex::Complex64;
 use super::ExportError;
 use crate::core::control::covariance::{Layout, ParameterCovariance, parameter_layout, parameters};
 use crate::core::effects::{
-    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ExtendedModel, RateLimit,
+    AmbientCorrection, AsymmetricDynamics, EffectBlock, EffectError, ExtendedModel, RateLimit, ReadOffSpeed,
     ScheduledTimeConstant, SensorDynamics, StaticMapOrder, ThermalSoak,
 };
 use crate::core::identification::static_map::StaticMap;
@@ -142,6 +142,9 @@ pub struct OutputPlan {
     /// (the shaft speed), or on `v`'s (see `core::effects::limits_own_rate`).
     pub rate_limit_through_map: bool,
     pub output_steps: Vec<OutputStep>,
+    /// The output read off the shaft speed: `P(y)` after the output steps, `y` being the speed
+    /// (see `core::effects::ReadOffSpeed`).
+    pub read_off: Option<ReadOffSpeed>,
     /// The effects' linear dynamics every local model shares (dead time, soak, sensor; unit steady
     /// gain), as `core::control::effect_dynamics` builds them.
     pub effect_dynamics: Filter,
@@ -367,8 +370,9 @@ fn direct_plan(out: &OutputModel, model: &ExtendedModel) -> OutputPlan {
         linear: Linear::Direct(Filter::of(tf)),
         soak: None,
         rate_limit: None,
-        rate_limit_through_map: crate::core::effects::limits_own_rate(&out.name),
+        rate_limit_through_map: model.limits_own_rate(),
         output_steps: Vec::new(),
+        read_off: None,
         effect_dynamics: {
             let (num_zinv, den_zinv) = crate::core::control::effect_dynamics(model);
             Filter { num_zinv, den_zinv, steady_gain: 1.0 }
@@ -421,6 +425,7 @@ fn add_effect(plan: &mut OutputPlan, split: &mut SplitEffects, effect: &EffectBl
         EffectBlock::ScheduledTimeConstant(s) => split.schedule = Some(s.clone()),
         EffectBlock::SensorDynamics(s) => plan.output_steps.push(OutputStep::Sensor(s.clone())),
         EffectBlock::StaticMapOrder(k) => plan.kink = Some(k.clone()),
+        EffectBlock::ReadOffSpeed(r) => plan.read_off = Some(r.clone()),
     }
 }
 

@@ -126,6 +126,7 @@ fn output(o: &OutputPlan) -> String {
     fields.push(("split", option(split(&o.linear))));
     fields.extend(parts::v_blocks(o).iter().map(block_entry));
     fields.push(("output_steps", steps(o.output_steps.iter().map(parts::output_step))));
+    fields.push(block_entry(&parts::read_off(o)));
     fields.push(("effect_dynamics", filter(&o.effect_dynamics)));
     let body: Vec<String> = fields.iter().map(|(k, v)| format!("\n        {k:?}: {v}")).collect();
     format!("{{{},\n    }}", body.join(","))

@@ -114,7 +114,7 @@ impl ModelInputs {
         let mut effects =
             model::add_effects(&live.model, plan, &self.run, fits, settings, &validation, progress);
         if let Some(spool) = &self.spool {
-            model::share_spool(&mut effects, spool, settings, &validation);
+            model::share_spool(&mut effects, spool, settings, &self.run, &validation);
         }
         outcome.history = effects.sequence.history.clone();
         outcome.rounds = effects.rounds.clone();

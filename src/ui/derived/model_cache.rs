@@ -430,18 +430,25 @@ impl OutputCache {
     }
 
     /// What the other outputs share of this model, when this is a shaft speed whose model is
-    /// finished ([`model::spool_part`]): `Some(None)` when it has no spool block (nothing to share),
+    /// finished ([`model::spool_part`]): `Some(None)` when it has no model of its own to share,
     /// `None` while it is being finished (the others keep what they share until it is).
     fn finished_spool(&self) -> Option<Option<Arc<ExtendedModel>>> {
         match &self.live {
             Ok(live) if live.finishing => None,
-            Ok(live) => Some(live.effects.model.as_ref().and_then(model::spool_part).map(Arc::new)),
+            Ok(live) => {
+                // A speed whose requested effects could not be added has no finished model to share
+                // (the batch refuses it); one with none requested shares its model as identified.
+                let failed = live.effects.model.is_none() && !live.effects.requested.is_empty();
+                let finished = (!failed).then(|| live.current_model());
+                Some(finished.as_ref().and_then(model::spool_part).map(Arc::new))
+            }
             Err(_) if self.finishing.is_some() => None,
             Err(_) => Some(None),
         }
     }
 
-    /// Share the spool blocks of `spool` from now on: rebuild when that changes what is shared.
+    /// Share the speed's model `spool` from now on (its spool blocks, and the whole model to read
+    /// off): rebuild when it changes.
     fn set_spool(&mut self, spool: Option<Arc<ExtendedModel>>) {
         if self.spool.as_deref() != spool.as_deref() {
             self.spool = spool;

@@ -7,9 +7,21 @@ use nalgebra::DMatrix;
 
 use super::map_equations::{MapRows, at_least_stationary, map_rows, window_positions};
 use super::{CovarianceError, Layout, ParameterCovariance, layout, with_parameters};
-use crate::core::effects::ExtendedModel;
+use crate::core::effects::{EffectId, ExtendedModel};
 use crate::core::identification::uncertainty::{bandwidth, long_run_variance};
-use crate::core::run::Run;
+use crate::core::run::{Quantity, Run};
+
+/// The speed's model that `model` is read off, as a model of the run's one shaft speed.
+fn spool_of(model: &ExtendedModel, run: &Run) -> Result<ExtendedModel, CovarianceError> {
+    let mut speeds = run.outputs.iter().filter(|c| Quantity::of(&c.name) == Some(Quantity::ShaftSpeed));
+    let (Some(speed), None) = (speeds.next(), speeds.next()) else {
+        return Err(CovarianceError::ReadOff { output: model.output.clone(), run: run.name.clone() });
+    };
+    let mut spool = model.clone();
+    spool.effects.retain(|e| e.id() != EffectId::ReadOffSpeed);
+    spool.output = speed.name.clone();
+    Ok(spool)
+}
 
 /// Relative step of the central differences: large beside a simulation's rounding (~1e-12
 /// relative over a run), small beside any parameter's interval.
@@ -22,11 +34,18 @@ const NO_INFORMATION: f64 = 1e-9;
 /// the static map's coefficients by least squares on the means of the `steady_windows` (run
 /// indices; the map's own fit), every other parameter by output error over the whole run. With no
 /// windows the map is taken as fitted by output error too.
+///
+/// A model read off the shaft speed's model holds the speed's parameters, fitted on the speed: their
+/// covariance is estimated there, on the run's shaft speed (the read-off polynomial, fitted on
+/// every sample of the run, is held; its own share of the uncertainty is not estimated).
 pub fn estimate(
     model: &ExtendedModel,
     run: &Run,
     steady_windows: &[Range<usize>],
 ) -> Result<ParameterCovariance, CovarianceError> {
+    if model.read_off().is_some() {
+        return estimate(&spool_of(model, run)?, run, steady_windows);
+    }
     let (layout, names, theta0) = layout(model)?;
     let fit = Residual::of(model, run, theta0.len())?;
     let jac = jacobian(model, run, &layout, &names, &theta0, &fit)?;

@@ -82,6 +82,13 @@ pub enum CovarianceError {
     Singular { output: String, names: Vec<String> },
     #[error("the covariance has {stored} parameters but the model has {model}: it belongs to another model")]
     Mismatch { stored: usize, model: usize },
+    /// The output is read off the shaft speed's model, whose parameters are estimated on the speed,
+    /// but the run does not measure exactly one shaft speed.
+    #[error(
+        "'{output}' is read off the shaft speed's model, whose parameters' uncertainty is estimated on \
+         the speed, but run '{run}' does not measure exactly one shaft speed"
+    )]
+    ReadOff { output: String, run: String },
 }
 
 /// How a root sits in θ: one coordinate for a real root, two for a pair.

@@ -177,7 +177,8 @@ fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Optio
         EffectId::TransportDelay
         | EffectId::AmbientCorrection
         | EffectId::StaticMapOrder
-        | EffectId::CalibrationDrift => None,
+        | EffectId::CalibrationDrift
+        | EffectId::ReadOffSpeed => None,
     }
 }
 
@@ -189,6 +190,14 @@ fn starting_points(
     data: &FitData,
 ) -> Result<Vec<EffectBlock>, EffectError> {
     Ok(match id {
+        EffectId::ReadOffSpeed => {
+            return Err(EffectError::NotApplicable {
+                effect: id.name().to_owned(),
+                reason: "it is not fitted on the output alone: the spool sharing offers it with the shaft \
+                         speed's model (a project with both outputs and validation runs)"
+                    .to_owned(),
+            });
+        }
         EffectId::TransportDelay => {
             TransportDelay::guesses(data.dt_secs).into_iter().map(EffectBlock::TransportDelay).collect()
         }

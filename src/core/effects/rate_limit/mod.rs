@@ -83,11 +83,12 @@ const MAX_LIMIT_PER_S: f64 = 1e12;
 const LIMIT_SHARES: [f64; 4] = [0.3, 0.5, 0.7, 1.5];
 
 impl RateLimit {
-    /// The limit as the spool section of a model of `output` applies it, with samples of
-    /// `dt_secs`; `gain`, `offset` and the map (with its kink) are the model's.
+    /// The limit as the spool section of a model applies it, with samples of `dt_secs`; `gain`,
+    /// `offset` and the map (with its kink) are the model's, and `through_map` says whether the
+    /// limit is on the map's output (the speed's own rate) or on `v`.
     pub fn on_state(
         &self,
-        output: &str,
+        through_map: bool,
         dt_secs: f64,
         gain: f64,
         offset: f64,
@@ -99,7 +100,7 @@ impl RateLimit {
             down: self.fall_per_s * dt_secs,
             gain,
             offset,
-            through: limits_own_rate(output).then(|| (map.clone(), kink.cloned())),
+            through: through_map.then(|| (map.clone(), kink.cloned())),
         }
     }
 
@@ -210,15 +211,15 @@ mod tests {
         let r = RateLimit { rise_per_s: 10.0, fall_per_s: 5.0 };
         let map = StaticMap { coeffs_scaled: vec![0.0, 1.0], ..StaticMap::identity() };
         // On v (a thrust model): v = 2x, so x may rise by 10·0.1/2 a sample.
-        let on_v = r.on_state("thrust_n", 0.1, 2.0, 0.0, &map, None);
+        let on_v = r.on_state(false, 0.1, 2.0, 0.0, &map, None);
         assert!((on_v.clamp(0.0, 3.0) - 0.5).abs() < 1e-12 && (on_v.clamp(0.0, -3.0) + 0.25).abs() < 1e-12);
         assert!((on_v.clamp(0.0, 0.1) - 0.1).abs() < 1e-15, "a small change is untouched");
         // A negative gain turns a rise of x into a fall of v: the fall's limit applies.
-        let negative = r.on_state("thrust_n", 0.1, -2.0, 0.0, &map, None);
+        let negative = r.on_state(false, 0.1, -2.0, 0.0, &map, None);
         assert!((negative.clamp(0.0, 3.0) - 0.25).abs() < 1e-12);
         // On the speed's own rate, through the map's slope (here 4 per unit of v).
         let steep = StaticMap { coeffs_scaled: vec![0.0, 4.0], ..StaticMap::identity() };
-        let on_speed = r.on_state("shaft_speed_rpm", 0.1, 2.0, 0.0, &steep, None);
+        let on_speed = r.on_state(true, 0.1, 2.0, 0.0, &steep, None);
         assert!((on_speed.clamp(0.0, 3.0) - 0.125).abs() < 1e-12);
         assert!(r.with_free_params(&r.free_params()).is_some_and(|b| (b.rise_per_s - 10.0).abs() < 1e-9));
         assert!(r.with_free_params(&[f64::NAN, 0.0]).is_none());

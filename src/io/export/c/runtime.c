@@ -60,6 +60,10 @@ typedef struct {
     int limit_through_map;
     int n_output_steps;
     jetid_output_step output_steps[2];
+    int has_read_off; /* 1: the output is read off the speed, P(y) after the output steps */
+    double read_off_center, read_off_scale;
+    double read_off_c0, read_off_c1, read_off_c2, read_off_c3, read_off_c4;
+    double read_off_theta_exp, read_off_delta_exp; /* the output's own correction, when corrected */
 } jetid_params;
 
 typedef struct {
@@ -223,32 +227,51 @@ static double jetid_sensor_step(jetid_sensor_state *s, const jetid_output_step *
     return s->pos;
 }
 
-/* The polynomial's value (k = 0), slope d/dx (k = 1) or curvature (k = 2) at x. */
-static double jetid_poly(const jetid_params *p, double x, int k)
+/* The polynomial c[0] + c[1] x + ... (n coefficients): its value (k = 0), slope d/dx (k = 1) or
+ * curvature (k = 2) at x. */
+static double jetid_poly_of(const double *c, int n, double x, int k)
 {
     double y = 0.0;
     int i;
-    for (i = p->n_coeffs - 1; i >= k; i--) y = y * x + (k == 0 ? 1.0 : k == 1 ? i : i * (i - 1.0)) * p->coeffs[i];
+    for (i = n - 1; i >= k; i--) y = y * x + (k == 0 ? 1.0 : k == 1 ? i : i * (i - 1.0)) * c[i];
     return y;
 }
 
-/* static_map.rs StaticMap::eval: the polynomial part of f at x. Inside |x| <= 1 (everywhere
- * without end_trend) the polynomial; beyond it the end's value, slope and curvature continue: an
- * exponential approach where the curvature slows the map outwards, else their parabola. */
-static double jetid_map_polynomial(const jetid_params *p, double x)
+static double jetid_poly(const jetid_params *p, double x, int k)
+{
+    return jetid_poly_of(p->coeffs, p->n_coeffs, x, k);
+}
+
+/* static_map.rs StaticMap::eval of the polynomial c (n coefficients) at x. Inside |x| <= 1
+ * (everywhere without end_trend) the polynomial; beyond it the end's value, slope and curvature
+ * continue: an exponential approach where the curvature slows the map outwards, else their parabola. */
+static double jetid_polynomial_map(const double *c, int n, int end_trend, double x)
 {
     double end, value, slope, curvature, t, length;
-    if (!p->end_trend || (x <= 1.0 && x >= -1.0)) return jetid_poly(p, x, 0);
+    if (!end_trend || (x <= 1.0 && x >= -1.0)) return jetid_poly_of(c, n, x, 0);
     end = x > 0.0 ? 1.0 : -1.0;
-    value = jetid_poly(p, end, 0);
-    slope = jetid_poly(p, end, 1);
-    curvature = jetid_poly(p, end, 2);
+    value = jetid_poly_of(c, n, end, 0);
+    slope = jetid_poly_of(c, n, end, 1);
+    curvature = jetid_poly_of(c, n, end, 2);
     t = end * (x - end);
     if (end * slope * curvature < 0.0) {
         length = fabs(slope / curvature);
         return value + end * slope * (length * (1.0 - exp(-t / length)));
     }
     return value + (end * slope * t + 0.5 * curvature * t * t);
+}
+
+/* The polynomial part of the static map f at x. */
+static double jetid_map_polynomial(const jetid_params *p, double x)
+{
+    return jetid_polynomial_map(p->coeffs, p->n_coeffs, p->end_trend, x);
+}
+
+/* read_off_speed.rs ReadOffSpeed::eval: the output at shaft speed n (a quartic with its end trend). */
+static double jetid_read_off(const jetid_params *p, double n)
+{
+    const double c[5] = {p->read_off_c0, p->read_off_c1, p->read_off_c2, p->read_off_c3, p->read_off_c4};
+    return jetid_polynomial_map(c, 5, 1, (n - p->read_off_center) / p->read_off_scale);
 }
 
 /* static_map.rs StaticMap::slope with the kink: df/dv. */
@@ -339,23 +362,32 @@ static double jetid_linear_step(jetid_state *s, double u, int first)
 }
 
 /* The output from v: the static map, then the sensors (their state in sensor) and the inlet
- * conditions' factor. */
+ * conditions' factor; read off the speed last, for an output that is. */
 static double jetid_output_stage(jetid_state *s, double v, double temp_c, double pressure_kpa, int first)
 {
     const jetid_params *p = s->p;
     jetid_sensor_state *sensor = s->sensor;
     double dt = s->dt;
-    int i;
-    double y = jetid_static_map(p, v);
+    int i, corrected = 0;
+    double y = jetid_static_map(p, v), theta = 1.0, delta = 1.0, factor = 1.0;
     if (p->has_soak && p->soak_power_exponent > 0.0) y = jetid_soak_power_step(s, y, first);
     for (i = 0; i < p->n_output_steps; i++) {
         const jetid_output_step *st = &p->output_steps[i];
         if (st->kind == JETID_STEP_SENSOR) {
             y = jetid_sensor_step(&sensor[i], st, dt, y, first);
         } else {
-            double theta = (temp_c + JETID_KELVIN_FROM_CELSIUS) / JETID_T_STD_K, delta = pressure_kpa / JETID_P_STD_KPA;
-            y *= pow(theta, st->theta_exp) * pow(delta, st->delta_exp);
+            theta = (temp_c + JETID_KELVIN_FROM_CELSIUS) / JETID_T_STD_K;
+            delta = pressure_kpa / JETID_P_STD_KPA;
+            factor = pow(theta, st->theta_exp) * pow(delta, st->delta_exp);
+            y *= factor;
+            corrected = 1;
         }
+    }
+    /* Read off the speed: in corrected quantities when the speed's model is corrected. */
+    if (p->has_read_off && corrected) {
+        y = jetid_read_off(p, y / factor) * pow(theta, p->read_off_theta_exp) * pow(delta, p->read_off_delta_exp);
+    } else if (p->has_read_off) {
+        y = jetid_read_off(p, y);
     }
     return y;
 }

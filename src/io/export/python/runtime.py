@@ -231,6 +231,14 @@ def static_map_slope(output, v):
     return slope
 
 
+def _read_off(read_off, n):
+    """read_off_speed.rs ReadOffSpeed: the output at shaft speed n and its slope d/dN (a quartic
+    in the scaled speed, with its end trend)."""
+    center, scale = read_off[0], read_off[1]
+    y, slope = _map_polynomial(list(read_off[2:7]), True, (n - center) / scale)
+    return y, slope / scale
+
+
 def _conditions(temp_c, pressure_kpa):
     if not (math.isfinite(temp_c) and temp_c > -_KELVIN_FROM_CELSIUS):
         raise ValueError(f"ambient_temp_c = {temp_c} is not a temperature")
@@ -292,12 +300,22 @@ class Model:
             k = self.p["soak"][2]
             power = self.soak.step(math.copysign(abs(y) ** k, y))
             y = math.copysign(abs(power) ** (1.0 / k), power)
+        corrected = None
         for spec, sensor in zip(self.p["output_steps"], sensors):
             if sensor is not None:
                 y = sensor.step(y)
             else:
                 theta, delta = _conditions(temp_c, pressure_kpa)
-                y *= theta ** spec[1] * delta ** spec[2]
+                factor = theta ** spec[1] * delta ** spec[2]
+                y *= factor
+                corrected = (theta, delta, factor)
+        read_off = self.p["read_off"]
+        if read_off is not None and corrected is not None:
+            # Read off in corrected quantities: y/(theta^a delta^b) = P(N/sqrt(theta)).
+            theta, delta, factor = corrected
+            y = _read_off(read_off, y / factor)[0] * theta ** read_off[7] * delta ** read_off[8]
+        elif read_off is not None:
+            y = _read_off(read_off, y)[0]
         return y
 
 
@@ -458,12 +476,14 @@ def local_dynamics(output, u_star):
 def operating_point(output, u_star):
     """The local linear model at the steady state of input u_star (on a standard day, without
     calibration offset), as a control.TransferFunction: K G(z)/G(1) with K = f'(v*) G(1) the local
-    gain, v* = G(1) u_star + offset the linear block's steady output, and the effects linearised
+    gain (times P'(f(v*)) for an output read off the speed), v* = G(1) u_star + offset the linear block's steady output, and the effects linearised
     where they act (see local_dynamics)."""
     p = OUTPUTS[output]
     g1 = p["tf"]["steady_gain"]
     v_star = g1 * u_star + p["offset"]
     k = static_map_slope(output, v_star) * g1
+    if p["read_off"] is not None:
+        k *= _read_off(p["read_off"], static_map(output, v_star))[1]
     num, den = local_dynamics(output, u_star)
     return _tf_zinv(k * num, den)
 

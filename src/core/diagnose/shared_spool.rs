@@ -66,6 +66,33 @@ pub struct SharedBlock {
 }
 
 impl SharedBlock {
+    /// The block `id` from the output `from`, offered with the blocks `with`, judged on the
+    /// output's validation scores without and with it (`scores`): kept unless the runs lean
+    /// against it, the diagnosis's comparison read the other way round giving "no worse" a p-value
+    /// below [`RIVAL_LEVEL`].
+    fn judged(
+        id: EffectId,
+        from: &str,
+        replaces_own: bool,
+        scores: (&Scores, &Scores),
+        with: Vec<EffectId>,
+    ) -> Self {
+        let (before, after) = scores;
+        let worse = Comparison::of(after, before, after);
+        Self {
+            id,
+            from: from.to_owned(),
+            replaces_own,
+            beyond_noise_before: before.beyond_noise(),
+            beyond_noise_after: after.beyond_noise(),
+            rmspe_before_pct: before.rmspe(),
+            rmspe_after_pct: after.rmspe(),
+            taken: after.beyond_noise().is_finite() && worse.p_value >= RIVAL_LEVEL,
+            p_worse: worse.p_value,
+            with,
+        }
+    }
+
     /// "the spool's scheduled_time_constant from shaft_speed_rpm (in place of its own, fitted on this
     /// output): validation from 4.779 % to 4.731 %, from 0.24 σ to 0.17 σ beyond the noise (worse
     /// beyond noise: p = 0.9420); shared".
@@ -150,44 +177,30 @@ pub fn share_spool_dynamics(
         let candidate = set.iter().fold(current.clone(), |m, b| with_block(&m, b, spool));
         // Blocks the output's model cannot run (no spool root to schedule) are not offered.
         let Ok(after) = Scores::of(&candidate, validation, initial, &responses) else { continue };
-        let worse = Comparison::of(&after, &scores, &after);
-        let taken = after.beyond_noise().is_finite() && worse.p_value >= RIVAL_LEVEL;
-        offered.extend(set.iter().map(|b| SharedBlock {
-            id: b.id(),
-            from: spool.output.clone(),
-            replaces_own: current.effect(b.id()).is_some(),
-            beyond_noise_before: scores.beyond_noise(),
-            beyond_noise_after: after.beyond_noise(),
-            rmspe_before_pct: scores.rmspe(),
-            rmspe_after_pct: after.rmspe(),
-            taken,
-            p_worse: worse.p_value,
-            with: set.iter().map(|o| o.id()).filter(|id| *id != b.id()).collect(),
-        }));
-        if taken {
+        let judged = set.iter().map(|b| {
+            let with = set.iter().map(|o| o.id()).filter(|id| *id != b.id()).collect();
+            SharedBlock::judged(
+                b.id(),
+                &spool.output,
+                current.effect(b.id()).is_some(),
+                (&scores, &after),
+                with,
+            )
+        });
+        offered.extend(judged);
+        if offered.last().is_some_and(|o| o.taken) {
             (current, scores) = (candidate, after);
         }
     }
     if let Some(candidate) = read_off_the_speed(&current, spool, ident)
         && let Ok(after) = Scores::of(&candidate, validation, initial, &responses)
     {
-        let worse = Comparison::of(&after, &scores, &after);
-        let taken = after.beyond_noise().is_finite() && worse.p_value >= RIVAL_LEVEL;
-        offered.push(SharedBlock {
-            id: EffectId::ReadOffSpeed,
-            from: spool.output.clone(),
-            replaces_own: true,
-            beyond_noise_before: scores.beyond_noise(),
-            beyond_noise_after: after.beyond_noise(),
-            rmspe_before_pct: scores.rmspe(),
-            rmspe_after_pct: after.rmspe(),
-            taken,
-            p_worse: worse.p_value,
-            with: Vec::new(),
-        });
-        if taken {
+        let read_off =
+            SharedBlock::judged(EffectId::ReadOffSpeed, &spool.output, true, (&scores, &after), Vec::new());
+        if read_off.taken {
             current = candidate;
         }
+        offered.push(read_off);
     }
     Ok((current, offered))
 }

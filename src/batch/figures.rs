@@ -140,11 +140,12 @@ fn bode_curves(identified: &Identified, finished: Option<&ExtendedModel>) -> Vec
         colour: Some(figures::palette::REDUCED),
         dashed: false,
     });
-    if let Some(block) =
-        finished.map(|m| &m.wiener.linear.tf).filter(|tf| **tf != identified.model.wiener.linear.tf)
-    {
+    if let Some(finished) = finished.filter(|m| m.wiener.linear.tf != identified.model.wiener.linear.tf) {
+        // An output read off the speed's model holds the speed's block, in the speed's units.
+        let name = if finished.read_off().is_some() { READ_OFF_NAME } else { REFITTED_NAME };
+        let block = &finished.wiener.linear.tf;
         curves.push(BodeCurve {
-            name: REFITTED_NAME.into(),
+            name: name.into(),
             points: block.bode_response(&omegas),
             emphasis: true,
             colour: Some(figures::palette::model(ModelKind::GrayBox)),
@@ -156,6 +157,9 @@ fn bode_curves(identified: &Identified, finished: Option<&ExtendedModel>) -> Vec
 
 /// The name of the final model's block when the effects' refit moved it from the reduced model's.
 const REFITTED_NAME: &str = "model with effects";
+/// The name of the final model's block when the output is read off the shaft speed's model (in
+/// the speed's units: its level is not thrust's).
+const READ_OFF_NAME: &str = "speed's block";
 
 /// f(v) at 101 points over the range of the steady points.
 fn static_map_curve(model: &GrayBoxModel) -> Vec<(f64, f64)> {

@@ -204,17 +204,9 @@ fn operating_point(
         .tf
         .dc_gain()
         .map_err(|e| OperatingPointError::NoSteadyState { output: output.clone(), reason: e.to_string() })?;
-    let kink = model.effects.iter().find_map(|e| match e {
-        EffectBlock::StaticMapOrder(k) => Some(k),
-        _ => None,
-    });
     let v = g1 * u + linear.offset;
     let y = model.static_output(v);
-    let slope =
-        model.wiener.map.slope(v) + kink.map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 });
-    // Read off the speed: the chain rule through P at the steady speed.
-    let read_off = model.read_off().map_or(1.0, |r| r.slope(model.map_with_kink(v)));
-    let gain = slope * read_off * g1;
+    let gain = model.static_slope(v) * g1;
     let unit = local_dynamics(model, u).map_err(|reason| OperatingPointError::LocalModel {
         output: output.clone(),
         u,

@@ -66,31 +66,32 @@ pub struct SharedBlock {
 }
 
 impl SharedBlock {
-    /// The block `id` from the output `from`, offered with the blocks `with`, judged on the
-    /// output's validation scores without and with it (`scores`): kept unless the runs lean
-    /// against it, the diagnosis's comparison read the other way round giving "no worse" a p-value
-    /// below [`RIVAL_LEVEL`].
+    /// The blocks of `set` from the output `from`, offered together, judged once on the output's
+    /// validation scores `before` and `after` them: kept unless the runs lean against them, the
+    /// diagnosis's comparison read the other way round giving "no worse" a p-value below
+    /// [`RIVAL_LEVEL`]. `replaces_own` says of each block whether the output had its own of the kind.
     fn judged(
-        id: EffectId,
+        set: &[EffectId],
         from: &str,
-        replaces_own: bool,
-        scores: (&Scores, &Scores),
-        with: Vec<EffectId>,
-    ) -> Self {
-        let (before, after) = scores;
+        replaces_own: impl Fn(EffectId) -> bool,
+        before: &Scores,
+        after: &Scores,
+    ) -> Vec<Self> {
         let worse = Comparison::of(after, before, after);
-        Self {
+        let taken = after.beyond_noise().is_finite() && worse.p_value >= RIVAL_LEVEL;
+        let block = |id: EffectId| Self {
             id,
             from: from.to_owned(),
-            replaces_own,
+            replaces_own: replaces_own(id),
             beyond_noise_before: before.beyond_noise(),
             beyond_noise_after: after.beyond_noise(),
             rmspe_before_pct: before.rmspe(),
             rmspe_after_pct: after.rmspe(),
-            taken: after.beyond_noise().is_finite() && worse.p_value >= RIVAL_LEVEL,
+            taken,
             p_worse: worse.p_value,
-            with,
-        }
+            with: set.iter().copied().filter(|other| *other != id).collect(),
+        };
+        set.iter().map(|id| block(*id)).collect()
     }
 
     /// "the spool's scheduled_time_constant from shaft_speed_rpm (in place of its own, fitted on this
@@ -177,18 +178,12 @@ pub fn share_spool_dynamics(
         let candidate = set.iter().fold(current.clone(), |m, b| with_block(&m, b, spool));
         // Blocks the output's model cannot run (no spool root to schedule) are not offered.
         let Ok(after) = Scores::of(&candidate, validation, initial, &responses) else { continue };
-        let judged = set.iter().map(|b| {
-            let with = set.iter().map(|o| o.id()).filter(|id| *id != b.id()).collect();
-            SharedBlock::judged(
-                b.id(),
-                &spool.output,
-                current.effect(b.id()).is_some(),
-                (&scores, &after),
-                with,
-            )
-        });
+        let ids: Vec<EffectId> = set.iter().map(|b| b.id()).collect();
+        let judged =
+            SharedBlock::judged(&ids, &spool.output, |id| current.effect(id).is_some(), &scores, &after);
+        let taken = judged.first().is_some_and(|b| b.taken);
         offered.extend(judged);
-        if offered.last().is_some_and(|o| o.taken) {
+        if taken {
             (current, scores) = (candidate, after);
         }
     }
@@ -196,11 +191,11 @@ pub fn share_spool_dynamics(
         && let Ok(after) = Scores::of(&candidate, validation, initial, &responses)
     {
         let read_off =
-            SharedBlock::judged(EffectId::ReadOffSpeed, &spool.output, true, (&scores, &after), Vec::new());
-        if read_off.taken {
+            SharedBlock::judged(&[EffectId::ReadOffSpeed], &spool.output, |_| true, &scores, &after);
+        if read_off.first().is_some_and(|b| b.taken) {
             current = candidate;
         }
-        offered.push(read_off);
+        offered.extend(read_off);
     }
     Ok((current, offered))
 }

@@ -57,6 +57,7 @@ mod read_off_speed;
 mod scheduled_time_constant;
 mod sensor_dynamics;
 mod spool;
+mod stages;
 mod static_map_order;
 pub mod stats;
 mod structural;

@@ -102,16 +102,17 @@ impl ReadOffSpeed {
     /// The output from the speed model's simulated speed `y` (replaced), given the inlet
     /// `conditions` and the speed's correction `speed_correction` when the model is corrected.
     pub fn apply(&self, y: &mut [f64], corrected: Option<(&AmbientCorrection, &Conditions)>) {
+        let map = self.map();
         match corrected {
             Some((speed_correction, c)) => {
                 let own =
                     AmbientCorrection { output_theta_exp: self.theta_exp, output_delta_exp: self.delta_exp };
                 let (speed_factor, own_factor) = (speed_correction.output_factor(c), own.output_factor(c));
                 for ((n, s), o) in y.iter_mut().zip(speed_factor).zip(own_factor) {
-                    *n = self.eval(*n / s) * o;
+                    *n = map.eval(*n / s) * o;
                 }
             }
-            None => y.iter_mut().for_each(|n| *n = self.eval(*n)),
+            None => y.iter_mut().for_each(|n| *n = map.eval(*n)),
         }
     }
 }

@@ -35,6 +35,8 @@ use crate::workflow::model::{self, EffectPlan, ModelSource};
 use crate::workflow::products::bode_grid;
 use crate::workflow::runs::{self, StepsFrom};
 
+mod spool;
+
 /// The identification run and everything identified from it.
 pub struct IdentCache {
     /// Index of the identification run in the session.
@@ -191,24 +193,6 @@ impl IdentCache {
             if !self.is_busy() {
                 break;
             }
-        }
-    }
-
-    /// Give every output other than the shaft speed the speed's finished model, whose spool blocks
-    /// its model shares (`workflow::model::share_spool`, as the batch does); each rebuilds when what
-    /// it shares changes. While the speed's model is being finished the others keep theirs.
-    fn share_the_spool(&mut self) {
-        let names: Vec<String> = self.outputs.iter().map(|o| o.name.clone()).collect();
-        let speed = model::spool_output(&names).map(str::to_owned);
-        let spool = match &speed {
-            Some(speed) => match self.output(speed).and_then(OutputCache::finished_spool) {
-                Some(spool) => spool,
-                None => return,
-            },
-            None => None,
-        };
-        for output in self.outputs.iter_mut().filter(|o| Some(&o.name) != speed.as_ref()) {
-            output.set_spool(spool.clone());
         }
     }
 
@@ -426,33 +410,6 @@ impl OutputCache {
             omegas_rad_s: Arc::clone(&self.omegas_rad_s),
             effects: EffectPlan { by_hand: self.setup.effects.clone(), auto_rounds: self.setup.auto_effects },
             spool: self.spool.clone(),
-        }
-    }
-
-    /// What the other outputs share of this model, when this is a shaft speed whose model is
-    /// finished ([`model::spool_part`]): `Some(None)` when it has no model of its own to share,
-    /// `None` while it is being finished (the others keep what they share until it is).
-    fn finished_spool(&self) -> Option<Option<Arc<ExtendedModel>>> {
-        match &self.live {
-            Ok(live) if live.finishing => None,
-            Ok(live) => {
-                // A speed whose requested effects could not be added has no finished model to share
-                // (the batch refuses it); one with none requested shares its model as identified.
-                let failed = live.effects.model.is_none() && !live.effects.requested.is_empty();
-                let finished = (!failed).then(|| live.current_model());
-                Some(finished.as_ref().and_then(model::spool_part).map(Arc::new))
-            }
-            Err(_) if self.finishing.is_some() => None,
-            Err(_) => Some(None),
-        }
-    }
-
-    /// Share the speed's model `spool` from now on (its spool blocks, and the whole model to read
-    /// off): rebuild when it changes.
-    fn set_spool(&mut self, spool: Option<Arc<ExtendedModel>>) {
-        if self.spool.as_deref() != spool.as_deref() {
-            self.spool = spool;
-            self.rebuild();
         }
     }
 

@@ -7,13 +7,14 @@
 //! `cargo run --release --no-default-features --example attribution_study -- [effects|free] [ENGINES]`
 //! (`effects`: every hidden effect on engines 3, 7, 11; `free`: effect-free engines 1..=ENGINES;
 //! with `OFFERS=1` set, what each thrust model was offered of the speed's spool blocks; with
-//! `READ_OFF_SPEED=1`, thrust read off the speed model too: see [`read_off_speed`]).
+//! `READ_OFF_SPEED=1`, thrust read off the speed model too: see [`read_off_speed`]; with
+//! `SPOOL_SCHEDULE=power_balance`, the scheduled time constant in the power balance's form).
 use anyhow::{Context, Result};
 use jetid::core::effects::ExtendedModel;
 use jetid::core::identification::fits::segments_for;
 use jetid::core::identification::pipeline::identify_output;
 use jetid::core::identification::segment::SegmentSettings;
-use jetid::core::identification::settings::OutputSettings;
+use jetid::core::identification::settings::{OutputSettings, SpoolSchedule};
 use jetid::core::identification::static_map::fit_static_map;
 use jetid::core::numerics::metrics::metrics;
 use jetid::core::parallel::on_two_threads;
@@ -57,7 +58,10 @@ fn loop_on(
     output: &str,
     spool: Option<&ExtendedModel>,
 ) -> Result<(Vec<String>, f64, f64, ExtendedModel)> {
-    let settings = OutputSettings::for_output(output);
+    let mut settings = OutputSettings::for_output(output);
+    if std::env::var("SPOOL_SCHEDULE").is_ok_and(|v| v == "power_balance") {
+        settings.spool_schedule = SpoolSchedule::PowerBalance;
+    }
     let segments = segments_for(&b.ident, None, &SegmentSettings::default())?;
     let identified = identify_output(&b.ident, output, &settings, &segments, None)?;
     let base = ExtendedModel::from_gray_box(&identified.model);

@@ -250,6 +250,44 @@ fn scheduled_time_constant() {
     exports_reproduce_predict(Some("scheduled_time_constant"), Some("shaft_speed_rpm"));
 }
 
+/// The scheduled time constant in the power balance's form (`spool_schedule = "power_balance"`),
+/// read through a map with a bleed valve's kink: every runtime runs the balance, the kink's jump of
+/// the time constant included, as `jetid predict` does.
+#[test]
+fn scheduled_time_constant_as_the_power_balance_through_a_kinked_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = power_balance_model(dir.path());
+    let run = dir.path().join("other.csv");
+    reproduce(dir.path(), &model, &run, &[], &[]);
+}
+
+/// A speed model fitted by `jetid --batch` on a project that asks for the power balance, on runs of
+/// an engine with a bleed valve (the map's kink): `fit/model.json` and `fit/report.json`.
+fn power_balance_model(dir: &Path) -> PathBuf {
+    let (ident, val, _) = simulated_runs(dir, Some("static_map_order"));
+    let project = dir.join("power_balance.toml");
+    let text = format!(
+        "ident = {:?}\nvalidate = [{:?}]\noutputs = [\"shaft_speed_rpm\"]\n\
+         add_effects = [\"static_map_order\", \"scheduled_time_constant\"]\n\
+         [output.shaft_speed_rpm]\nspool_schedule = \"power_balance\"\n",
+        s(&ident),
+        s(&val)
+    );
+    std::fs::write(&project, text).unwrap();
+    let fitted = dir.join("fit");
+    ok(&jetid(&["--batch", s(&project), "--out", s(&fitted), "--quiet"]), "jetid --batch");
+    let model = fitted.join("model.json");
+    let file = read_model(&model).unwrap();
+    let speed = &file.outputs[0];
+    let mut ids: Vec<&str> = speed.effects.iter().map(|e| e.id.name()).collect();
+    ids.sort_unstable();
+    assert_eq!(ids, ["scheduled_time_constant", "static_map_order"], "{}", model.display());
+    let schedule = speed.effects.iter().find(|e| e.id.name() == "scheduled_time_constant").unwrap();
+    let k = schedule.params["load_exponent"];
+    assert!((1.0..=5.0).contains(&k), "the power balance's load exponent {k}");
+    model
+}
+
 #[test]
 fn rate_limit() {
     exports_reproduce_predict(Some("rate_limit"), Some("shaft_speed_rpm"));
@@ -605,15 +643,19 @@ fn the_python_sample_models_follow_the_covariance() {
 }
 
 /// The exported `operating_point` is the local model of the report's operating points (the same
-/// frequency response at every point), for a scheduled spool and for sensor dynamics.
+/// frequency response at every point), for a scheduled spool (in either form) and for sensor
+/// dynamics.
 #[test]
 fn the_python_operating_points_are_the_reports() {
     if !have_python() {
         return;
     }
-    for effect in ["scheduled_time_constant", "sensor_dynamics"] {
+    for effect in ["scheduled_time_constant", "sensor_dynamics", "power_balance"] {
         let dir = tempfile::tempdir().unwrap();
-        let (model, _) = fit_with_report(dir.path(), Some(effect), Some("shaft_speed_rpm"));
+        let model = match effect {
+            "power_balance" => power_balance_model(dir.path()),
+            _ => fit_with_report(dir.path(), Some(effect), Some("shaft_speed_rpm")).0,
+        };
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit/report.json")).unwrap())
                 .unwrap();

@@ -444,6 +444,11 @@ fn option_cases(dir: &Path, run: &Path, model: &Path, cases: &mut Vec<Case>) {
         format!("ident = '{r}'\n[output.shaft_speed_rpm]\nstatic_order = 50\n").as_bytes(),
     );
     let unknown_key = write(dir, "key_project.toml", b"idnet = 'x.csv'\n");
+    let schedule = write(
+        dir,
+        "schedule_project.toml",
+        format!("ident = '{r}'\n[output.shaft_speed_rpm]\nspool_schedule = 'cubic'\n").as_bytes(),
+    );
     let not_toml = write(dir, "not_toml.toml", b"[[[\n");
     let truth = dir.join("sim.csv");
     let sim = s(&truth);
@@ -569,6 +574,13 @@ fn option_cases(dir: &Path, run: &Path, model: &Path, cases: &mut Vec<Case>) {
             &[&order],
             &dir.join("b2"),
             refused("order_project.toml", &["static_order = 50", "out of range"]),
+        ),
+        case(
+            "batch spool_schedule = cubic",
+            &["--batch", &s(&schedule), "--out", &s(&dir.join("b6"))],
+            &[&schedule],
+            &dir.join("b6"),
+            refused("schedule_project.toml", &["cubic", "power_balance", "exponential"]),
         ),
         case(
             "batch unknown key",

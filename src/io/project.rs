@@ -26,6 +26,8 @@
 //! dead_time_samples = 8                    # input dead time of a model built from `clusters`
 //! initial_state = "estimated"              # or "steady": where scored runs start
 //! polish = "within_clusters"               # or "free": where the polish may move a root
+//! spool_schedule = "power_balance"         # or "exponential" (default): the form of a fitted
+//!                                          # scheduled time constant
 //! ```
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -38,7 +40,7 @@ use crate::core::identification::arx::ArxOrders;
 use crate::core::identification::cluster::Cluster;
 use crate::core::identification::initial_state::InitialState;
 use crate::core::identification::segment::{Segment, segment_label};
-use crate::core::identification::settings::{OutputSettings, PolishRegion};
+use crate::core::identification::settings::{OutputSettings, PolishRegion, SpoolSchedule};
 use crate::io::csv_run::LoadOptions;
 
 /// How to read runs: the command line's `--map`, `--sample-time`, `--window`, `--quality`, `--resample`.
@@ -158,6 +160,8 @@ pub struct OutputSpec {
     pub initial_state: Option<InitialState>,
     /// Where the polish may move a cluster's root: "within_clusters" (default) or "free".
     pub polish: Option<PolishRegion>,
+    /// The form of a fitted scheduled time constant: "exponential" (default) or "power_balance".
+    pub spool_schedule: Option<SpoolSchedule>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -288,6 +292,7 @@ fn output_settings(name: &str, spec: &OutputSpec) -> Result<OutputSettings> {
     s.dead_time_samples = spec.dead_time_samples.or(s.dead_time_samples);
     s.initial_state = spec.initial_state.unwrap_or(s.initial_state);
     s.polish = spec.polish.unwrap_or(s.polish);
+    s.spool_schedule = spec.spool_schedule.unwrap_or(s.spool_schedule);
     Ok(s)
 }
 

@@ -152,6 +152,7 @@ fn output_spec(setup: &ModelSetup, name: &str) -> OutputSpec {
         clusters,
         initial_state: Some(settings.initial_state),
         polish: Some(settings.polish),
+        spool_schedule: Some(settings.spool_schedule),
     }
 }
 

@@ -254,10 +254,6 @@ pub fn local_dynamics(model: &ExtendedModel, u: f64) -> Result<DiscreteTf, Strin
     let tf = &model.wiener.linear.tf;
     let dt = tf.dt_secs;
     let g1 = tf.dc_gain().map_err(|e| e.to_string())?;
-    let scheduled = model.effects.iter().find_map(|e| match e {
-        EffectBlock::ScheduledTimeConstant(s) => Some(s),
-        _ => None,
-    });
     let split_needed = model
         .effects
         .iter()
@@ -265,7 +261,7 @@ pub fn local_dynamics(model: &ExtendedModel, u: f64) -> Result<DiscreteTf, Strin
     let (num, den) = if split_needed {
         let (poles, zeros) = model.roots().map_err(|e| e.to_string())?;
         let split = AsymmetricDynamics::split(&poles, &zeros, dt).map_err(|e| e.to_string())?;
-        let factor = scheduled.map_or(1.0, |s| s.factor(u, u)).max(f64::MIN_POSITIVE);
+        let factor = model.steady_spool_factor(u).max(f64::MIN_POSITIVE);
         let ln_root = Complex64::new(split.spool.norm().max(f64::MIN_POSITIVE).ln(), split.spool.arg());
         let root = (ln_root / factor).exp();
         let (spool_num, spool_den) = if split.is_pair() {

@@ -164,8 +164,7 @@ pub fn share_spool_dynamics(
         measured(run, &model.output)?;
     }
     let responses = ValidationResponses::of(validation);
-    let blocks: Vec<&EffectBlock> =
-        spool.effects.iter().filter(|b| SHARED_SPOOL_BLOCKS.contains(&b.id())).collect();
+    let blocks: Vec<&EffectBlock> = spool.effects.iter().filter(|b| carried_alone(b)).collect();
     let mut current = model.clone();
     let mut scores = Scores::of(&current, validation, initial, &responses)?;
     let mut offered = Vec::new();
@@ -198,6 +197,17 @@ pub fn share_spool_dynamics(
         offered.extend(read_off);
     }
     Ok((current, offered))
+}
+
+/// Whether the speed model's block can be carried over to another output's model as it is: one of
+/// [`SHARED_SPOOL_BLOCKS`], but not a schedule that runs the spool's power balance, which reads the
+/// speed through the speed's own map (another output's map would read it wrongly, as the rate
+/// limit's rpm/s would be): the read-off of the speed carries it.
+fn carried_alone(block: &EffectBlock) -> bool {
+    match block {
+        EffectBlock::ScheduledTimeConstant(s) => !s.is_power_balance(),
+        b => SHARED_SPOOL_BLOCKS.contains(&b.id()),
+    }
 }
 
 /// The output of `model` read off the speed's model `spool`: the speed's linear block, effects and

@@ -123,6 +123,7 @@ pub(super) fn linear_parts(structures: &[&Structure], data: &FitData) -> Vec<Opt
                 split: p.split.as_ref(),
                 u: &p.u,
                 limit: None,
+                through: None,
             })
         })
         .collect();
@@ -210,18 +211,24 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
             .filter_map(|&(a, b)| Some((mean(v.get(a..b)?), mean(y_c.get(a..b)?))))
             .unzip()
     };
-    if let Some(limit) = rate_limit(&s.effects) {
+    let power =
+        s.effects.iter().any(|e| matches!(e, EffectBlock::ScheduledTimeConstant(s) if s.is_power_balance()));
+    if power || rate_limit(&s.effects).is_some() {
         // The limit is on the spool's state in units the gain and the map give (see
-        // `RateLimit::on_state`): both from the unlimited response first (a limit binds on the
-        // transients, so the settled values the map is fitted on are the same with it), then the
-        // response again with the limit in the spool. Gain and offset are not refitted after: the
-        // map's refit below takes up any affine change of `v`.
+        // `RateLimit::on_state`), and the power balance reads the spool's speed through the map
+        // (see `PowerBalance`): both from the response without them first (a limit binds on the
+        // transients, and a schedule changes only them, so the settled values the map is fitted on
+        // are the same with them), then the response again with them in the spool. Gain and offset
+        // are not refitted after: the map's refit below takes up any affine change of `v`.
         let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
         let (vs, ys) = steady(&v);
         let (map, slope_change) = fit_map_with_knot(&vs, &ys, s.map_order, knot)?;
         let kink = knot.map(|knot_v| super::StaticMapOrder { knot_v, slope_change });
-        let state = limit.on_state(limits_own_rate(&data.output), dt, gain, offset, &map, kink.as_ref());
-        w = Cow::Owned(limited_response(s, data, state)?);
+        let state = rate_limit(&s.effects).map(|limit| {
+            limit.on_state(limits_own_rate(&data.output), dt, gain, offset, &map, kink.as_ref())
+        });
+        let through = super::stages::Through { gain, offset, map, kink };
+        w = Cow::Owned(second_pass_response(s, data, state, power.then_some(&through))?);
     }
     let v: Vec<f64> = w.iter().map(|wk| gain * wk + offset).collect();
     let (vs, ys) = steady(&v);
@@ -252,11 +259,16 @@ pub(super) fn assemble_from(s: &Structure, data: &FitData, part: &LinearPart) ->
     Some(Assembled { model, structure, residual, cost })
 }
 
-/// The unit-gain response of `s` with its spool's state limited by `limit` (see
-/// [`linear_parts`], whose first pass has no limit).
-fn limited_response(s: &Structure, data: &FitData, limit: super::rate_limit::StateLimit) -> Option<Vec<f64>> {
+/// The unit-gain response of `s` with its spool's state limited by `limit` and its power balance
+/// read `through` the first pass's map (see [`linear_parts`], whose first pass has neither).
+fn second_pass_response(
+    s: &Structure,
+    data: &FitData,
+    limit: Option<super::rate_limit::StateLimit>,
+    through: Option<&super::stages::Through>,
+) -> Option<Vec<f64>> {
     let p = Prepared::of(s, data)?;
-    linear_stage(&s.effects, &p.block, p.split.as_ref(), &p.u, Some(limit), data.dt_secs).ok()
+    linear_stage(&s.effects, &p.block, p.split.as_ref(), &p.u, limit, through, data.dt_secs).ok()
 }
 
 impl FitData {

@@ -52,6 +52,7 @@ mod calibration_drift;
 mod fit;
 mod id;
 mod model;
+pub(crate) mod power_balance;
 mod rate_limit;
 mod read_off_speed;
 mod scheduled_time_constant;

@@ -3,8 +3,9 @@
 use num_complex::Complex64;
 
 use super::ambient_correction::Conditions;
+use super::power_balance::PowerBalance;
 use super::rate_limit::StateLimit;
-use super::stages::{input_stage, kink, linear_stage, needs_split, output_stage, rate_limit};
+use super::stages::{Through, input_stage, kink, linear_stage, needs_split, output_stage, rate_limit};
 use super::{
     AsymmetricDynamics, EffectBlock, EffectError, EffectId, EffectRecord, ReadOffSpeed, SensorDynamics,
     StaticMapOrder,
@@ -143,8 +144,10 @@ impl ExtendedModel {
             None
         };
         let limit = self.state_limit(run.dt_secs)?;
+        let through = self.through();
         let linear = |u: &[f64]| {
-            linear_stage(&self.effects, &self.wiener.linear, split.as_ref(), u, limit.clone(), run.dt_secs)
+            let stage = &self.wiener.linear;
+            linear_stage(&self.effects, stage, split.as_ref(), u, limit.clone(), Some(&through), run.dt_secs)
         };
         let mut v = linear(&u)?;
         let offset = self.calibration_offset(run, &u, &v, conditions.as_ref());
@@ -165,6 +168,30 @@ impl ExtendedModel {
         let gain = linear.tf.dc_gain().map_err(|e| EffectError::BadBaseModel { reason: e.to_string() })?;
         let through_map = self.limits_own_rate();
         Ok(Some(limit.on_state(through_map, dt_secs, gain, linear.offset, &self.wiener.map, self.kink())))
+    }
+
+    /// The linear block's way to the static map, which the power balance reads the spool through.
+    fn through(&self) -> Through {
+        Through {
+            gain: 1.0,
+            offset: self.wiener.linear.offset,
+            map: self.wiener.map.clone(),
+            kink: self.kink().cloned(),
+        }
+    }
+
+    /// The spool's time-constant factor in steady state at input `u` (state and target both at
+    /// `u`): 1 without a scheduled time constant. What the local models at operating points use.
+    pub fn steady_spool_factor(&self, u: f64) -> f64 {
+        let Some(EffectBlock::ScheduledTimeConstant(s)) = self.effect(super::EffectId::ScheduledTimeConstant)
+        else {
+            return 1.0;
+        };
+        let balance = self.wiener.linear.tf.dc_gain().ok().filter(|_| s.is_power_balance()).map(|gain| {
+            let t = self.through();
+            PowerBalance::new(gain, t.offset, t.map, t.kink, s.load_exponent, s.ref_input)
+        });
+        s.factor_through(u, u, balance.as_ref())
     }
 
     /// Whether the model's rate limit is read through its static map (a limit on the shaft speed's

@@ -4,6 +4,7 @@
 //! static map and its kink, the soak on the output's power, the inlet factor, the sensor, the
 //! read-off of the speed). The model and the fits both run them.
 use super::ambient_correction::Conditions;
+use super::power_balance::PowerBalance;
 use super::rate_limit::StateLimit;
 use super::scheduled_time_constant::{ScheduledTimeConstant, Section};
 use super::spool::SplitShape;
@@ -60,9 +61,10 @@ pub(super) fn linear_stage(
     split: Option<&SplitShape>,
     u: &[f64],
     limit: Option<StateLimit>,
+    through: Option<&Through>,
     dt_secs: f64,
 ) -> Result<Vec<f64>, EffectError> {
-    let stage = StageInput { effects, linear, split, u, limit };
+    let stage = StageInput { effects, linear, split, u, limit, through };
     linear_stages(&[stage], dt_secs).pop().unwrap_or_else(|| Ok(Vec::new()))
 }
 
@@ -75,6 +77,19 @@ pub(super) struct StageInput<'a> {
     /// The rate limit on the spool's state (the fit's first pass, which finds the gain and the map
     /// the limit is read through, has none).
     pub limit: Option<StateLimit>,
+    /// The gain, offset and map the spool's power balance is read through, when the schedule is
+    /// the physical one (the fit's first pass has none).
+    pub through: Option<&'a Through>,
+}
+
+/// The linear stage's way to the output: `N = f(gain·w + offset)` with the map's kink, `w` the
+/// stage's response before its offset.
+#[derive(Clone, Debug)]
+pub(super) struct Through {
+    pub gain: f64,
+    pub offset: f64,
+    pub map: StaticMap,
+    pub kink: Option<StaticMapOrder>,
 }
 
 /// How one [`StageInput`] is simulated: its whole linear block, or the spool split off it (with the
@@ -88,6 +103,7 @@ enum Path<'a> {
         asymmetric: Option<&'a AsymmetricDynamics>,
         scheduled: Option<&'a ScheduledTimeConstant>,
         limit: Option<StateLimit>,
+        power: Option<Box<PowerBalance>>,
     },
 }
 
@@ -113,7 +129,7 @@ pub(super) fn linear_stages(stages: &[StageInput], dt_secs: f64) -> Vec<Result<V
     for path in &paths {
         match path {
             Ok(Path::Block) => responses.push(simulated.next()),
-            Ok(Path::Spool { split, delayed, asymmetric, scheduled, limit, .. }) => {
+            Ok(Path::Spool { split, delayed, asymmetric, scheduled, limit, power, .. }) => {
                 let r = match split.rest {
                     Some(_) => simulated.next().unwrap_or_default(),
                     None => delayed.clone(),
@@ -124,6 +140,7 @@ pub(super) fn linear_stages(stages: &[StageInput], dt_secs: f64) -> Vec<Result<V
                     asymmetric: *asymmetric,
                     scheduled: *scheduled,
                     limit: limit.clone(),
+                    power: power.as_deref().cloned(),
                 });
                 responses.push(None);
             }
@@ -174,7 +191,18 @@ fn path<'a>(stage: &StageInput<'a>) -> Result<Path<'a>, EffectError> {
             // The split is built from the roots alone; the block's dead time delays its input.
             let delay_samples = stage.linear.tf.input_delay() as f64;
             let delayed = TransportDelay { delay_samples }.delay(stage.u);
-            Ok(Path::Spool { split, gain, delayed, asymmetric, scheduled, limit: stage.limit.clone() })
+            let power = scheduled.filter(|s| s.is_power_balance()).zip(stage.through).map(|(s, t)| {
+                PowerBalance::new(
+                    t.gain * gain,
+                    t.offset,
+                    t.map.clone(),
+                    t.kink.clone(),
+                    s.load_exponent,
+                    s.ref_input,
+                )
+            });
+            let power = power.map(Box::new);
+            Ok(Path::Spool { split, gain, delayed, asymmetric, scheduled, limit: stage.limit.clone(), power })
         }
         None => Ok(Path::Block),
     }

@@ -95,6 +95,23 @@ impl std::fmt::Display for StructuralChange {
     }
 }
 
+/// "the spool time constant follows the operating point (its power balance, compressor power
+/// growing as N^3.1): 2.40 times as long at the low end of the identified range as at the high end".
+fn schedule_words(model: &ExtendedModel, s: &super::ScheduledTimeConstant) -> String {
+    let form = match s.is_power_balance() {
+        true => format!(" (its power balance, compressor power growing as N^{:.1})", s.load_exponent),
+        false => String::new(),
+    };
+    let ratio = match model.identified_inputs() {
+        Some((lo, hi)) => model.steady_spool_factor(lo) / model.steady_spool_factor(hi),
+        None => (s.log_ratio + s.state_log_ratio).exp(),
+    };
+    format!(
+        "the spool time constant follows the operating point{form}: {ratio:.2} times as long at the low \
+         end of the identified range as at the high end"
+    )
+}
+
 /// The model with one structural refinement, refitted on the identification data, and a sentence
 /// naming what was added ("the linear block needs a pole pair near 2.31 rad/s (ζ 0.60)").
 pub fn refine_structure(
@@ -105,11 +122,7 @@ pub fn refine_structure(
     if change == StructuralChange::ScheduledTimeConstant {
         let fitted = apply_effect(model, EffectId::ScheduledTimeConstant, data)?;
         let words = fitted.effect(EffectId::ScheduledTimeConstant).map_or_else(String::new, |b| match b {
-            EffectBlock::ScheduledTimeConstant(s) => format!(
-                "the spool time constant follows the operating point: {:.2} times as long at the low end of \
-                 the identified range as at the high end",
-                (s.log_ratio + s.state_log_ratio).exp()
-            ),
+            EffectBlock::ScheduledTimeConstant(s) => schedule_words(&fitted, s),
             _ => String::new(),
         });
         return Ok((fitted, words));

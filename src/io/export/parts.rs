@@ -131,6 +131,7 @@ pub(super) fn schedule(s: &Spool) -> Block {
                 ("state_log_ratio", num(sc.state_log_ratio)),
                 ("ref_input", num(sc.ref_input)),
                 ("input_span", num(sc.input_span)),
+                ("load_exponent", num(sc.load_exponent)),
             ]
         }),
     }

@@ -24,6 +24,8 @@ pub struct FitData {
     pub longest_segment_secs: f64,
     /// Highest static-map order the settings allow.
     pub max_static_order: usize,
+    /// The form a fitted scheduled time constant takes.
+    pub spool_schedule: crate::core::identification::settings::SpoolSchedule,
     /// Each segment's response `(step, end)` in `run`: the stretches a cross-validation holds out.
     pub responses: Vec<(usize, usize)>,
     /// Samples `(start, end)` of `run` left out of the fit (see [`FitData::folds`]): their error is
@@ -78,6 +80,7 @@ impl FitData {
             steady_windows,
             longest_segment_secs,
             max_static_order: settings.max_static_order,
+            spool_schedule: settings.spool_schedule,
             responses,
             held_out: Vec::new(),
             soak_power_exponent: std::sync::OnceLock::new(),

@@ -166,9 +166,15 @@ fn neutral_block(id: EffectId, current: &ExtendedModel, data: &FitData) -> Optio
         EffectId::AsymmetricDynamics => {
             Some(EffectBlock::AsymmetricDynamics(AsymmetricDynamics { decel_factor: 1.0 }))
         }
-        EffectId::ScheduledTimeConstant => Some(EffectBlock::ScheduledTimeConstant(
-            ScheduledTimeConstant::for_input(&data.run.input.values, 0.0),
-        )),
+        EffectId::ScheduledTimeConstant => {
+            let (poles, zeros) = current.roots().ok()?;
+            let split = AsymmetricDynamics::split(&poles, &zeros, data.dt_secs).ok()?;
+            Some(EffectBlock::ScheduledTimeConstant(ScheduledTimeConstant::neutral(
+                &data.run.input.values,
+                data.spool_schedule,
+                &split,
+            )))
+        }
         EffectId::SensorDynamics => Some(EffectBlock::SensorDynamics(SensorDynamics {
             freq_hz: 0.9 * SensorDynamics::max_freq_hz(data.dt_secs),
             zeta: 0.7,
@@ -213,8 +219,8 @@ fn starting_points(
             AsymmetricDynamics::guesses().into_iter().map(EffectBlock::AsymmetricDynamics).collect()
         }
         EffectId::ScheduledTimeConstant => {
-            AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
-            ScheduledTimeConstant::guesses(&data.run.input.values)
+            let split = AsymmetricDynamics::split(&base.poles, &base.zeros, data.dt_secs)?;
+            ScheduledTimeConstant::guesses(&data.run.input.values, data.spool_schedule, &split)
                 .into_iter()
                 .map(EffectBlock::ScheduledTimeConstant)
                 .collect()

@@ -52,6 +52,7 @@ typedef struct {
     double gain, decel;
     int has_schedule;
     double log_ratio, state_log_ratio, ref_input, input_span;
+    double load_exponent; /* > 0: the spool runs its power balance through the map (jetid_balance_factor) */
     int has_soak;
     double soak_gain, soak_tau_s;
     double soak_power_exponent; /* > 0: the soak acts on y^k after the static map; 0: on v */
@@ -125,6 +126,47 @@ static double jetid_delay_step(jetid_delay_state *s, int whole, double frac, dou
 }
 
 static double jetid_map_slope(const jetid_params *p, double v);
+static double jetid_map_smooth_slope(const jetid_params *p, double v);
+static double jetid_map_polynomial(const jetid_params *p, double x);
+static double jetid_static_map(const jetid_params *p, double v);
+
+/* power_balance.rs PowerBalance::time_constant: (r - x)/dx/dt of the spool's power balance up to a
+ * constant, or 0 where the map gives no positive speed. */
+static double jetid_balance_tau(const jetid_params *p, double x, double r, double smooth_ref, double speed_ref)
+{
+    double k = p->load_exponent, v = p->gain * x + p->offset, vr, n, dn_dx, smooth, p_x, p_r, dp_dx, tau;
+    n = jetid_static_map(p, v) / speed_ref;
+    dn_dx = jetid_map_slope(p, v) * p->gain / speed_ref;
+    if (!(n > 0.0)) return 0.0;
+    vr = p->gain * r + p->offset;
+    smooth = jetid_map_polynomial(p, (v - p->v_center) / p->v_scale);
+    p_x = pow(fmax(smooth / smooth_ref, 1e-6), k);
+    p_r = pow(fmax(jetid_map_polynomial(p, (vr - p->v_center) / p->v_scale) / smooth_ref, 1e-6), k);
+    if (fabs(p_r - p_x) > 1e-9 * fmax(fabs(p_x), 1e-9)) {
+        dp_dx = (p_r - p_x) / (r - x);
+    } else {
+        double sr = fmax(smooth / smooth_ref, 1e-6);
+        dp_dx = k * pow(sr, k - 1.0) * jetid_map_smooth_slope(p, v) * p->gain / smooth_ref;
+    }
+    tau = n * dn_dx / dp_dx;
+    return isfinite(tau) && tau > 0.0 ? tau : 0.0;
+}
+
+/* power_balance.rs PowerBalance::factor: the spool's time constant at state x heading for r over
+ * the one at the reference operating point (bounded to [0.05, 20]); 1 where the map gives no
+ * positive speed. */
+static double jetid_balance_factor(const jetid_params *p, double x, double r)
+{
+    double v_ref = p->gain * p->ref_input + p->offset, smooth_ref, speed_ref, at_ref, tau;
+    smooth_ref = jetid_map_polynomial(p, (v_ref - p->v_center) / p->v_scale);
+    speed_ref = jetid_static_map(p, v_ref);
+    if (!(smooth_ref > 0.0 && speed_ref > 0.0)) return 1.0;
+    at_ref = jetid_balance_tau(p, p->ref_input, p->ref_input, smooth_ref, speed_ref);
+    tau = jetid_balance_tau(p, x, r, smooth_ref, speed_ref);
+    if (at_ref <= 0.0 || tau <= 0.0) return 1.0;
+    tau /= at_ref;
+    return tau < 0.05 ? 0.05 : tau > 20.0 ? 20.0 : tau;
+}
 
 /* rate_limit.rs StateLimit::clamp: the spool state's change limited in the limited quantity's units
  * (the output's, through the map's slope, or v's). */
@@ -153,7 +195,10 @@ static double jetid_spool_step(jetid_state *s, double u, int first)
     u = jetid_delay_step(&s->dead, p->dead_time, 0.0, u, first);
     r = p->has_rest ? jetid_filter_step(&p->rest, &s->rest, u, first) : u;
     if (first) s->x = s->x_old = s->prev = s->prev_old = r;
-    if (p->has_schedule)
+    if (p->has_schedule && p->load_exponent > 0.0)
+        factor = jetid_balance_factor(p, s->x, s->prev) *
+                 exp(-p->state_log_ratio * (s->x - p->ref_input) / p->input_span);
+    else if (p->has_schedule)
         factor = exp(-(p->log_ratio * (s->prev - p->ref_input) + p->state_log_ratio * (s->x - p->ref_input)) /
                      p->input_span);
     if (s->prev < s->x) factor *= p->decel;
@@ -274,8 +319,8 @@ static double jetid_read_off(const jetid_params *p, double n)
     return jetid_polynomial_map(c, 5, 1, (n - p->read_off_center) / p->read_off_scale);
 }
 
-/* static_map.rs StaticMap::slope with the kink: df/dv. */
-static double jetid_map_slope(const jetid_params *p, double v)
+/* static_map.rs StaticMap::slope: df/dv of the polynomial part. */
+static double jetid_map_smooth_slope(const jetid_params *p, double v)
 {
     double x = (v - p->v_center) / p->v_scale, dx, end, slope, curvature, t;
     if (!p->end_trend || (x <= 1.0 && x >= -1.0)) {
@@ -291,7 +336,13 @@ static double jetid_map_slope(const jetid_params *p, double v)
             dx = slope + end * curvature * t;
         }
     }
-    dx /= p->v_scale;
+    return dx / p->v_scale;
+}
+
+/* The map's slope with the kink: df/dv. */
+static double jetid_map_slope(const jetid_params *p, double v)
+{
+    double dx = jetid_map_smooth_slope(p, v);
     if (p->has_kink && v > p->knot_v) dx += p->slope_change;
     return dx;
 }

@@ -110,7 +110,10 @@ x = r(1); x_old = x; prev = x; prev_old = x;
 out = zeros(1, numel(r));
 for k = 1:numel(r)
     factor = 1;
-    if ~isempty(sp.schedule)
+    if ~isempty(sp.schedule) && sp.schedule(5) > 0
+        c = sp.schedule;
+        factor = balance_factor(o, sp, x, prev) * exp(-c(2) * (x - c(3)) / c(4));
+    elseif ~isempty(sp.schedule)
         c = sp.schedule;
         factor = exp(-(c(1) * (prev - c(3)) + c(2) * (x - c(3))) / c(4));
     end
@@ -132,6 +135,51 @@ for k = 1:numel(r)
     x_old = x; x = nxt;
     prev_old = prev; prev = r(k);
     out(k) = x;
+end
+end
+
+function f = balance_factor(o, sp, x, r)
+% power_balance.rs PowerBalance::factor: the spool's time constant at state x heading for r over the
+% one at the reference operating point (bounded to [0.05, 20]), by the power balance read through
+% the static map; 1 where the map gives no positive speed.
+ref = sp.schedule(3);
+v_ref = sp.gain * ref + o.offset;
+smooth_ref = map_polynomial(o, (v_ref - o.v_center) / o.v_scale);
+speed_ref = static_map(o, v_ref);
+f = 1;
+if ~(smooth_ref > 0 && speed_ref > 0)
+    return;
+end
+at_ref = balance_tau(o, sp, ref, ref, smooth_ref, speed_ref);
+tau = balance_tau(o, sp, x, r, smooth_ref, speed_ref);
+if at_ref > 0 && tau > 0
+    f = min(max(tau / at_ref, 0.05), 20);
+end
+end
+
+function tau = balance_tau(o, sp, x, r, smooth_ref, speed_ref)
+% power_balance.rs PowerBalance::time_constant: (r - x)/dx/dt up to a constant, 0 where the map
+% gives no positive speed.
+k = sp.schedule(5);
+v = sp.gain * x + o.offset;
+n = static_map(o, v) / speed_ref;
+dn_dx = static_map_slope(o, v) * sp.gain / speed_ref;
+tau = 0;
+if ~(n > 0)
+    return;
+end
+vr = sp.gain * r + o.offset;
+[smooth, slope] = map_polynomial(o, (v - o.v_center) / o.v_scale);
+p_x = max(smooth / smooth_ref, 1e-6) ^ k;
+p_r = max(map_polynomial(o, (vr - o.v_center) / o.v_scale) / smooth_ref, 1e-6) ^ k;
+if abs(p_r - p_x) > 1e-9 * max(abs(p_x), 1e-9)
+    dp_dx = (p_r - p_x) / (r - x);
+else
+    dp_dx = k * max(smooth / smooth_ref, 1e-6) ^ (k - 1) * (slope / o.v_scale) * sp.gain / smooth_ref;
+end
+t = n * dn_dx / dp_dx;
+if isfinite(t) && t > 0
+    tau = t;
 end
 end
 

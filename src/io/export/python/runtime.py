@@ -68,6 +68,9 @@ class _Spool:
         self.ln_re, self.ln_im = s["ln_root"]
         self.pair, self.gain, self.decel, self.schedule = s["pair"], s["gain"], s["decel"], s["schedule"]
         self.output, self.offset = output, offset
+        self.balance = None
+        if self.schedule is not None and self.schedule[4] > 0.0:
+            self.balance = _Balance(output, self.gain, offset, self.schedule[4], self.schedule[2])
         # The rate limit on the spool's state, per sample (rate_limit.rs StateLimit).
         self.limit = (limit[0] * dt, limit[1] * dt, limit[2] != 0) if limit is not None else None
         self.started = False
@@ -91,8 +94,11 @@ class _Spool:
             self.x = self.x_old = self.prev = self.prev_old = r
             self.started = True
         factor = 1.0
-        if self.schedule is not None:
-            log_ratio, state_log_ratio, ref, span = self.schedule
+        if self.balance is not None:
+            _, state_log_ratio, ref, span, _ = self.schedule
+            factor = self.balance.factor(self.x, self.prev) * math.exp(-state_log_ratio * (self.x - ref) / span)
+        elif self.schedule is not None:
+            log_ratio, state_log_ratio, ref, span, _ = self.schedule
             factor = math.exp(-(log_ratio * (self.prev - ref) + state_log_ratio * (self.x - ref)) / span)
         if self.prev < self.x:
             factor *= self.decel
@@ -109,6 +115,54 @@ class _Spool:
         self.x_old, self.x = self.x, nxt
         self.prev_old, self.prev = self.prev, r
         return self.gain * self.x
+
+
+class _Balance:
+    """power_balance.rs PowerBalance: the spool's power balance read through the static map; factor
+    is the spool's time constant at state x heading for r over the one at the reference point."""
+
+    def __init__(self, output, gain, offset, k, ref_x):
+        self.map = OUTPUTS[output]["map"]
+        self.output, self.gain, self.offset, self.k = output, gain, offset, k
+        self.reference = None
+        v_ref = gain * ref_x + offset
+        smooth_ref, speed_ref = self._smooth(v_ref)[0], static_map(output, v_ref)
+        if smooth_ref > 0.0 and speed_ref > 0.0:
+            tau = self._tau(ref_x, ref_x, smooth_ref, speed_ref)
+            if tau is not None:
+                self.reference = (smooth_ref, speed_ref, tau)
+
+    def _smooth(self, v):
+        center, scale, coeffs, end_trend = self.map
+        y, d = _map_polynomial(coeffs, end_trend, (v - center) / scale)
+        return y, d / scale
+
+    def _tau(self, x, r, smooth_ref, speed_ref):
+        """(r - x)/dx/dt up to a constant, or None where the map gives no positive speed."""
+        k, v = self.k, self.gain * x + self.offset
+        n = static_map(self.output, v) / speed_ref
+        dn_dx = static_map_slope(self.output, v) * self.gain / speed_ref
+        if not n > 0.0:
+            return None
+        vr = self.gain * r + self.offset
+        smooth, slope = self._smooth(v)
+        p_x = max(smooth / smooth_ref, 1e-6) ** k
+        p_r = max(self._smooth(vr)[0] / smooth_ref, 1e-6) ** k
+        if abs(p_r - p_x) > 1e-9 * max(abs(p_x), 1e-9):
+            dp_dx = (p_r - p_x) / (r - x)
+        else:
+            dp_dx = k * max(smooth / smooth_ref, 1e-6) ** (k - 1.0) * slope * self.gain / smooth_ref
+        if dp_dx == 0.0:
+            return None
+        tau = n * dn_dx / dp_dx
+        return tau if math.isfinite(tau) and tau > 0.0 else None
+
+    def factor(self, x, r):
+        if self.reference is None:
+            return 1.0
+        smooth_ref, speed_ref, at_ref = self.reference
+        tau = self._tau(x, r, smooth_ref, speed_ref)
+        return 1.0 if tau is None else min(max(tau / at_ref, 0.05), 20.0)
 
 
 class _Soak:
@@ -454,8 +508,12 @@ def local_dynamics(output, u_star):
         num, den = np.array(p["tf"]["num"]) / g1, np.array(p["tf"]["den"])
     else:
         factor = 1.0
-        if s["schedule"] is not None:
-            log_ratio, state_log_ratio, ref, span = s["schedule"]
+        if s["schedule"] is not None and s["schedule"][4] > 0.0:
+            _, state_log_ratio, ref, span, k = s["schedule"]
+            balance = _Balance(output, s["gain"], p["offset"], k, ref)
+            factor = balance.factor(u_star, u_star) * math.exp(-state_log_ratio * (u_star - ref) / span)
+        elif s["schedule"] is not None:
+            log_ratio, state_log_ratio, ref, span, _ = s["schedule"]
             factor = math.exp(-(log_ratio + state_log_ratio) * (u_star - ref) / span)
         f = max(factor, _MIN_POSITIVE)
         mag = math.exp(s["ln_root"][0] / f)

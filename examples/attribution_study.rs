@@ -8,7 +8,8 @@
 //! (`effects`: every hidden effect on engines 3, 7, 11; `free`: effect-free engines 1..=ENGINES;
 //! with `OFFERS=1` set, what each thrust model was offered of the speed's spool blocks; with
 //! `READ_OFF_SPEED=1`, thrust read off the speed model too: see [`read_off_speed`]; with
-//! `SPOOL_SCHEDULE=power_balance`, the scheduled time constant in the power balance's form).
+//! `SPOOL_SCHEDULE=power_balance`, the scheduled time constant in the power balance's form; with
+//! `SPOOL_SCHEDULE=speed`, on the shaft speed only).
 use anyhow::{Context, Result};
 use jetid::core::effects::ExtendedModel;
 use jetid::core::identification::fits::segments_for;
@@ -59,7 +60,8 @@ fn loop_on(
     spool: Option<&ExtendedModel>,
 ) -> Result<(Vec<String>, f64, f64, ExtendedModel)> {
     let mut settings = OutputSettings::for_output(output);
-    if std::env::var("SPOOL_SCHEDULE").is_ok_and(|v| v == "power_balance") {
+    let schedule = std::env::var("SPOOL_SCHEDULE").unwrap_or_default();
+    if schedule == "power_balance" || (schedule == "speed" && output == OUTPUTS[0]) {
         settings.spool_schedule = SpoolSchedule::PowerBalance;
     }
     let segments = segments_for(&b.ident, None, &SegmentSettings::default())?;

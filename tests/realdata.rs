@@ -166,3 +166,26 @@ fn t07_project_runs_and_the_residuals_name_the_flow_meter_dropouts() {
     assert!(notes.iter().any(|n| n.contains("running window found")), "{notes:?}");
     assert!(pr["steady_states"].as_str().unwrap().contains("steady state"), "{pr}");
 }
+
+/// The JetCat's schedule is its ECU's, not its spool's power balance: asked for the balance
+/// (`spool_schedule = "power_balance"`), the fit finds a balance that carries almost none of the
+/// schedule (the exponential state term carries it), falls back to the exponential form, and the
+/// project ends on the model the default builds.
+#[test]
+#[cfg_attr(not(jetid_realdata), ignore = "needs ../shared/realdata")]
+fn jetcat_asked_for_the_power_balance_keeps_the_exponential_schedule() {
+    let bundled = crate::common::sample("jetcat_p300/project.toml");
+    let folder = bundled.parent().unwrap().display().to_string();
+    let text =
+        std::fs::read_to_string(&bundled).unwrap().replace("\"../../../", &format!("\"{folder}/../../../"));
+    let dir = tempfile::tempdir().unwrap();
+    let asked = dir.path().join("power_balance.toml");
+    std::fs::write(&asked, format!("{text}\n[output.rpm]\nspool_schedule = \"power_balance\"\n")).unwrap();
+    let covariance = jetid::workflow::project_model::Covariance::Skip;
+    let (with_balance, _) = build_project_at(&asked, covariance);
+    let (default, _) = build_project_at(&bundled, covariance);
+    let effects = |file: &jetid::io::model_file::ModelFile| file.outputs[0].effects.clone();
+    let schedule = effects(&with_balance).into_iter().find(|e| e.id.name() == "scheduled_time_constant");
+    assert_eq!(schedule.map(|s| s.params["load_exponent"]), Some(0.0), "{:?}", effects(&with_balance));
+    assert_eq!(effects(&with_balance), effects(&default));
+}

@@ -144,10 +144,23 @@ impl ExtendedModel {
             None
         };
         let limit = self.state_limit(run.dt_secs)?;
-        let through = self.through();
+        // The map is cloned for the power balance only, which reads the spool through it.
+        let balance = matches!(
+            self.effect(EffectId::ScheduledTimeConstant),
+            Some(EffectBlock::ScheduledTimeConstant(s)) if s.is_power_balance()
+        );
+        let through = balance.then(|| self.through());
         let linear = |u: &[f64]| {
             let stage = &self.wiener.linear;
-            linear_stage(&self.effects, stage, split.as_ref(), u, limit.clone(), Some(&through), run.dt_secs)
+            linear_stage(
+                &self.effects,
+                stage,
+                split.as_ref(),
+                u,
+                limit.clone(),
+                through.as_ref(),
+                run.dt_secs,
+            )
         };
         let mut v = linear(&u)?;
         let offset = self.calibration_offset(run, &u, &v, conditions.as_ref());
@@ -183,8 +196,7 @@ impl ExtendedModel {
     /// The spool's time-constant factor in steady state at input `u` (state and target both at
     /// `u`): 1 without a scheduled time constant. What the local models at operating points use.
     pub fn steady_spool_factor(&self, u: f64) -> f64 {
-        let Some(EffectBlock::ScheduledTimeConstant(s)) = self.effect(super::EffectId::ScheduledTimeConstant)
-        else {
+        let Some(EffectBlock::ScheduledTimeConstant(s)) = self.effect(EffectId::ScheduledTimeConstant) else {
             return 1.0;
         };
         let balance = self.wiener.linear.tf.dc_gain().ok().filter(|_| s.is_power_balance()).map(|gain| {

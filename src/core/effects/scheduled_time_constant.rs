@@ -17,7 +17,8 @@ use crate::core::identification::settings::SpoolSchedule;
 /// follow either. This block lets the slowest real pole (the spool, split off as for
 /// [`AsymmetricDynamics`]) run with the time constant the operating point gives it, in one of two
 /// forms:
-/// - **The power balance** (`load_exponent` k > 0, what the fit gives): the spool section runs the
+/// - **The power balance** (`load_exponent` k > 0; fitted where the project asks for it,
+///   `spool_schedule = "power_balance"`): the spool section runs the
 ///   balance above read through the model's own static map, `N = f(v)` ([`PowerBalance`]), with
 ///   the load exponent `k` fitted. Its one number is physical, its large-signal rates are the
 ///   balance's, and a kink in the map (a bleed valve's load) changes the spool's time constant where

@@ -41,10 +41,10 @@ pub struct OutputSettings {
 /// Why the default is the exponential. On the engine family the power balance lowers the speed's
 /// held-out error on most engines (asymmetric dynamics from 2.7–4.4 to 1.0–1.5 times the
 /// effect-free engine's). But on 4 of 20 effect-free engines thrust's own loop then takes a
-/// physical effect, which the default never does, and it costs time: the JetCat batch takes
-/// 5.0–6.1 s instead of 4.3 s, at the edge of its 6 s budget. On the JetCat itself the fit falls
-/// back to the exponential form, because the balance does not carry its schedule (the ECU's;
-/// `fit::search::balance_carries_the_schedule`).
+/// physical effect, which the default never does; with a bleed kink fitted by hand the balance's
+/// fit can run to its bound (k = 1) and fall back; and it costs time (the JetCat batch 4.2 s
+/// instead of 3.5 s). On the JetCat itself the fit falls back to the exponential form, because the
+/// balance does not carry its schedule (the ECU's; `fit::search::balance_carries_the_schedule`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SpoolSchedule {

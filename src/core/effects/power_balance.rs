@@ -65,17 +65,7 @@ impl PowerBalance {
     }
 
     fn speed(&self, v: f64) -> f64 {
-        self.map.eval(v) + self.kink.as_ref().map_or(0.0, |k| k.eval(v))
-    }
-
-    fn speed_slope(&self, v: f64) -> f64 {
-        self.map.slope(v)
-            + self.kink.as_ref().map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 })
-    }
-
-    /// The turbine power at the operating point of `v`, relative to the reference point's.
-    fn power(&self, v: f64, smooth_ref: f64) -> f64 {
-        (self.smooth(v) / smooth_ref).max(1e-6).powf(self.exponent)
+        self.smooth(v) + self.kink_value(v)
     }
 
     /// The map's smooth polynomial, without the kink: what the turbine power is read through.
@@ -83,26 +73,33 @@ impl PowerBalance {
         self.map.eval(v)
     }
 
-    fn smooth_slope(&self, v: f64) -> f64 {
-        self.map.slope(v)
+    fn kink_value(&self, v: f64) -> f64 {
+        self.kink.as_ref().map_or(0.0, |k| k.eval(v))
     }
 
-    /// `(r − x)/ẋ` up to the constant `K`, or `None` where the map gives no positive speed.
+    fn kink_slope(&self, v: f64) -> f64 {
+        self.kink.as_ref().map_or(0.0, |k| if v > k.knot_v { k.slope_change } else { 0.0 })
+    }
+
+    /// `(r − x)/ẋ` up to the constant `K`, or `None` where the map gives no positive speed. The
+    /// map and its slope at `x` are evaluated once (this runs on every sample of a simulation).
     fn time_constant(&self, x: f64, r: f64, smooth_ref: f64, speed_ref: f64) -> Option<f64> {
         let v = self.v(x);
-        let n = self.speed(v) / speed_ref;
-        let dn_dx = self.speed_slope(v) * self.gain / speed_ref;
+        let (smooth, smooth_slope) = (self.smooth(v), self.map.slope(v));
+        let n = (smooth + self.kink_value(v)) / speed_ref;
+        let dn_dx = (smooth_slope + self.kink_slope(v)) * self.gain / speed_ref;
         if n.is_nan() || n <= 0.0 {
             return None;
         }
-        let vr = self.v(r);
-        let (p_x, p_r) = (self.power(v, smooth_ref), self.power(vr, smooth_ref));
+        // The turbine power at the operating point, relative to the reference point's.
+        let power = |smooth: f64| (smooth / smooth_ref).max(1e-6);
+        let (s_x, p_r) = (power(smooth), power(self.smooth(self.v(r))).powf(self.exponent));
+        let p_x = s_x.powf(self.exponent);
         // Equal powers (r = x among them): the balance's slope at x.
         let dp_dx = if (p_r - p_x).abs() > 1e-9 * p_x.abs().max(1e-9) {
             (p_r - p_x) / (r - x)
         } else {
-            let s = (self.smooth(v) / smooth_ref).max(1e-6);
-            self.exponent * s.powf(self.exponent - 1.0) * self.smooth_slope(v) * self.gain / smooth_ref
+            self.exponent * s_x.powf(self.exponent - 1.0) * smooth_slope * self.gain / smooth_ref
         };
         let tau = n * dn_dx / dp_dx;
         (tau.is_finite() && tau > 0.0).then_some(tau)
